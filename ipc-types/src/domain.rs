@@ -1,0 +1,148 @@
+//! A run's own iceoryx2 domain, so two pipelines or two tests on one machine never cross.
+
+use iceoryx2::config::Config;
+use iceoryx2::prelude::*;
+
+/// Characters a domain name may have: they become part of file names in /dev/shm.
+const MAX_DOMAIN_LEN: usize = 40;
+/// Prefix of every file a domain leaves in /dev/shm and /tmp/iceoryx2.
+pub const FILE_PREFIX: &str = "slam_";
+
+/// Why a domain name was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum DomainError {
+    #[error("domain name is empty")]
+    Empty,
+    #[error("domain name '{0}' is longer than {MAX_DOMAIN_LEN} characters")]
+    TooLong(String),
+    #[error("domain name '{0}' may only contain ASCII letters, digits and '-'")]
+    BadCharacter(String),
+}
+
+/// Why a node could not be created.
+#[derive(Debug, thiserror::Error)]
+pub enum NodeError {
+    #[error("node name '{0}' is not a valid iceoryx2 node name")]
+    BadName(String),
+    #[error("cannot create node '{name}' in domain '{domain}': {cause:?}")]
+    Create {
+        name: String,
+        domain: String,
+        cause: iceoryx2::node::NodeCreationFailure,
+    },
+}
+
+/// A run's domain: its name and the iceoryx2 configuration whose prefix keeps its shared
+/// memory apart from every other run's.
+#[derive(Debug, Clone)]
+pub struct Domain {
+    name: String,
+    config: Config,
+}
+
+impl Domain {
+    /// A domain named `name` (ASCII letters, digits and '-', at most 40 characters).
+    pub fn new(name: &str) -> Result<Self, DomainError> {
+        if name.is_empty() {
+            return Err(DomainError::Empty);
+        }
+        if name.len() > MAX_DOMAIN_LEN {
+            return Err(DomainError::TooLong(name.to_owned()));
+        }
+        if !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
+            return Err(DomainError::BadCharacter(name.to_owned()));
+        }
+        let mut config = Config::default();
+        // Validated above: letters, digits, '-' and '_' always make a valid file name.
+        config.global.prefix = FileName::new(Self::prefix_of(name).as_bytes())
+            .map_err(|_| DomainError::BadCharacter(name.to_owned()))?;
+        Ok(Self {
+            name: name.to_owned(),
+            config,
+        })
+    }
+
+    /// The domain's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The file-name prefix of every shared-memory resource of this domain.
+    pub fn file_prefix(&self) -> String {
+        Self::prefix_of(&self.name)
+    }
+
+    fn prefix_of(name: &str) -> String {
+        // '_' cannot occur in a name, so the prefix of one domain is never the start of
+        // another's.
+        format!("{FILE_PREFIX}{name}_")
+    }
+
+    /// The iceoryx2 configuration of this domain.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Creates a node in this domain. Signal handling is ours ([`crate::shutdown`]).
+    pub fn node(&self, name: &str) -> Result<Node<ipc::Service>, NodeError> {
+        let node_name = NodeName::new(name).map_err(|_| NodeError::BadName(name.to_owned()))?;
+        NodeBuilder::new()
+            .name(&node_name)
+            .config(&self.config)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<ipc::Service>()
+            .map_err(|cause| NodeError::Create {
+                name: name.to_owned(),
+                domain: self.name.clone(),
+                cause,
+            })
+    }
+
+    /// Deletes what iceoryx2 leaves of this domain in /dev/shm once every process of it has
+    /// ended (its global management segment outlives the last node). Call it only when no
+    /// process of the domain is alive. Returns the number of files removed.
+    pub fn remove_leftovers(&self) -> std::io::Result<usize> {
+        self.remove_leftovers_in(std::path::Path::new("/dev/shm"))
+    }
+
+    /// Files in `dir` that belong to this domain.
+    pub fn leftovers_in(&self, dir: &std::path::Path) -> std::io::Result<Vec<std::path::PathBuf>> {
+        let prefix = self.file_prefix();
+        let mut found = Vec::new();
+        for entry in std::fs::read_dir(dir)? {
+            let entry = entry?;
+            if entry.file_name().to_string_lossy().starts_with(&prefix) {
+                found.push(entry.path());
+            }
+        }
+        Ok(found)
+    }
+
+    fn remove_leftovers_in(&self, dir: &std::path::Path) -> std::io::Result<usize> {
+        let mut removed = 0;
+        for path in self.leftovers_in(dir)? {
+            match std::fs::remove_file(&path) {
+                Ok(()) => removed += 1,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(removed)
+    }
+
+    /// Removes the resources of this domain's nodes whose processes died, so a killed
+    /// subscriber no longer blocks a lossless publisher. Returns how many were removed.
+    pub fn cleanup_dead_nodes(&self) -> usize {
+        let mut removed = 0;
+        // A listing error means there is nothing of this domain to clean yet.
+        let _ = Node::<ipc::Service>::list(&self.config, |state| {
+            if let NodeState::Dead(view) = state
+                && view.try_remove_stale_resources().is_ok()
+            {
+                removed += 1;
+            }
+            CallbackProgression::Continue
+        });
+        removed
+    }
+}

@@ -1,0 +1,81 @@
+//! The header every message starts with.
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+/// Length of the fixed frame-id buffer, NUL padded.
+pub const FRAME_ID_LEN: usize = 32;
+
+/// Bit in [`Header::flags`]: the publisher has no more data; this message carries none.
+///
+/// It travels on the data service itself, so it arrives after every message sent before it.
+pub const FLAG_END_OF_STREAM: u32 = 1;
+
+/// Sequence, time and frame of a message, after ROS `std_msgs/Header`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("slam::Header::v1")]
+pub struct Header {
+    /// Sequence number of the source scan, counting from 0 without gaps at the source.
+    pub seq: u64,
+    /// Acquisition time in the sensor's clock domain, nanoseconds.
+    pub stamp_ns: u64,
+    /// CLOCK_REALTIME when the message was published, nanoseconds; for latency.
+    pub sent_ns: u64,
+    /// NUL-padded UTF-8 frame name, e.g. `laser`.
+    pub frame_id: [u8; FRAME_ID_LEN],
+    /// `FLAG_*` bits.
+    pub flags: u32,
+    /// Keeps the layout free of implicit padding; always 0.
+    pub reserved: u32,
+}
+
+impl Header {
+    /// A header with the given sequence, stamp and frame name (cut to [`FRAME_ID_LEN`] bytes
+    /// at a character boundary).
+    pub fn new(seq: u64, stamp_ns: u64, frame_id: &str) -> Self {
+        let mut header = Self {
+            seq,
+            stamp_ns,
+            sent_ns: 0,
+            frame_id: [0; FRAME_ID_LEN],
+            flags: 0,
+            reserved: 0,
+        };
+        header.set_frame_id(frame_id);
+        header
+    }
+
+    /// Sets the frame name, cut to [`FRAME_ID_LEN`] bytes at a character boundary.
+    pub fn set_frame_id(&mut self, frame_id: &str) {
+        let mut end = frame_id.len().min(FRAME_ID_LEN);
+        while !frame_id.is_char_boundary(end) {
+            end -= 1;
+        }
+        self.frame_id = [0; FRAME_ID_LEN];
+        self.frame_id[..end].copy_from_slice(&frame_id.as_bytes()[..end]);
+    }
+
+    /// The frame name, or `""` when it is not valid UTF-8.
+    pub fn frame_id(&self) -> &str {
+        let len = self
+            .frame_id
+            .iter()
+            .position(|&b| b == 0)
+            .unwrap_or(FRAME_ID_LEN);
+        std::str::from_utf8(&self.frame_id[..len]).unwrap_or("")
+    }
+
+    /// True when this message only marks the end of the stream.
+    pub fn is_end_of_stream(&self) -> bool {
+        self.flags & FLAG_END_OF_STREAM != 0
+    }
+}
+
+/// CLOCK_REALTIME now, in nanoseconds since the Unix epoch (0 if the clock is before it).
+pub fn now_ns() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
+        .unwrap_or(0)
+}

@@ -1,0 +1,33 @@
+//! Compile-time checks of the message layouts: the contract between processes built
+//! separately. A change here is a change of the wire format and needs a new type-name version.
+
+use core::mem::{align_of, offset_of, size_of};
+
+use crate::header::Header;
+use crate::messages::*;
+
+const _: () = {
+    assert!(size_of::<Header>() == 64 && align_of::<Header>() == 8);
+    assert!(offset_of!(Header, frame_id) == 24 && offset_of!(Header, flags) == 56);
+    assert!(size_of::<Pose2>() == 24);
+    assert!(size_of::<Corner>() == 160);
+    assert!(size_of::<TrueCorner>() == 32);
+    assert!(size_of::<MapCorner>() == 168);
+    assert!(size_of::<Line>() == 88);
+    assert!(size_of::<StageTiming>() == 40);
+
+    assert!(size_of::<LaserScan>() == 64 + 32 + 2 * 4 * crate::MAX_BEAMS);
+    assert!(align_of::<LaserScan>() == 8);
+    assert!(offset_of!(LaserScan, beam_count) == 88);
+    assert!(offset_of!(LaserScan, ranges) == 96);
+
+    assert!(size_of::<Odometry>() == 176);
+    assert!(size_of::<GroundTruthPose>() == 88);
+    assert!(size_of::<PoseEstimate>() == 272);
+    assert!(offset_of!(PoseEstimate, timing) == 232);
+
+    assert!(offset_of!(Features, lines) == 88);
+    assert!(size_of::<Features>() == 88 + 88 * crate::MAX_LINES + 160 * crate::MAX_FEATURE_CORNERS);
+    assert!(size_of::<WorldCorners>() == 72 + 32 * crate::MAX_WORLD_CORNERS);
+    assert!(size_of::<MapSnapshot>() == 72 + 168 * crate::MAX_MAP_CORNERS);
+};

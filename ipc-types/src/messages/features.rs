@@ -1,0 +1,80 @@
+//! The lines and corners found in one scan.
+
+use std::borrow::Cow;
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+use super::corner::Corner;
+use super::line::Line;
+use crate::capacity::{CapacityError, MAX_FEATURE_CORNERS, MAX_LINES, fill, used};
+use crate::header::Header;
+
+/// The features of one scan, in the sensor frame.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("slam::Features::v1")]
+pub struct Features {
+    /// The source scan's header (sequence, stamp, frame); `sent_ns` is this message's.
+    pub header: Header,
+    /// When the source scan was published (its `header.sent_ns`), for end-to-end latency.
+    pub scan_sent_ns: u64,
+    /// Time spent extracting the features, nanoseconds.
+    pub processing_ns: u64,
+    pub line_count: u32,
+    pub corner_count: u32,
+    pub lines: [Line; MAX_LINES],
+    pub corners: [Corner; MAX_FEATURE_CORNERS],
+}
+
+impl Features {
+    pub fn lines(&self) -> &[Line] {
+        used(&self.lines, self.line_count)
+    }
+
+    pub fn corners(&self) -> &[Corner] {
+        used(&self.corners, self.corner_count)
+    }
+
+    /// Replaces the lines and corners.
+    pub fn set(&mut self, lines: &[Line], corners: &[Corner]) -> Result<(), CapacityError> {
+        self.line_count = fill("lines", &mut self.lines, lines)?;
+        self.corner_count = fill("corners", &mut self.corners, corners)?;
+        Ok(())
+    }
+
+    pub fn to_record(&self) -> FeaturesRecord<'_> {
+        FeaturesRecord {
+            header: self.header,
+            scan_sent_ns: self.scan_sent_ns,
+            processing_ns: self.processing_ns,
+            lines: Cow::Borrowed(self.lines()),
+            corners: Cow::Borrowed(self.corners()),
+        }
+    }
+
+    pub fn from_record(record: &FeaturesRecord<'_>) -> Result<Box<Self>, CapacityError> {
+        let mut features = <Self as crate::Zeroable>::boxed_zeroed();
+        features.header = record.header;
+        features.scan_sent_ns = record.scan_sent_ns;
+        features.processing_ns = record.processing_ns;
+        features.set(&record.lines, &record.corners)?;
+        Ok(features)
+    }
+}
+
+/// [`Features`] without their unused capacity: what gets written to disk.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FeaturesRecord<'a> {
+    pub header: Header,
+    pub scan_sent_ns: u64,
+    pub processing_ns: u64,
+    pub lines: Cow<'a, [Line]>,
+    pub corners: Cow<'a, [Corner]>,
+}
+
+impl Serialize for Features {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        self.to_record().serialize(serializer)
+    }
+}

@@ -1,0 +1,119 @@
+//! One sweep of a planar lidar, modelled on ROS `sensor_msgs/LaserScan`.
+
+use std::borrow::Cow;
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+use crate::capacity::{CapacityError, MAX_BEAMS, fill, used};
+use crate::header::Header;
+
+/// One sweep of a planar lidar.
+///
+/// Beam `i` has bearing `angle_min + i * angle_increment` in the sensor frame (x forward,
+/// y left). Invalid readings follow REP 117: NaN = measurement error, +inf = no return,
+/// -inf = too close. A consumer treats any non-finite range, or one outside
+/// `[range_min, range_max]`, as invalid.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("slam::LaserScan::v1")]
+pub struct LaserScan {
+    pub header: Header,
+    /// Bearing of the first beam, radians.
+    pub angle_min: f32,
+    /// Bearing step between beams, radians (negative for a clockwise sensor).
+    pub angle_increment: f32,
+    /// Time between beams, seconds.
+    pub time_increment: f32,
+    /// Time between scans, seconds.
+    pub scan_time: f32,
+    /// Shortest valid range, metres.
+    pub range_min: f32,
+    /// Longest valid range, metres.
+    pub range_max: f32,
+    /// Beams used in `ranges` and `intensities`.
+    pub beam_count: u32,
+    /// Keeps the layout free of implicit padding; always 0.
+    pub reserved: u32,
+    /// Ranges in metres; only the first `beam_count` are meaningful.
+    pub ranges: [f32; MAX_BEAMS],
+    /// Intensities in sensor units (0 when the sensor gives none).
+    pub intensities: [f32; MAX_BEAMS],
+}
+
+impl LaserScan {
+    /// The ranges of the beams in use.
+    pub fn ranges(&self) -> &[f32] {
+        used(&self.ranges, self.beam_count)
+    }
+
+    /// The intensities of the beams in use.
+    pub fn intensities(&self) -> &[f32] {
+        used(&self.intensities, self.beam_count)
+    }
+
+    /// Replaces the beams; intensities default to zero when `intensities` is empty.
+    pub fn set_beams(&mut self, ranges: &[f32], intensities: &[f32]) -> Result<(), CapacityError> {
+        if !intensities.is_empty() && intensities.len() != ranges.len() {
+            return Err(CapacityError {
+                what: "intensities (must match the ranges)",
+                len: intensities.len(),
+                capacity: ranges.len(),
+            });
+        }
+        self.beam_count = fill("ranges", &mut self.ranges, ranges)?;
+        // `fill` checked the capacity, so the ranges' length indexes the intensities too.
+        self.intensities[..ranges.len()].fill(0.0);
+        fill("intensities", &mut self.intensities, intensities)?;
+        Ok(())
+    }
+
+    /// The compact, serialisable form of this scan (only the beams in use).
+    pub fn to_record(&self) -> LaserScanRecord<'_> {
+        LaserScanRecord {
+            header: self.header,
+            angle_min: self.angle_min,
+            angle_increment: self.angle_increment,
+            time_increment: self.time_increment,
+            scan_time: self.scan_time,
+            range_min: self.range_min,
+            range_max: self.range_max,
+            ranges: Cow::Borrowed(self.ranges()),
+            intensities: Cow::Borrowed(self.intensities()),
+        }
+    }
+
+    /// Rebuilds a scan from its record, on the heap.
+    pub fn from_record(record: &LaserScanRecord<'_>) -> Result<Box<Self>, CapacityError> {
+        let mut scan = <Self as crate::Zeroable>::boxed_zeroed();
+        scan.header = record.header;
+        scan.angle_min = record.angle_min;
+        scan.angle_increment = record.angle_increment;
+        scan.time_increment = record.time_increment;
+        scan.scan_time = record.scan_time;
+        scan.range_min = record.range_min;
+        scan.range_max = record.range_max;
+        scan.set_beams(&record.ranges, &record.intensities)?;
+        Ok(scan)
+    }
+}
+
+/// A [`LaserScan`] without its unused capacity: what gets written to disk.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LaserScanRecord<'a> {
+    pub header: Header,
+    pub angle_min: f32,
+    pub angle_increment: f32,
+    pub time_increment: f32,
+    pub scan_time: f32,
+    pub range_min: f32,
+    pub range_max: f32,
+    pub ranges: Cow<'a, [f32]>,
+    pub intensities: Cow<'a, [f32]>,
+}
+
+impl Serialize for LaserScan {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        self.to_record().serialize(serializer)
+    }
+}

@@ -1,0 +1,44 @@
+//! The SLAM estimate for one scan.
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+use super::pose::Pose2;
+use crate::header::Header;
+
+/// Time spent in each stage of one SLAM update, nanoseconds.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("slam::StageTiming::v1")]
+pub struct StageTiming {
+    pub motion_ns: u64,
+    pub predict_ns: u64,
+    pub update_ns: u64,
+    pub resample_ns: u64,
+    pub total_ns: u64,
+}
+
+/// The pose estimate after one scan, in the map frame (the first pose is the origin).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("slam::PoseEstimate::v1")]
+pub struct PoseEstimate {
+    /// The source scan's header; `sent_ns` is this message's.
+    pub header: Header,
+    /// When the source scan was published, for end-to-end latency.
+    pub scan_sent_ns: u64,
+    /// Pose of the particle with the highest weight.
+    pub best: Pose2,
+    /// Weighted mean pose of the particles (yaw by circular mean).
+    pub mean: Pose2,
+    /// The scan-to-scan motion estimate integrated alone, for comparison.
+    pub dead_reckoning: Pose2,
+    /// Row-major 3x3 covariance of (x, y, yaw) over the particles.
+    pub covariance: [f64; 9],
+    /// `1 / sum(w_i^2)` of the normalised weights.
+    pub effective_particles: f64,
+    pub particle_count: u32,
+    /// Confirmed corners in the best particle's map.
+    pub map_corners: u32,
+    pub timing: StageTiming,
+}

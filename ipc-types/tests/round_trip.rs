@@ -1,0 +1,207 @@
+//! Every message survives serde + bincode unchanged: that is how runs are recorded to disk.
+
+use std::borrow::Cow;
+
+use ipc_types::*;
+
+fn encode<T: serde::Serialize + ?Sized>(value: &T) -> Vec<u8> {
+    bincode::serde::encode_to_vec(value, bincode::config::standard()).expect("encode")
+}
+
+fn decode<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> T {
+    let (value, used) =
+        bincode::serde::decode_from_slice(bytes, bincode::config::standard()).expect("decode");
+    assert_eq!(used, bytes.len(), "trailing bytes");
+    value
+}
+
+fn header(seq: u64) -> Header {
+    let mut header = Header::new(seq, 1_234_567_890_123_456_789, "laser");
+    header.sent_ns = 42;
+    header
+}
+
+fn corner(i: usize) -> Corner {
+    let mut covariance = [0.0; 16];
+    for (k, c) in covariance.iter_mut().enumerate() {
+        *c = (i * 16 + k) as f64 * 1e-4;
+    }
+    Corner {
+        x: i as f64 * 0.5,
+        y: -(i as f64),
+        heading: 0.1 * i as f64,
+        angle: 1.5,
+        covariance,
+    }
+}
+
+#[test]
+fn laser_scan_round_trips_with_rep117_values() {
+    let mut scan = LaserScan::boxed_zeroed();
+    scan.header = header(7);
+    scan.angle_min = -2.356_194_5;
+    scan.angle_increment = 0.004_363_323;
+    scan.time_increment = 1.0 / 43_200.0;
+    scan.scan_time = 0.025;
+    scan.range_min = 0.1;
+    scan.range_max = 30.0;
+    let ranges: Vec<f32> = (0..1081)
+        .map(|i| match i % 97 {
+            0 => f32::INFINITY,
+            1 => f32::NEG_INFINITY,
+            _ => 0.5 + i as f32 * 0.01,
+        })
+        .collect();
+    let intensities: Vec<f32> = (0..1081).map(|i| i as f32).collect();
+    scan.set_beams(&ranges, &intensities).unwrap();
+
+    let bytes = encode(&*scan);
+    // Only the beams in use are written, not the 8192-beam capacity.
+    assert!(bytes.len() < 1081 * 2 * 4 + 200, "{} bytes", bytes.len());
+    let record: LaserScanRecord = decode(&bytes);
+    let back = LaserScan::from_record(&record).unwrap();
+    assert_eq!(*back, *scan);
+    assert_eq!(back.header.frame_id(), "laser");
+    assert_eq!(back.ranges().len(), 1081);
+}
+
+#[test]
+fn nan_ranges_survive_bitwise() {
+    let mut scan = LaserScan::boxed_zeroed();
+    scan.set_beams(&[f32::NAN, 1.0], &[]).unwrap();
+    let record: LaserScanRecord = decode(&encode(&*scan));
+    let back = LaserScan::from_record(&record).unwrap();
+    assert!(back.ranges()[0].is_nan());
+    assert_eq!(back.ranges()[1], 1.0);
+}
+
+#[test]
+fn too_many_beams_is_an_error_not_a_panic() {
+    let mut scan = LaserScan::boxed_zeroed();
+    let err = scan.set_beams(&vec![1.0; MAX_BEAMS + 1], &[]).unwrap_err();
+    assert_eq!(err.capacity, MAX_BEAMS);
+    let record = LaserScanRecord {
+        header: header(0),
+        angle_min: 0.0,
+        angle_increment: 0.1,
+        time_increment: 0.0,
+        scan_time: 0.0,
+        range_min: 0.0,
+        range_max: 1.0,
+        ranges: Cow::Owned(vec![1.0; 3]),
+        intensities: Cow::Owned(vec![1.0; 2]),
+    };
+    assert!(
+        LaserScan::from_record(&record).is_err(),
+        "mismatched intensities"
+    );
+}
+
+#[test]
+fn a_corrupt_count_cannot_read_past_the_capacity() {
+    let mut scan = LaserScan::boxed_zeroed();
+    scan.beam_count = u32::MAX;
+    assert_eq!(scan.ranges().len(), MAX_BEAMS);
+}
+
+#[test]
+fn features_round_trip() {
+    let mut features = Features::boxed_zeroed();
+    features.header = header(3);
+    features.scan_sent_ns = 99;
+    features.processing_ns = 12_345;
+    let lines: Vec<Line> = (0..5)
+        .map(|i| Line {
+            rho: i as f64,
+            theta: -0.3 * i as f64,
+            covariance: [1e-4, 1e-6, 1e-6, 1e-5],
+            start: [0.0, i as f64],
+            end: [1.0, i as f64],
+            point_count: 10 + i,
+            reserved: 0,
+        })
+        .collect();
+    let corners: Vec<Corner> = (0..4).map(corner).collect();
+    features.set(&lines, &corners).unwrap();
+    let record: FeaturesRecord = decode(&encode(&*features));
+    assert_eq!(*Features::from_record(&record).unwrap(), *features);
+}
+
+#[test]
+fn map_snapshot_round_trips_at_full_capacity() {
+    let mut map = MapSnapshot::boxed_zeroed();
+    map.header = header(1199);
+    let corners: Vec<MapCorner> = (0..MAX_MAP_CORNERS)
+        .map(|i| MapCorner {
+            corner: corner(i),
+            observations: i as u32,
+            reserved: 0,
+        })
+        .collect();
+    map.set(&corners).unwrap();
+    let record: MapSnapshotRecord = decode(&encode(&*map));
+    assert_eq!(*MapSnapshot::from_record(&record).unwrap(), *map);
+}
+
+#[test]
+fn world_corners_round_trip() {
+    let mut world = WorldCorners::boxed_zeroed();
+    world.header = header(0);
+    let corners: Vec<TrueCorner> = (0..100)
+        .map(|i| TrueCorner {
+            x: i as f64,
+            y: 2.0 * i as f64,
+            heading: 0.01 * i as f64,
+            angle: 1.57,
+        })
+        .collect();
+    world.set(&corners).unwrap();
+    let record: WorldCornersRecord = decode(&encode(&*world));
+    assert_eq!(*WorldCorners::from_record(&record).unwrap(), *world);
+}
+
+#[test]
+fn small_messages_round_trip() {
+    let odometry = Odometry {
+        header: header(5),
+        pose: Pose2::new(1.0, -2.0, 0.5),
+        covariance: [0.01, 0.0, 0.0, 0.0, 0.01, 0.0, 0.0, 0.0, 0.001],
+        linear_velocity: 0.7,
+        angular_velocity: -0.1,
+    };
+    assert_eq!(decode::<Odometry>(&encode(&odometry)), odometry);
+
+    let truth = GroundTruthPose {
+        header: header(6),
+        pose: Pose2::new(3.0, 4.0, -3.0),
+    };
+    assert_eq!(decode::<GroundTruthPose>(&encode(&truth)), truth);
+
+    let estimate = PoseEstimate {
+        header: header(8),
+        scan_sent_ns: 17,
+        best: Pose2::new(1.0, 2.0, 0.1),
+        mean: Pose2::new(1.1, 2.1, 0.11),
+        dead_reckoning: Pose2::new(0.9, 2.2, 0.2),
+        covariance: [1e-3, 0.0, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0, 1e-4],
+        effective_particles: 63.5,
+        particle_count: 100,
+        map_corners: 42,
+        timing: StageTiming {
+            motion_ns: 1,
+            predict_ns: 2,
+            update_ns: 3,
+            resample_ns: 4,
+            total_ns: 10,
+        },
+    };
+    assert_eq!(decode::<PoseEstimate>(&encode(&estimate)), estimate);
+}
+
+#[test]
+fn frame_ids_are_cut_at_a_character_boundary() {
+    let mut header = Header::new(0, 0, "");
+    header.set_frame_id(&"é".repeat(20));
+    assert_eq!(header.frame_id(), "é".repeat(16));
+    assert!(!header.is_end_of_stream());
+}

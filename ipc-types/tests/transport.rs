@@ -1,0 +1,156 @@
+//! The transport over real shared memory: lossless streams lose nothing, domains never cross.
+
+use std::time::{Duration, Instant};
+
+use ipc_types::prelude::*;
+
+fn unique_domain(tag: &str) -> Domain {
+    let nanos = now_ns() % 1_000_000_000;
+    Domain::new(&format!("t-{tag}-{}-{nanos}", std::process::id())).unwrap()
+}
+
+/// Receives scans until end of stream; returns their sequence numbers.
+fn drain_until_end(inlet: &Inlet<LaserScan>) -> Vec<u64> {
+    let mut seqs = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        assert!(Instant::now() < deadline, "no end of stream after {seqs:?}");
+        wait_any(&[inlet], Duration::from_millis(50)).unwrap();
+        while let Some(sample) = inlet.receive().unwrap() {
+            if sample.header.is_end_of_stream() {
+                return seqs;
+            }
+            assert_eq!(sample.ranges().len(), 3);
+            seqs.push(sample.header.seq);
+        }
+    }
+}
+
+#[test]
+fn lossless_stream_delivers_every_message_in_order() {
+    let domain = unique_domain("lossless");
+    let publisher_domain = domain.clone();
+    let sender = std::thread::spawn(move || {
+        let node = publisher_domain.node("sender").unwrap();
+        let outlet =
+            Outlet::create(&publisher_domain, &node, topic::SCAN, Delivery::Lossless, 0).unwrap();
+        assert!(
+            outlet
+                .wait_for_subscribers(1, Some(Duration::from_secs(20)))
+                .unwrap()
+        );
+        for seq in 0..500 {
+            outlet
+                .publish(|scan| {
+                    scan.header = Header::new(seq, seq * 25_000_000, "laser");
+                    scan.set_beams(&[1.0, 2.0, 3.0], &[]).unwrap();
+                })
+                .unwrap();
+        }
+        outlet.publish_end_of_stream(500, 0).unwrap();
+    });
+
+    let node = domain.node("receiver").unwrap();
+    let inlet = Inlet::open(&node, topic::SCAN).unwrap();
+    assert_eq!(inlet.delivery(), Delivery::Lossless);
+    let seqs = drain_until_end(&inlet);
+    sender.join().unwrap();
+    assert_eq!(seqs, (0..500).collect::<Vec<_>>());
+}
+
+#[test]
+fn latest_delivery_drops_the_oldest_and_never_blocks() {
+    let domain = unique_domain("latest");
+    let node = domain.node("both").unwrap();
+    let outlet = Outlet::create(&domain, &node, topic::SCAN, Delivery::Latest, 0).unwrap();
+    let inlet = Inlet::open(&node, topic::SCAN).unwrap();
+    assert_eq!(inlet.delivery(), Delivery::Latest);
+    let total = ipc_types::LATEST_QUEUE as u64 * 3;
+    for seq in 0..total {
+        outlet
+            .publish(|scan| {
+                scan.header.seq = seq;
+                scan.set_beams(&[1.0, 2.0, 3.0], &[]).unwrap();
+            })
+            .unwrap();
+    }
+    let mut seqs = Vec::new();
+    while let Some(sample) = inlet.receive().unwrap() {
+        seqs.push(sample.header.seq);
+    }
+    let expected: Vec<u64> = (total - ipc_types::LATEST_QUEUE as u64..total).collect();
+    assert_eq!(seqs, expected);
+}
+
+#[test]
+fn two_domains_never_cross() {
+    let a = unique_domain("a");
+    let b = unique_domain("b");
+    let node_a = a.node("pub").unwrap();
+    let node_b = b.node("pub").unwrap();
+    let out_a = Outlet::create(&a, &node_a, topic::SCAN, Delivery::Latest, 0).unwrap();
+    let out_b = Outlet::create(&b, &node_b, topic::SCAN, Delivery::Latest, 0).unwrap();
+    let in_a = Inlet::open(&a.node("sub").unwrap(), topic::SCAN).unwrap();
+    let in_b = Inlet::open(&b.node("sub").unwrap(), topic::SCAN).unwrap();
+    out_a.publish(|s| s.header.seq = 1).unwrap();
+    out_b.publish(|s| s.header.seq = 2).unwrap();
+    out_b.publish(|s| s.header.seq = 3).unwrap();
+    assert_eq!(in_a.receive().unwrap().map(|s| s.header.seq), Some(1));
+    assert!(in_a.receive().unwrap().is_none());
+    assert_eq!(in_b.receive().unwrap().map(|s| s.header.seq), Some(2));
+    assert_eq!(in_b.receive().unwrap().map(|s| s.header.seq), Some(3));
+}
+
+#[test]
+fn history_reaches_a_late_subscriber() {
+    let domain = unique_domain("history");
+    let node = domain.node("n").unwrap();
+    let outlet =
+        Outlet::create(&domain, &node, topic::WORLD_CORNERS, Delivery::Lossless, 1).unwrap();
+    outlet
+        .publish(|w| {
+            w.set(&[TrueCorner {
+                x: 1.0,
+                y: 2.0,
+                heading: 0.0,
+                angle: 1.57,
+            }])
+            .unwrap()
+        })
+        .unwrap();
+    let inlet = Inlet::open(&node, topic::WORLD_CORNERS).unwrap();
+    outlet.update_connections().unwrap();
+    let sample = inlet.receive().unwrap().expect("history sample");
+    assert_eq!(sample.corners().len(), 1);
+}
+
+#[test]
+fn bad_domain_names_are_refused() {
+    assert!(Domain::new("").is_err());
+    assert!(Domain::new("a/b").is_err());
+    assert!(Domain::new("under_score").is_err());
+    assert!(Domain::new(&"x".repeat(41)).is_err());
+    assert_eq!(Domain::new("run-1").unwrap().file_prefix(), "slam_run-1_");
+}
+
+#[test]
+fn leftovers_are_removed_once_the_nodes_are_gone() {
+    let domain = unique_domain("leftovers");
+    {
+        let node = domain.node("n").unwrap();
+        let _outlet = Outlet::create(&domain, &node, topic::POSE, Delivery::Latest, 0).unwrap();
+        assert!(
+            !domain
+                .leftovers_in(std::path::Path::new("/dev/shm"))
+                .unwrap()
+                .is_empty()
+        );
+    }
+    domain.remove_leftovers().unwrap();
+    assert!(
+        domain
+            .leftovers_in(std::path::Path::new("/dev/shm"))
+            .unwrap()
+            .is_empty()
+    );
+}
