@@ -5,6 +5,8 @@ use iceoryx2::prelude::*;
 
 /// Characters a domain name may have: they become part of file names in /dev/shm.
 const MAX_DOMAIN_LEN: usize = 40;
+/// A domain with no live node whose files are this old is abandoned.
+const ABANDONED_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
 /// Prefix of every file a domain leaves in /dev/shm and /tmp/iceoryx2.
 pub const FILE_PREFIX: &str = "slam_";
 
@@ -128,6 +130,68 @@ impl Domain {
             }
         }
         Ok(removed)
+    }
+
+    /// True when every file of this domain in /dev/shm is older than `age`.
+    fn is_older_than(&self, age: std::time::Duration) -> bool {
+        let Ok(files) = self.leftovers_in(std::path::Path::new("/dev/shm")) else {
+            return false;
+        };
+        files.iter().all(|path| {
+            std::fs::metadata(path)
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| t.elapsed().ok())
+                .is_some_and(|elapsed| elapsed >= age)
+        })
+    }
+
+    /// Nodes of this domain whose processes are alive.
+    pub fn alive_nodes(&self) -> usize {
+        let mut alive = 0;
+        // A listing error means there are no nodes yet.
+        let _ = Node::<ipc::Service>::list(&self.config, |state| {
+            if let NodeState::Alive(_) = state {
+                alive += 1;
+            }
+            CallbackProgression::Continue
+        });
+        alive
+    }
+
+    /// Cleans up every domain in /dev/shm that no live process uses any more: dead nodes are
+    /// removed and, where no node is alive, the domain's files too. Returns the domains
+    /// cleaned. Run at start so crashed runs do not pile up shared memory.
+    pub fn sweep_abandoned() -> Vec<String> {
+        let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+            return Vec::new();
+        };
+        let mut names: Vec<String> = entries
+            .filter_map(|entry| entry.ok())
+            .filter_map(|entry| {
+                let file = entry.file_name().to_string_lossy().into_owned();
+                let rest = file.strip_prefix(FILE_PREFIX)?;
+                Some(rest.split('_').next()?.to_owned())
+            })
+            .collect();
+        names.sort();
+        names.dedup();
+        let mut cleaned = Vec::new();
+        for name in names {
+            let Ok(domain) = Domain::new(&name) else {
+                continue;
+            };
+            let dead = domain.cleanup_dead_nodes();
+            // A pipeline starting right now has files but no node yet: leave young domains.
+            if domain.alive_nodes() == 0 && domain.is_older_than(ABANDONED_AFTER) {
+                if domain.remove_leftovers().unwrap_or(0) > 0 || dead > 0 {
+                    cleaned.push(name);
+                }
+            } else if dead > 0 {
+                cleaned.push(name);
+            }
+        }
+        cleaned
     }
 
     /// Removes the resources of this domain's nodes whose processes died, so a killed

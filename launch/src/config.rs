@@ -1,0 +1,174 @@
+//! The run configuration: one TOML file for every process, command-line options on top.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+/// Why a configuration file was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("cannot read config file {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("config file {path}: {source}")]
+    Parse {
+        path: PathBuf,
+        source: Box<toml::de::Error>,
+    },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Where the scans come from.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimSection {
+    /// `hall`, `office`, `corridor` or a world file (JSON).
+    pub world: String,
+    /// Scans to publish (0 = until the end of the path).
+    pub frames: u64,
+    /// Scans per second; 0 = lockstep (lossless and deterministic).
+    pub rate: f64,
+    /// Noise seed.
+    pub seed: u64,
+    /// Publish noisy wheel odometry too.
+    pub odometry: bool,
+    /// Anything else `lidar-sim --config` takes (sensor and vehicle settings).
+    #[serde(flatten)]
+    pub extra: toml::Table,
+}
+
+impl Default for SimSection {
+    fn default() -> Self {
+        Self {
+            world: "office".into(),
+            frames: 0,
+            rate: 0.0,
+            seed: 1,
+            odometry: false,
+            extra: toml::Table::new(),
+        }
+    }
+}
+
+/// SLAM settings; `extra` goes to `slam-proc --config` as is.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SlamSection {
+    pub particles: usize,
+    pub seed: u64,
+    /// Publish the map every this many scans (and at the end).
+    pub map_every: u64,
+    #[serde(flatten)]
+    pub extra: toml::Table,
+}
+
+impl Default for SlamSection {
+    fn default() -> Self {
+        Self {
+            particles: 100,
+            seed: 1,
+            map_every: 20,
+            extra: toml::Table::new(),
+        }
+    }
+}
+
+/// The whole run. Sections the launcher does not interpret (`features`) are handed to the
+/// process they name, which validates them and names any mistake.
+#[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    pub sim: SimSection,
+    pub features: toml::Table,
+    pub slam: SlamSection,
+}
+
+impl RunConfig {
+    /// Reads a config file; unknown keys are errors so a typo never passes silently.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        toml::from_str(&text).map_err(|source| ConfigError::Parse {
+            path: path.to_owned(),
+            source: Box::new(source),
+        })
+    }
+
+    /// Checks what the launcher itself relies on.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if !(self.sim.rate.is_finite() && self.sim.rate >= 0.0) {
+            return Err(ConfigError::Invalid(format!(
+                "rate must be 0 (lockstep) or a positive number of scans per second, not {}",
+                self.sim.rate
+            )));
+        }
+        if self.slam.particles == 0 {
+            return Err(ConfigError::Invalid("particles must be at least 1".into()));
+        }
+        if self.slam.map_every == 0 {
+            return Err(ConfigError::Invalid("map_every must be at least 1".into()));
+        }
+        Ok(())
+    }
+
+    /// A section as the TOML text its process reads with `--config`.
+    pub fn section_text(table: &toml::Table) -> String {
+        toml::to_string(table).unwrap_or_default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_full_file_parses_and_extra_keys_reach_the_process() {
+        let config: RunConfig = toml::from_str(
+            r#"
+            [sim]
+            world = "hall"
+            frames = 300
+            range_noise = 0.02
+            [features]
+            split_threshold = 0.05
+            [slam]
+            particles = 50
+            resample_threshold = 0.4
+            "#,
+        )
+        .unwrap();
+        assert_eq!(config.sim.world, "hall");
+        assert_eq!(config.sim.frames, 300);
+        assert_eq!(config.sim.extra["range_noise"].as_float(), Some(0.02));
+        assert_eq!(config.features["split_threshold"].as_float(), Some(0.05));
+        assert_eq!(config.slam.particles, 50);
+        assert!(config.slam.extra.contains_key("resample_threshold"));
+        config.validate().unwrap();
+    }
+
+    #[test]
+    fn unknown_sections_are_refused() {
+        assert!(toml::from_str::<RunConfig>("[simulation]\nworld = 'x'").is_err());
+    }
+
+    #[test]
+    fn bad_numbers_are_named() {
+        let mut config = RunConfig::default();
+        config.sim.rate = -1.0;
+        assert!(config.validate().unwrap_err().to_string().contains("rate"));
+        config.sim.rate = 0.0;
+        config.slam.particles = 0;
+        assert!(
+            config
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .contains("particles")
+        );
+    }
+}

@@ -1,0 +1,19 @@
+//! # slam-launch
+//!
+//! Starts the pipeline's processes in a fresh iceoryx2 domain of their own, watches them,
+//! shows progress and stops them cleanly:
+//!
+//! * consumers first (`map-sink`, `slam-proc`, `feature-proc`), the scan publisher last; each
+//!   prints `ready` once its ports are connected, and a lossless publisher waits for its
+//!   subscribers before it streams, so nothing is lost at start;
+//! * a child that dies is named with its exit status and the tail of its stderr, its dead
+//!   node is cleaned up at once (a dead subscriber would otherwise stall a lossless
+//!   publisher), the others are stopped and the run fails;
+//! * Ctrl-C or SIGTERM stops every child and waits for map-sink to write its results;
+//! * shared memory of crashed earlier runs is cleaned up at start, and nothing of this run is
+//!   left in /dev/shm at the end.
+
+pub mod config;
+pub mod stage;
+pub mod status;
+pub mod supervisor;

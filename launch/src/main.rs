@@ -1,0 +1,297 @@
+//! `slam-launch`: one command runs the whole pipeline and leaves its results in a directory.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use clap::Parser;
+use ipc_types::{Domain, shutdown};
+use launch::config::RunConfig;
+use launch::supervisor::{self, Display, Outcome, StagePlan};
+
+/// Runs lidar-sim -> feature-proc -> slam-proc -> map-sink as separate processes over
+/// iceoryx2 shared memory in a domain of their own, and writes trajectory, map, picture and
+/// metrics into the output directory.
+///
+/// Every setting can also come from a TOML file (--config) with the sections [sim],
+/// [features] and [slam]; options given here override the file. Keys a section does not
+/// know are refused by the process that reads it.
+#[derive(Debug, Parser)]
+#[command(name = "slam-launch", version)]
+struct Args {
+    /// TOML file with [sim], [features] and [slam] sections.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// World to simulate: hall, office, corridor or a world file (JSON).
+    #[arg(long)]
+    world: Option<String>,
+    /// Scans to simulate (0 = the whole path of the world).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Scans per second; 0 = lockstep: nothing is lost and a run repeats exactly for its seed.
+    #[arg(long)]
+    rate: Option<f64>,
+    /// Seed of the simulator's noise and of the particle filter.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Particles of the filter.
+    #[arg(long)]
+    particles: Option<usize>,
+    /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
+    #[arg(long)]
+    odometry: bool,
+    /// Output directory (default: runs/<world>).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// iceoryx2 domain of this run (default: a fresh one).
+    #[arg(long)]
+    domain: Option<String>,
+    /// Directory with the pipeline's executables (default: this program's directory).
+    #[arg(long, value_name = "DIR")]
+    bin_dir: Option<PathBuf>,
+    /// No progress output, only the final summary.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("slam-launch: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run() -> Result<ExitCode> {
+    let args = Args::parse();
+    shutdown::install().context("cannot install the Ctrl-C handler")?;
+
+    let mut config = match &args.config {
+        Some(path) => RunConfig::load(path)?,
+        None => RunConfig::default(),
+    };
+    apply_overrides(&mut config, &args);
+    config.validate()?;
+
+    let bin_dir = match &args.bin_dir {
+        Some(dir) => dir.clone(),
+        None => std::env::current_exe()
+            .context("cannot find this program's path")?
+            .parent()
+            .map(Path::to_path_buf)
+            .context("this program has no directory")?,
+    };
+    let out = args.out.clone().unwrap_or_else(|| {
+        let stem = Path::new(&config.sim.world)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "run".into());
+        PathBuf::from("runs").join(stem)
+    });
+    let config_dir = out.join("config");
+    let log_dir = out.join("logs");
+    for dir in [&out, &config_dir, &log_dir] {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create directory {}", dir.display()))?;
+    }
+    std::fs::write(
+        out.join("config.toml"),
+        toml::to_string(&config).context("cannot write the effective configuration")?,
+    )?;
+
+    let cleaned = Domain::sweep_abandoned();
+    if !cleaned.is_empty() {
+        eprintln!(
+            "cleaned up shared memory of {} abandoned run(s): {}",
+            cleaned.len(),
+            cleaned.join(", ")
+        );
+    }
+    let domain_name = args.domain.clone().unwrap_or_else(|| {
+        format!(
+            "run-{}-{}",
+            std::process::id(),
+            ipc_types::now_ns() % 1_000_000_000
+        )
+    });
+    let domain = Domain::new(&domain_name)?;
+    domain.cleanup_dead_nodes();
+
+    let plan = plan(&config, &domain, &bin_dir, &out, &config_dir)?;
+    let display = Display {
+        label: config.sim.world.clone(),
+        total_frames: (config.sim.frames > 0).then_some(config.sim.frames),
+        quiet: args.quiet,
+    };
+    let outcome = supervisor::run(&plan, &domain, &log_dir, &display)?;
+
+    domain.cleanup_dead_nodes();
+    if let Err(e) = domain.remove_leftovers() {
+        eprintln!("cannot remove the run's shared memory: {e}");
+    }
+
+    match outcome {
+        Outcome::Finished => {
+            print_summary(&out)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Outcome::Interrupted => {
+            eprintln!("interrupted; partial results in {}", out.display());
+            Ok(ExitCode::from(130))
+        }
+        Outcome::Failed(message) => {
+            eprintln!("slam-launch: {message}");
+            eprintln!("logs in {}", log_dir.display());
+            Ok(ExitCode::FAILURE)
+        }
+    }
+}
+
+fn apply_overrides(config: &mut RunConfig, args: &Args) {
+    if let Some(world) = &args.world {
+        config.sim.world = world.clone();
+    }
+    if let Some(frames) = args.frames {
+        config.sim.frames = frames;
+    }
+    if let Some(rate) = args.rate {
+        config.sim.rate = rate;
+    }
+    if let Some(seed) = args.seed {
+        config.sim.seed = seed;
+        config.slam.seed = seed;
+    }
+    if let Some(particles) = args.particles {
+        config.slam.particles = particles;
+    }
+    if args.odometry {
+        config.sim.odometry = true;
+    }
+}
+
+/// The processes of a simulated run, consumers first and the source last.
+fn plan(
+    config: &RunConfig,
+    domain: &Domain,
+    bin_dir: &Path,
+    out: &Path,
+    config_dir: &Path,
+) -> Result<Vec<StagePlan>> {
+    let program = |name: &str| -> Result<PathBuf> {
+        let path = bin_dir.join(name);
+        if !path.is_file() {
+            bail!(
+                "{} not found; build the workspace first (cargo build --release)",
+                path.display()
+            );
+        }
+        Ok(path)
+    };
+    let section = |name: &str, table: &toml::Table| -> Result<Vec<String>> {
+        if table.is_empty() {
+            return Ok(Vec::new());
+        }
+        let path = config_dir.join(format!("{name}.toml"));
+        std::fs::write(&path, RunConfig::section_text(table))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(vec!["--config".into(), path.display().to_string()])
+    };
+    let d = domain.name().to_owned();
+
+    let sink = vec![
+        "--domain".into(),
+        d.clone(),
+        "--out".into(),
+        out.display().to_string(),
+        "--status".into(),
+    ];
+    let mut slam = vec![
+        "--domain".into(),
+        d.clone(),
+        "--particles".into(),
+        config.slam.particles.to_string(),
+        "--seed".into(),
+        config.slam.seed.to_string(),
+        "--map-every".into(),
+        config.slam.map_every.to_string(),
+    ];
+    slam.extend(section("slam", &config.slam.extra)?);
+    let mut features = vec!["--domain".into(), d.clone()];
+    features.extend(section("features", &config.features)?);
+    let mut sim = vec![
+        "--world".into(),
+        config.sim.world.clone(),
+        "--frames".into(),
+        config.sim.frames.to_string(),
+        "--rate".into(),
+        config.sim.rate.to_string(),
+        "--seed".into(),
+        config.sim.seed.to_string(),
+        "--domain".into(),
+        d,
+        // feature-proc and map-sink take the scans.
+        "--subscribers".into(),
+        "2".into(),
+    ];
+    if config.sim.odometry {
+        sim.push("--odometry".into());
+    }
+    sim.extend(section("sim", &config.sim.extra)?);
+
+    Ok(vec![
+        StagePlan {
+            name: "map-sink".into(),
+            program: program("map-sink")?,
+            args: sink,
+        },
+        StagePlan {
+            name: "slam-proc".into(),
+            program: program("slam-proc")?,
+            args: slam,
+        },
+        StagePlan {
+            name: "feature-proc".into(),
+            program: program("feature-proc")?,
+            args: features,
+        },
+        StagePlan {
+            name: "lidar-sim".into(),
+            program: program("lidar-sim")?,
+            args: sim,
+        },
+    ])
+}
+
+/// Prints the key numbers of metrics.json.
+fn print_summary(out: &Path) -> Result<()> {
+    let path = out.join("metrics.json");
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("the run finished but {} is missing", path.display()))?;
+    let metrics: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+    let number = |key: &str| metrics.get(key).and_then(serde_json::Value::as_f64);
+    let mut line = format!("results in {}", out.display());
+    for (key, label, unit) in [
+        ("frames_processed", "scans", ""),
+        ("scans_per_s", "rate", " scans/s"),
+        ("ate_rmse_m", "ATE RMSE", " m"),
+        ("map_corner_rmse_m", "map RMSE", " m"),
+        ("map_corners", "map", " corners"),
+    ] {
+        if let Some(value) = number(key) {
+            line.push_str(&format!(" | {label} {}{unit}", trim(value)));
+        }
+    }
+    println!("{line}");
+    Ok(())
+}
+
+fn trim(value: f64) -> String {
+    if value.fract() == 0.0 && value.abs() < 1e12 {
+        format!("{value:.0}")
+    } else {
+        format!("{value:.3}")
+    }
+}

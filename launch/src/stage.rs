@@ -1,0 +1,162 @@
+//! One child process of the pipeline: started, watched through its output, stopped.
+
+use std::collections::VecDeque;
+use std::io::{BufRead, BufReader, Write};
+use std::path::Path;
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::mpsc::Sender;
+use std::sync::{Arc, Mutex};
+
+/// Lines of a child's stderr kept to explain its death.
+const STDERR_TAIL: usize = 20;
+
+/// What a child said on stdout, line by line.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StageEvent {
+    /// The child's ports are connected (`ready`).
+    Ready(usize),
+    /// A `status key=value ...` progress line.
+    Status(usize, String),
+    /// Any other line.
+    Line(usize, String),
+}
+
+/// Why a stage could not be started.
+#[derive(Debug, thiserror::Error)]
+pub enum StageError {
+    #[error("cannot start {name} ({program}): {source}")]
+    Spawn {
+        name: String,
+        program: String,
+        source: std::io::Error,
+    },
+    #[error("cannot create log file {path}: {source}")]
+    Log {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+/// A running child.
+#[derive(Debug)]
+pub struct Stage {
+    pub name: String,
+    child: Child,
+    stderr_tail: Arc<Mutex<VecDeque<String>>>,
+    exit: Option<ExitStatus>,
+}
+
+impl Stage {
+    /// Starts `program args` as stage `index`; stdout lines become events, stderr goes to
+    /// `log_dir/<name>.log` and its last lines are kept.
+    pub fn spawn(
+        index: usize,
+        name: &str,
+        program: &Path,
+        args: &[String],
+        log_dir: &Path,
+        events: Sender<StageEvent>,
+    ) -> Result<Self, StageError> {
+        let log_path = log_dir.join(format!("{name}.log"));
+        let mut log = std::fs::File::create(&log_path).map_err(|source| StageError::Log {
+            path: log_path.display().to_string(),
+            source,
+        })?;
+        let _ = writeln!(log, "$ {} {}", program.display(), args.join(" "));
+        let mut child = Command::new(program)
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|source| StageError::Spawn {
+                name: name.to_owned(),
+                program: program.display().to_string(),
+                source,
+            })?;
+        if let Some(stdout) = child.stdout.take() {
+            std::thread::spawn(move || {
+                for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                    let event = if line == "ready" {
+                        StageEvent::Ready(index)
+                    } else if let Some(rest) = line.strip_prefix("status ") {
+                        StageEvent::Status(index, rest.to_owned())
+                    } else {
+                        StageEvent::Line(index, line)
+                    };
+                    if events.send(event).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        let stderr_tail = Arc::new(Mutex::new(VecDeque::with_capacity(STDERR_TAIL)));
+        if let Some(stderr) = child.stderr.take() {
+            let tail = Arc::clone(&stderr_tail);
+            std::thread::spawn(move || {
+                for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                    let _ = writeln!(log, "{line}");
+                    if let Ok(mut tail) = tail.lock() {
+                        if tail.len() == STDERR_TAIL {
+                            tail.pop_front();
+                        }
+                        tail.push_back(line);
+                    }
+                }
+            });
+        }
+        Ok(Self {
+            name: name.to_owned(),
+            child,
+            stderr_tail,
+            exit: None,
+        })
+    }
+
+    /// The exit status once the child has ended (polls without blocking).
+    pub fn poll_exit(&mut self) -> Option<ExitStatus> {
+        if self.exit.is_none() {
+            self.exit = self.child.try_wait().ok().flatten();
+        }
+        self.exit
+    }
+
+    /// The last lines the child wrote to stderr.
+    pub fn stderr_tail(&self) -> Vec<String> {
+        self.stderr_tail
+            .lock()
+            .map(|tail| tail.iter().cloned().collect())
+            .unwrap_or_default()
+    }
+
+    /// Sends `signal` unless the child has already ended.
+    pub fn signal(&mut self, signal: libc::c_int) {
+        if self.poll_exit().is_some() {
+            return;
+        }
+        if let Ok(pid) = libc::pid_t::try_from(self.child.id()) {
+            // SAFETY: kill(2) with a pid we own and have not reaped yet.
+            unsafe {
+                libc::kill(pid, signal);
+            }
+        }
+    }
+
+    /// Kills the child for good and reaps it.
+    pub fn kill(&mut self) {
+        if self.poll_exit().is_none() {
+            let _ = self.child.kill();
+            self.exit = self.child.wait().ok();
+        }
+    }
+}
+
+/// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`.
+pub fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(code), _) => format!("exit status {code}"),
+        (None, Some(signal)) => format!("killed by signal {signal}"),
+        _ => status.to_string(),
+    }
+}

@@ -1,0 +1,255 @@
+//! Runs the stages of a pipeline to completion, failure or interruption.
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use ipc_types::{Domain, shutdown};
+
+use crate::stage::{Stage, StageError, StageEvent, describe};
+use crate::status::Progress;
+
+/// How long every stage has to print `ready`.
+const READY_TIMEOUT: Duration = Duration::from_secs(60);
+/// How long the pipeline may make no progress after the source has finished.
+const STALL_TIMEOUT: Duration = Duration::from_secs(120);
+/// How long stopped stages have to finish writing before they are killed.
+const STOP_GRACE: Duration = Duration::from_secs(30);
+const POLL: Duration = Duration::from_millis(50);
+
+/// A process to start.
+#[derive(Debug, Clone)]
+pub struct StagePlan {
+    pub name: String,
+    pub program: PathBuf,
+    pub args: Vec<String>,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Every stage exited 0 after the source finished.
+    Finished,
+    /// Ctrl-C or SIGTERM; every stage was stopped.
+    Interrupted,
+    /// A stage died or the pipeline stalled; the message says which and why.
+    Failed(String),
+}
+
+/// Options of the progress display.
+#[derive(Debug, Clone)]
+pub struct Display {
+    pub label: String,
+    pub total_frames: Option<u64>,
+    pub quiet: bool,
+}
+
+/// Starts `plan` in order (the source last), supervises it and stops it.
+/// The stages must all use `domain`.
+pub fn run(
+    plan: &[StagePlan],
+    domain: &Domain,
+    log_dir: &Path,
+    display: &Display,
+) -> Result<Outcome, StageError> {
+    let (sender, events) = mpsc::channel();
+    let mut stages = Vec::with_capacity(plan.len());
+    for (index, stage) in plan.iter().enumerate() {
+        match Stage::spawn(
+            index,
+            &stage.name,
+            &stage.program,
+            &stage.args,
+            log_dir,
+            sender.clone(),
+        ) {
+            Ok(stage) => stages.push(stage),
+            Err(e) => {
+                stop_all(&mut stages, domain);
+                return Err(e);
+            }
+        }
+    }
+    drop(sender);
+
+    let mut printer = Printer::new(display);
+    let mut progress = Progress::default();
+    let mut ready = vec![false; stages.len()];
+    let started = Instant::now();
+    let mut last_progress = (0, Instant::now());
+    let source = stages.len().saturating_sub(1);
+
+    let outcome = loop {
+        while let Ok(event) = events.try_recv() {
+            match event {
+                StageEvent::Ready(i) => ready[i] = true,
+                StageEvent::Status(_, line) => progress.update(&line),
+                StageEvent::Line(i, line) => printer.line(&stages[i].name, &line),
+            }
+        }
+        printer.progress(&progress);
+
+        if shutdown::requested() {
+            stop_all(&mut stages, domain);
+            break Outcome::Interrupted;
+        }
+
+        let mut all_done = true;
+        let mut failure = None;
+        for stage in &mut stages {
+            match stage.poll_exit() {
+                None => all_done = false,
+                Some(status) if status.success() => {}
+                Some(status) => {
+                    failure.get_or_insert_with(|| {
+                        let tail = stage.stderr_tail();
+                        format!(
+                            "{} died ({}); last lines of its stderr:\n  {}",
+                            stage.name,
+                            describe(status),
+                            tail.join("\n  ")
+                        )
+                    });
+                }
+            }
+        }
+        if let Some(message) = failure {
+            // Its node is dead: clean it up at once so no publisher blocks on it.
+            domain.cleanup_dead_nodes();
+            stop_all(&mut stages, domain);
+            break Outcome::Failed(message);
+        }
+        if all_done {
+            break Outcome::Finished;
+        }
+
+        if !ready.iter().all(|&r| r) && started.elapsed() > READY_TIMEOUT {
+            let waiting: Vec<String> = stages
+                .iter()
+                .zip(&ready)
+                .filter(|(_, r)| !**r)
+                .map(|(s, _)| s.name.clone())
+                .collect();
+            stop_all(&mut stages, domain);
+            break Outcome::Failed(format!(
+                "not ready after {} s: {}",
+                READY_TIMEOUT.as_secs(),
+                waiting.join(", ")
+            ));
+        }
+        if progress.frames() != last_progress.0 {
+            last_progress = (progress.frames(), Instant::now());
+        }
+        let source_done = stages
+            .get_mut(source)
+            .is_some_and(|s| s.poll_exit().is_some());
+        if source_done && last_progress.1.elapsed() > STALL_TIMEOUT {
+            stop_all(&mut stages, domain);
+            break Outcome::Failed(format!(
+                "no progress for {} s after the source finished (stalled at {} scans)",
+                STALL_TIMEOUT.as_secs(),
+                progress.frames()
+            ));
+        }
+        std::thread::sleep(POLL);
+    };
+    while let Ok(event) = events.try_recv() {
+        if let StageEvent::Status(_, line) = event {
+            progress.update(&line);
+        }
+    }
+    printer.finish(&progress);
+    Ok(outcome)
+}
+
+/// SIGTERM to every stage, the source first so the stream ends; then waits for them to
+/// finish writing and kills whoever has not after the grace period.
+fn stop_all(stages: &mut [Stage], domain: &Domain) {
+    for stage in stages.iter_mut().rev() {
+        stage.signal(libc::SIGTERM);
+    }
+    let deadline = Instant::now() + STOP_GRACE;
+    while Instant::now() < deadline && stages.iter_mut().any(|s| s.poll_exit().is_none()) {
+        std::thread::sleep(POLL);
+    }
+    for stage in stages.iter_mut() {
+        if stage.poll_exit().is_none() {
+            eprintln!(
+                "{} did not stop within {} s; killed",
+                stage.name,
+                STOP_GRACE.as_secs()
+            );
+            stage.kill();
+        }
+    }
+    domain.cleanup_dead_nodes();
+}
+
+/// Writes progress: a live line on a terminal, a plain line every few seconds otherwise.
+struct Printer {
+    label: String,
+    total: Option<u64>,
+    quiet: bool,
+    live: bool,
+    last: Instant,
+    shown: bool,
+}
+
+impl Printer {
+    fn new(display: &Display) -> Self {
+        Self {
+            label: display.label.clone(),
+            total: display.total_frames,
+            quiet: display.quiet,
+            live: std::io::stderr().is_terminal(),
+            last: Instant::now(),
+            shown: false,
+        }
+    }
+
+    fn line(&mut self, stage: &str, line: &str) {
+        if self.quiet {
+            return;
+        }
+        self.clear();
+        eprintln!("[{stage}] {line}");
+    }
+
+    fn progress(&mut self, progress: &Progress) {
+        if self.quiet || progress.frames() == 0 {
+            return;
+        }
+        let period = if self.live {
+            Duration::from_millis(200)
+        } else {
+            Duration::from_secs(5)
+        };
+        if self.last.elapsed() < period {
+            return;
+        }
+        self.last = Instant::now();
+        let text = format!("{}: {}", self.label, progress.render(self.total));
+        if self.live {
+            eprint!("\r\x1b[K{text}");
+            let _ = std::io::stderr().flush();
+            self.shown = true;
+        } else {
+            eprintln!("{text}");
+        }
+    }
+
+    fn clear(&mut self) {
+        if self.shown {
+            eprint!("\r\x1b[K");
+            self.shown = false;
+        }
+    }
+
+    fn finish(&mut self, progress: &Progress) {
+        self.clear();
+        if !self.quiet && progress.frames() > 0 {
+            eprintln!("{}: {}", self.label, progress.render(self.total));
+        }
+    }
+}
