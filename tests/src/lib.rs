@@ -1,0 +1,116 @@
+//! Helpers for the end-to-end tests: find the release binaries, run `slam-launch`, read what
+//! a run wrote.
+//!
+//! The binaries must have been built first (`cargo build --release --workspace`, as the
+//! README's test command does); the helpers say so instead of running stale ones silently.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Directory of the workspace's release binaries (`target/release`).
+pub fn bin_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    // target/<profile>/deps/<test> -> target/<profile>
+    let profile_dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile> directory")
+        .to_path_buf();
+    let release = profile_dir
+        .parent()
+        .map(|target| target.join("release"))
+        .unwrap_or_else(|| profile_dir.clone());
+    assert!(
+        release.join("slam-launch").is_file(),
+        "{} has no slam-launch: run `cargo build --release --workspace` first",
+        release.display()
+    );
+    release
+}
+
+/// A binary of the workspace.
+pub fn bin(name: &str) -> PathBuf {
+    bin_dir().join(name)
+}
+
+/// A fresh directory under the target directory for one test's output.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = bin_dir()
+        .join("e2e-scratch")
+        .join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+/// A domain name no other test uses.
+pub fn domain(tag: &str) -> String {
+    format!("e2e-{tag}-{}", std::process::id())
+}
+
+/// Runs `slam-launch` with `args`, quietly, in `domain`, writing into `out`.
+pub fn launch(domain: &str, out: &Path, args: &[&str]) -> Output {
+    Command::new(bin("slam-launch"))
+        .args(["--quiet", "--domain", domain, "--out"])
+        .arg(out)
+        .args(args)
+        .output()
+        .expect("run slam-launch")
+}
+
+/// Panics with the run's output unless it succeeded.
+pub fn assert_success(output: &Output) {
+    assert!(
+        output.status.success(),
+        "slam-launch failed ({}):\nstdout:\n{}\nstderr:\n{}",
+        output.status,
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// The run's metrics.json.
+pub fn metrics(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("metrics.json")).expect("metrics.json");
+    serde_json::from_str(&text).expect("metrics.json is JSON")
+}
+
+/// A number from metrics.json.
+pub fn number(metrics: &serde_json::Value, key: &str) -> f64 {
+    metrics
+        .get(key)
+        .and_then(serde_json::Value::as_f64)
+        .unwrap_or_else(|| panic!("metrics.json has no number '{key}': {metrics}"))
+}
+
+/// The poses of a TUM file: `(stamp, x, y, qz, qw)`; panics on a malformed line.
+pub fn read_tum(path: &Path) -> Vec<[f64; 5]> {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    text.lines()
+        .filter(|line| !line.starts_with('#') && !line.trim().is_empty())
+        .enumerate()
+        .map(|(i, line)| {
+            let fields: Vec<f64> = line
+                .split_whitespace()
+                .map(|f| f.parse().unwrap_or_else(|_| panic!("line {}: {line}", i + 1)))
+                .collect();
+            assert_eq!(fields.len(), 8, "line {} of {}: {line}", i + 1, path.display());
+            [fields[0], fields[1], fields[2], fields[6], fields[7]]
+        })
+        .collect()
+}
+
+/// Files of `domain` left in /dev/shm.
+pub fn shm_leftovers(domain: &str) -> Vec<String> {
+    let prefix = format!("slam_{domain}_");
+    std::fs::read_dir("/dev/shm")
+        .map(|entries| {
+            entries
+                .filter_map(Result::ok)
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|name| name.starts_with(&prefix))
+                .collect()
+        })
+        .unwrap_or_default()
+}

@@ -1,0 +1,175 @@
+//! The whole pipeline through `slam-launch`: the real binaries, real shared memory.
+
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use tests::*;
+
+const RESULT_FILES: [&str; 6] = [
+    "trajectory.tum",
+    "ground_truth.tum",
+    "map_corners.csv",
+    "map.svg",
+    "metrics.json",
+    "config.toml",
+];
+
+/// Runs a simulated world and checks everything a run must leave behind.
+fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> serde_json::Value {
+    let domain = domain(&format!("{}-{frames}", world.replace(['/', '.', '_'], "-")));
+    let out = scratch(&format!("world-{}", world.replace('/', "-")));
+    let frames_arg = frames.to_string();
+    let particles_arg = particles.to_string();
+    let output = launch(
+        &domain,
+        &out,
+        &["--world", world, "--frames", &frames_arg, "--particles", &particles_arg, "--seed", "1"],
+    );
+    assert_success(&output);
+    for file in RESULT_FILES {
+        assert!(out.join(file).is_file(), "{file} missing in {}", out.display());
+    }
+    let metrics = metrics(&out);
+    let published = number(&metrics, "frames_published");
+    assert!(published > 0.0);
+    assert_eq!(number(&metrics, "frames_processed"), published, "{metrics}");
+    assert_eq!(number(&metrics, "frames_dropped"), 0.0, "{metrics}");
+    let trajectory = read_tum(&out.join("trajectory.tum"));
+    assert_eq!(trajectory.len() as f64, published);
+    assert_eq!(read_tum(&out.join("ground_truth.tum")).len() as f64, published);
+    assert!(
+        trajectory.windows(2).all(|w| w[1][0] > w[0][0]),
+        "stamps must increase"
+    );
+    let ate = number(&metrics, "ate_rmse_m");
+    assert!(ate <= ate_limit, "{world}: ATE RMSE {ate} m > {ate_limit} m: {metrics}");
+    let csv = std::fs::read_to_string(out.join("map_corners.csv")).unwrap();
+    assert!(csv.starts_with("x,y,heading,angle,"));
+    assert_eq!(csv.lines().count() - 1, number(&metrics, "map_corners") as usize);
+    let svg = std::fs::read_to_string(out.join("map.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(shm_leftovers(&domain).is_empty(), "{:?}", shm_leftovers(&domain));
+    metrics
+}
+
+#[test]
+fn office_loop_is_mapped_within_target() {
+    // Target 0.10 m (README); the margin keeps a busy CI machine from flaking.
+    run_world("office", 1200, 100, 0.15);
+}
+
+#[test]
+fn hall_is_mapped_within_target() {
+    run_world("hall", 800, 100, 0.25);
+}
+
+#[test]
+fn two_pipelines_at_once_do_not_cross_and_repeat_exactly() {
+    let outs = [scratch("twin-a"), scratch("twin-b")];
+    let domains = [domain("twin-a"), domain("twin-b")];
+    let children: Vec<_> = outs
+        .iter()
+        .zip(&domains)
+        .map(|(out, domain)| {
+            Command::new(bin("slam-launch"))
+                .args(["--quiet", "--domain", domain, "--out"])
+                .arg(out)
+                .args(["--world", "office", "--frames", "300", "--particles", "30", "--seed", "7"])
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .expect("slam-launch")
+        })
+        .collect();
+    for child in children {
+        assert_success(&child.wait_with_output().expect("slam-launch"));
+    }
+    // Same seed, lockstep: the runs must agree to the last digit; any cross-talk between
+    // the two domains would have mixed their scans.
+    let a = std::fs::read_to_string(outs[0].join("trajectory.tum")).unwrap();
+    let b = std::fs::read_to_string(outs[1].join("trajectory.tum")).unwrap();
+    assert_eq!(a.lines().count(), 300);
+    assert_eq!(a, b);
+    let corners_a = std::fs::read_to_string(outs[0].join("map_corners.csv")).unwrap();
+    let corners_b = std::fs::read_to_string(outs[1].join("map_corners.csv")).unwrap();
+    assert_eq!(corners_a, corners_b);
+    for domain in &domains {
+        assert!(shm_leftovers(domain).is_empty());
+    }
+}
+
+#[test]
+fn sigterm_halfway_leaves_a_valid_trajectory() {
+    let domain = domain("sigterm");
+    let out = scratch("sigterm");
+    let mut child = Command::new(bin("slam-launch"))
+        .args(["--quiet", "--domain", &domain, "--out"])
+        .arg(&out)
+        // Real time, so the run lasts long enough to be stopped halfway.
+        .args(["--world", "office", "--frames", "2000", "--rate", "40"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("slam-launch");
+    let trajectory = out.join("trajectory.tum");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while std::fs::read_to_string(&trajectory)
+        .map(|t| t.lines().count())
+        .unwrap_or(0)
+        < 40
+    {
+        assert!(Instant::now() < deadline, "no poses after 60 s");
+        assert!(child.try_wait().unwrap().is_none(), "slam-launch ended early");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // SAFETY: kill(2) on our own child.
+    unsafe {
+        libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
+    }
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(output.status.code(), Some(130), "{}", String::from_utf8_lossy(&output.stderr));
+    let poses = read_tum(&trajectory);
+    assert!(poses.len() >= 40 && poses.len() < 2000, "{} poses", poses.len());
+    assert!(out.join("metrics.json").is_file(), "map-sink writes its results on SIGTERM");
+    assert!(shm_leftovers(&domain).is_empty(), "{:?}", shm_leftovers(&domain));
+}
+
+#[test]
+fn a_world_file_works_like_a_builtin_world() {
+    let dir = scratch("world-file");
+    let world = dir.join("square.json");
+    // A 20 x 14 m room with four pillars, driven round once.
+    let pillar = |x: f64, y: f64| {
+        format!("[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]", x + 0.8, x + 0.8, y + 0.8, y + 0.8)
+    };
+    let text = format!(
+        r#"{{"walls": [[[0,0],[20,0],[20,14],[0,14],[0,0]], {}, {}, {}, {}],
+            "waypoints": [[3,3],[17,3],[17,11],[3,11],[3,3.5]], "speed": 1.0}}"#,
+        pillar(6.0, 6.0),
+        pillar(13.0, 6.0),
+        pillar(6.0, 8.0),
+        pillar(13.0, 8.0)
+    );
+    std::fs::write(&world, text).unwrap();
+    let domain = domain("world-file");
+    let out = dir.join("run");
+    let output = launch(&domain, &out, &["--world", world.to_str().unwrap(), "--frames", "400"]);
+    assert_success(&output);
+    let metrics = metrics(&out);
+    assert_eq!(number(&metrics, "frames_processed"), 400.0);
+    assert!(number(&metrics, "ate_rmse_m") < 0.3, "{metrics}");
+}
+
+#[test]
+fn a_bad_world_file_is_refused_by_name() {
+    let dir = scratch("bad-world");
+    let world = dir.join("bad.json");
+    std::fs::write(&world, r#"{"walls": [[[0,0],[1,0]]], "waypoints": [[0.5, 0.5]]}"#).unwrap();
+    let domain = domain("bad-world");
+    let output = launch(&domain, &dir.join("run"), &["--world", world.to_str().unwrap()]);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("lidar-sim"), "names the process: {stderr}");
+    assert!(stderr.contains("waypoint"), "names the problem: {stderr}");
+    assert!(shm_leftovers(&domain).is_empty());
+}
