@@ -1,0 +1,41 @@
+//! The one error type of the crate.
+
+use std::io;
+use std::path::PathBuf;
+
+/// Why recording or reading a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SinkError {
+    /// A file system operation failed; `action` says which, `path` on what.
+    #[error("cannot {action} {}: {source}", path.display())]
+    Io {
+        action: &'static str,
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+    /// A line of a TUM file is not `stamp x y z qx qy qz qw`.
+    #[error("{}:{line}: {reason}", path.display())]
+    Malformed {
+        path: PathBuf,
+        line: usize,
+        reason: String,
+    },
+    /// A [`RecorderOptions`](crate::RecorderOptions) value is out of range.
+    #[error("invalid recorder option: {0}")]
+    InvalidOption(String),
+    /// The metrics could not be serialised (only non-string map keys could cause it).
+    #[error("cannot serialise the metrics: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+impl SinkError {
+    /// Wraps an I/O error with what was being done and to which file.
+    pub(crate) fn io(action: &'static str, path: impl Into<PathBuf>, source: io::Error) -> Self {
+        Self::Io {
+            action,
+            path: path.into(),
+            source,
+        }
+    }
+}

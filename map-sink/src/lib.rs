@@ -1,0 +1,72 @@
+//! # map-sink
+//!
+//! Records a lidar SLAM run into a directory: the estimated (and true, and dead-reckoning)
+//! trajectories in TUM format, the corner map as CSV, a picture of the run as SVG and a
+//! `metrics.json` with throughput, latency and, when the truth is known, accuracy scores.
+//!
+//! This is the library half; the process shell receives the pipeline's messages and feeds
+//! them to a [`Recorder`] as plain values, so nothing here depends on the transport.
+//!
+//! * Trajectories are appended and flushed line by line, so a killed run keeps what it had;
+//!   whole-file results are written to `name.tmp` and renamed, so none is ever half written
+//!   (see [`TumWriter`] and [`write_atomic`]).
+//! * Accuracy follows docs/CONVENTIONS.md: the estimate is aligned to the truth by a
+//!   least-squares rigid SE(2) fit ([`align_se2`], as `evo_ape -a`) before the absolute
+//!   trajectory error ([`ate`]) is taken, and the map corners are moved by the same
+//!   transform before they are scored.
+//!
+//! ```
+//! use map_sink::{Pose2, Recorder, RecorderOptions};
+//!
+//! # fn main() -> Result<(), map_sink::SinkError> {
+//! let dir = std::env::temp_dir().join(format!("map-sink-doc-{}", std::process::id()));
+//! let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+//! for seq in 0..10_u64 {
+//!     let stamp_ns = seq * 100_000_000;
+//!     let truth = Pose2::new(0.1 * seq as f64, 0.0, 0.0);
+//!     recorder.record_truth(seq, stamp_ns, truth)?;
+//!     recorder.record_scan(seq, -1.0, 0.5, 0.1, 30.0, &[2.0, 2.1, f32::NAN, 2.3, 2.2]);
+//!     recorder.record_pose(seq, stamp_ns, truth, None, Some(3_000_000))?;
+//! }
+//! let metrics = recorder.finish()?;
+//! assert_eq!(metrics.frames_processed, 10);
+//! assert!(metrics.ate_rmse_m.is_some_and(|e| e < 1e-9));
+//! # std::fs::remove_dir_all(&dir).ok();
+//! # Ok(())
+//! # }
+//! ```
+
+mod align;
+mod ate;
+mod atomic;
+mod corner;
+mod corner_score;
+mod corners_csv;
+mod error;
+mod hit_grid;
+mod metrics;
+mod percentile;
+mod pose;
+mod recorder;
+mod scan_points;
+mod svg;
+mod tum;
+
+pub use align::{Se2Alignment, align_se2};
+pub use ate::{AteStats, ate};
+pub use atomic::{tmp_path, write_atomic};
+pub use corner::MapCorner;
+pub use corner_score::nearest_rmse;
+pub use corners_csv::{corners_csv, corners_csv_header};
+pub use error::SinkError;
+pub use hit_grid::{HitCell, HitGrid};
+pub use metrics::{FrameCounts, Metrics};
+pub use percentile::percentile;
+pub use pose::{Pose2, wrap_angle};
+pub use recorder::{
+    DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Recorder,
+    RecorderOptions, TRAJECTORY_FILE,
+};
+pub use scan_points::scan_points;
+pub use svg::{SvgInput, render_svg};
+pub use tum::{TumPose, TumWriter, format_stamp, format_tum_line, read_tum, yaw_quaternion};

@@ -1,0 +1,225 @@
+//! `map-sink`: records a run (trajectory, map, picture, metrics) from the pipeline's topics.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use ipc_types::Wakeable;
+use ipc_types::prelude::*;
+use map_sink::{FrameCounts, Recorder, RecorderOptions};
+
+/// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
+/// trajectory.tum, ground_truth.tum, map_corners.csv, map.svg and metrics.json into DIR.
+#[derive(Debug, Parser)]
+#[command(name = "map-sink", version)]
+struct Args {
+    /// iceoryx2 domain of the run.
+    #[arg(long, default_value = "default")]
+    domain: String,
+    /// Output directory.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Print `status key=value ...` progress lines on stdout (for slam-launch).
+    #[arg(long)]
+    status: bool,
+    /// Title of the picture.
+    #[arg(long, default_value = "lidar SLAM run")]
+    title: String,
+}
+
+const STATUS_PERIOD: Duration = Duration::from_millis(500);
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("map-sink: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// What the status line shows, from the latest pose.
+#[derive(Debug, Default)]
+struct Progress {
+    poses: u64,
+    latency_ms: f64,
+    neff: f64,
+    particles: u32,
+    map: u32,
+    rate_window: (u64, Option<Instant>),
+    rate: f64,
+}
+
+impl Progress {
+    fn line(&mut self) -> String {
+        let now = Instant::now();
+        match self.rate_window.1 {
+            Some(since) if now.duration_since(since) >= Duration::from_secs(1) => {
+                let dt = now.duration_since(since).as_secs_f64();
+                self.rate = (self.poses - self.rate_window.0) as f64 / dt;
+                self.rate_window = (self.poses, Some(now));
+            }
+            Some(_) => {}
+            None => self.rate_window = (self.poses, Some(now)),
+        }
+        format!(
+            "status frames={} scans_per_s={:.1} latency_ms={:.2} neff={:.1} particles={} map={}",
+            self.poses, self.rate, self.latency_ms, self.neff, self.particles, self.map
+        )
+    }
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    shutdown::install().context("cannot install the Ctrl-C handler")?;
+    let mut recorder = Recorder::create(
+        &args.out,
+        RecorderOptions {
+            title: args.title.clone(),
+            ..RecorderOptions::default()
+        },
+    )?;
+
+    let domain = Domain::new(&args.domain)?;
+    let node = domain.node("map-sink")?;
+    // The source creates its ground truth and world before the scans: once the scans exist,
+    // so do they, if the source is a simulator.
+    wait_for_topic(&node, topic::SCAN)?;
+    let truth = Inlet::try_open(&node, topic::GROUND_TRUTH)?;
+    let world = Inlet::try_open(&node, topic::WORLD_CORNERS)?;
+    let scans = Inlet::open(&node, topic::SCAN)?;
+    let maps = Inlet::open(&node, topic::MAP)?;
+    let poses = Inlet::open(&node, topic::POSE)?;
+    println!("ready");
+
+    let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps];
+    if let Some(truth) = &truth {
+        wakeables.push(truth);
+    }
+    if let Some(world) = &world {
+        wakeables.push(world);
+    }
+
+    let mut progress = Progress::default();
+    let mut published = None;
+    let mut last_status = Instant::now();
+    let mut finished = false;
+    while !finished {
+        if wait_any(&wakeables, Duration::from_millis(100))? == Wake::Shutdown {
+            break;
+        }
+        if let Some(world) = &world {
+            while let Some(sample) = world.receive()? {
+                recorder.set_true_corners(sample.corners().iter().map(|c| [c.x, c.y]).collect());
+            }
+        }
+        if let Some(truth) = &truth {
+            while let Some(sample) = truth.receive()? {
+                if !sample.header.is_end_of_stream() {
+                    let p = sample.pose;
+                    recorder.record_truth(sample.header.seq, sample.header.stamp_ns, pose(p))?;
+                }
+            }
+        }
+        drain_scans(&scans, &mut recorder, &mut published)?;
+        while let Some(sample) = maps.receive()? {
+            recorder.set_map(map_corners(&sample));
+        }
+        while let Some(sample) = poses.receive()? {
+            if sample.header.is_end_of_stream() {
+                finished = true;
+                // Everything sent before the end marker is already queued: take it.
+                drain_scans(&scans, &mut recorder, &mut published)?;
+                while let Some(sample) = maps.receive()? {
+                    recorder.set_map(map_corners(&sample));
+                }
+                break;
+            }
+            let latency = sample.header.sent_ns.checked_sub(sample.scan_sent_ns);
+            recorder.record_pose(
+                sample.header.seq,
+                sample.header.stamp_ns,
+                pose(sample.best),
+                Some(pose(sample.dead_reckoning)),
+                latency,
+            )?;
+            progress.poses += 1;
+            progress.latency_ms = latency.unwrap_or(0) as f64 * 1e-6;
+            progress.neff = sample.effective_particles;
+            progress.particles = sample.particle_count;
+            progress.map = sample.map_corners;
+        }
+        if args.status && last_status.elapsed() >= STATUS_PERIOD {
+            println!("{}", progress.line());
+            last_status = Instant::now();
+        }
+    }
+    if args.status {
+        println!("{}", progress.line());
+    }
+
+    if let Some(published) = published {
+        recorder.set_counts(FrameCounts {
+            published,
+            processed: progress.poses,
+            dropped: published.saturating_sub(progress.poses),
+        });
+    }
+    let metrics = recorder.finish()?;
+    eprintln!(
+        "map-sink: {} poses, {} map corners written to {}",
+        metrics.frames_processed,
+        metrics.map_corners,
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn drain_scans(
+    scans: &Inlet<LaserScan>,
+    recorder: &mut Recorder,
+    published: &mut Option<u64>,
+) -> Result<()> {
+    while let Some(scan) = scans.receive()? {
+        if scan.header.is_end_of_stream() {
+            // The end marker's sequence number is the number of scans the source sent.
+            *published = Some(scan.header.seq);
+            continue;
+        }
+        recorder.record_scan(
+            scan.header.seq,
+            f64::from(scan.angle_min),
+            f64::from(scan.angle_increment),
+            f64::from(scan.range_min),
+            f64::from(scan.range_max),
+            scan.ranges(),
+        );
+    }
+    Ok(())
+}
+
+fn pose(p: Pose2) -> map_sink::Pose2 {
+    map_sink::Pose2 {
+        x: p.x,
+        y: p.y,
+        yaw: p.yaw,
+    }
+}
+
+fn map_corners(snapshot: &MapSnapshot) -> Vec<map_sink::MapCorner> {
+    snapshot
+        .corners()
+        .iter()
+        .map(|c| map_sink::MapCorner {
+            x: c.corner.x,
+            y: c.corner.y,
+            heading: c.corner.heading,
+            angle: c.corner.angle,
+            covariance: c.corner.covariance,
+            observations: c.observations,
+        })
+        .collect()
+}

@@ -1,0 +1,43 @@
+//! The numbers that summarise a run, as written to `metrics.json`.
+
+use serde::{Deserialize, Serialize};
+
+/// How many scans the pipeline published, processed and dropped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct FrameCounts {
+    pub published: u64,
+    pub processed: u64,
+    pub dropped: u64,
+}
+
+/// The summary of a run. Serialises with keys in field order; the ground-truth scores are
+/// absent (not null) when there was no truth to score against, while a value that is merely
+/// undefined (no latency samples, zero wall time) is `null`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    pub frames_published: u64,
+    pub frames_processed: u64,
+    pub frames_dropped: u64,
+    /// Length of the estimated trajectory.
+    pub path_length_m: f64,
+    pub map_corners: usize,
+    /// From the first message recorded to the last.
+    pub wall_s: f64,
+    /// `frames_processed / wall_s`.
+    pub scans_per_s: Option<f64>,
+    /// Scan stamp to pose published, milliseconds.
+    pub latency_ms_p50: Option<f64>,
+    pub latency_ms_p99: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ate_rmse_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ate_max_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_error_m: Option<f64>,
+    /// Map corners moved by the trajectory alignment, each to its nearest true corner.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map_corner_rmse_m: Option<f64>,
+    /// The dead-reckoning trajectory scored on its own alignment, as a baseline.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dead_reckoning_ate_rmse_m: Option<f64>,
+}

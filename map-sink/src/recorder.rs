@@ -1,0 +1,479 @@
+//! The recorder: takes a run's messages as they arrive and writes the run's files.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::io::ErrorKind;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::align::Se2Alignment;
+use crate::ate::{AteStats, ate, distance};
+use crate::atomic::write_atomic;
+use crate::corner::MapCorner;
+use crate::corner_score::nearest_rmse;
+use crate::corners_csv::corners_csv;
+use crate::error::SinkError;
+use crate::hit_grid::HitGrid;
+use crate::metrics::{FrameCounts, Metrics};
+use crate::percentile::percentile;
+use crate::pose::Pose2;
+use crate::scan_points::scan_points;
+use crate::svg::{SvgInput, render_svg};
+use crate::tum::TumWriter;
+
+/// The estimated trajectory, appended as it grows.
+pub const TRAJECTORY_FILE: &str = "trajectory.tum";
+/// The simulator's true trajectory, appended as it grows (only when truth is recorded).
+pub const GROUND_TRUTH_FILE: &str = "ground_truth.tum";
+/// The dead-reckoning trajectory, appended as it grows (only when one is recorded).
+pub const DEAD_RECKONING_FILE: &str = "dead_reckoning.tum";
+/// The final map, written atomically by [`Recorder::finish`].
+pub const MAP_CORNERS_FILE: &str = "map_corners.csv";
+/// The picture, written atomically by [`Recorder::finish`].
+pub const MAP_SVG_FILE: &str = "map.svg";
+/// The summary, written atomically and last by [`Recorder::finish`]: its presence means
+/// the run was finished.
+pub const METRICS_FILE: &str = "metrics.json";
+
+/// Scans kept while they wait for their pose. A scan whose pose never comes (the SLAM
+/// process dropped it) would otherwise be kept for ever; the oldest are dropped first.
+const MAX_PENDING_SCANS: usize = 256;
+
+/// How a [`Recorder`] records.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecorderOptions {
+    /// The first line of the picture.
+    pub title: String,
+    /// Edge of the picture's scan-hit cells, metres.
+    pub cell_m: f64,
+    /// Beams of a scan looked at, at most (evenly strided); 0 for all.
+    pub max_points_per_scan: usize,
+}
+
+impl Default for RecorderOptions {
+    fn default() -> Self {
+        Self {
+            title: "lidar SLAM run".to_owned(),
+            cell_m: 0.05,
+            max_points_per_scan: 2048,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Estimate {
+    pose: Pose2,
+    dead_reckoning: Option<Pose2>,
+}
+
+/// Records one run into a directory.
+///
+/// The TUM trajectories are appended and flushed line by line as poses arrive, so a killed
+/// run keeps every pose it had ([`TumWriter`] explains why they are not written atomically);
+/// the map, the picture and the metrics are whole-file results written atomically by
+/// [`finish`](Self::finish), so a crash never leaves one half-written.
+///
+/// Poses, truth and scans are matched by sequence number (the scan's), in any arrival order.
+/// Scans are projected into the picture's hit grid as soon as their pose is known and then
+/// forgotten, so memory grows with the area seen rather than the length of the run.
+#[derive(Debug)]
+pub struct Recorder {
+    dir: PathBuf,
+    options: RecorderOptions,
+    trajectory: TumWriter,
+    ground_truth: Option<TumWriter>,
+    dead_reckoning: Option<TumWriter>,
+    estimates: BTreeMap<u64, Estimate>,
+    truth: BTreeMap<u64, Pose2>,
+    pending_scans: BTreeMap<u64, Vec<[f64; 2]>>,
+    grid: HitGrid,
+    latencies_ns: Vec<u64>,
+    map: Vec<MapCorner>,
+    true_corners: Vec<[f64; 2]>,
+    counts: Option<FrameCounts>,
+    scans_seen: u64,
+    first_message: Option<Instant>,
+    last_message: Option<Instant>,
+    wall_s: Option<f64>,
+}
+
+impl Recorder {
+    /// Creates `dir` if needed and starts `trajectory.tum`. Files of an earlier run in the
+    /// same directory are removed, so none can be mistaken for this run's.
+    pub fn create(dir: &Path, options: RecorderOptions) -> Result<Self, SinkError> {
+        if !(options.cell_m.is_finite() && options.cell_m > 0.0) {
+            return Err(SinkError::InvalidOption(format!(
+                "cell_m must be a positive number of metres, not {}",
+                options.cell_m
+            )));
+        }
+        fs::create_dir_all(dir).map_err(|e| SinkError::io("create directory", dir, e))?;
+        for stale in [
+            GROUND_TRUTH_FILE,
+            DEAD_RECKONING_FILE,
+            MAP_CORNERS_FILE,
+            MAP_SVG_FILE,
+            METRICS_FILE,
+        ] {
+            let path = dir.join(stale);
+            match fs::remove_file(&path) {
+                Err(e) if e.kind() != ErrorKind::NotFound => {
+                    return Err(SinkError::io("remove stale", path, e));
+                }
+                _ => {}
+            }
+        }
+        let trajectory = TumWriter::create(&dir.join(TRAJECTORY_FILE))?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            grid: HitGrid::new(options.cell_m),
+            options,
+            trajectory,
+            ground_truth: None,
+            dead_reckoning: None,
+            estimates: BTreeMap::new(),
+            truth: BTreeMap::new(),
+            pending_scans: BTreeMap::new(),
+            latencies_ns: Vec::new(),
+            map: Vec::new(),
+            true_corners: Vec::new(),
+            counts: None,
+            scans_seen: 0,
+            first_message: None,
+            last_message: None,
+            wall_s: None,
+        })
+    }
+
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Records the estimate for scan `seq`, stamped with the scan's `stamp_ns`, with the
+    /// dead-reckoning pose and the scan-to-pose latency when known.
+    pub fn record_pose(
+        &mut self,
+        seq: u64,
+        stamp_ns: u64,
+        est: Pose2,
+        dead_reckoning: Option<Pose2>,
+        latency_ns: Option<u64>,
+    ) -> Result<(), SinkError> {
+        self.touch();
+        self.trajectory.append(stamp_ns, est)?;
+        if let Some(dr) = dead_reckoning {
+            append_lazily(
+                &mut self.dead_reckoning,
+                &self.dir,
+                DEAD_RECKONING_FILE,
+                stamp_ns,
+                dr,
+            )?;
+        }
+        self.estimates.insert(
+            seq,
+            Estimate {
+                pose: est,
+                dead_reckoning,
+            },
+        );
+        self.latencies_ns.extend(latency_ns);
+        if let Some(points) = self.pending_scans.remove(&seq) {
+            self.project(est, &points);
+        }
+        Ok(())
+    }
+
+    /// Records the simulator's true pose for scan `seq`.
+    pub fn record_truth(&mut self, seq: u64, stamp_ns: u64, pose: Pose2) -> Result<(), SinkError> {
+        self.touch();
+        append_lazily(
+            &mut self.ground_truth,
+            &self.dir,
+            GROUND_TRUTH_FILE,
+            stamp_ns,
+            pose,
+        )?;
+        self.truth.insert(seq, pose);
+        Ok(())
+    }
+
+    /// Records scan `seq` for the picture: its valid points go into the hit grid through
+    /// the scan's pose, now if the pose is known, else when it arrives.
+    pub fn record_scan(
+        &mut self,
+        seq: u64,
+        angle_min: f64,
+        angle_increment: f64,
+        range_min: f64,
+        range_max: f64,
+        ranges: &[f32],
+    ) {
+        self.touch();
+        self.scans_seen += 1;
+        let points = scan_points(
+            angle_min,
+            angle_increment,
+            range_min,
+            range_max,
+            ranges,
+            self.options.max_points_per_scan,
+        );
+        if let Some(estimate) = self.estimates.get(&seq) {
+            let pose = estimate.pose;
+            self.project(pose, &points);
+            return;
+        }
+        self.pending_scans.insert(seq, points);
+        while self.pending_scans.len() > MAX_PENDING_SCANS {
+            self.pending_scans.pop_first();
+        }
+    }
+
+    /// Replaces the map (the latest snapshot wins), in the SLAM frame.
+    pub fn set_map(&mut self, corners: Vec<MapCorner>) {
+        self.map = corners;
+    }
+
+    /// The world's true corner positions, for scoring the map.
+    pub fn set_true_corners(&mut self, corners: Vec<[f64; 2]>) {
+        self.true_corners = corners;
+    }
+
+    /// The pipeline's own frame counts. Without them, `processed` is the number of poses
+    /// recorded, `published` the larger of that and the scans recorded, and `dropped` the
+    /// difference.
+    pub fn set_counts(&mut self, counts: FrameCounts) {
+        self.counts = Some(counts);
+    }
+
+    /// Overrides the measured wall time (first to last message recorded), seconds.
+    pub fn set_wall_time(&mut self, wall_s: f64) {
+        self.wall_s = Some(wall_s);
+    }
+
+    /// Syncs the trajectories, scores the run and writes `map_corners.csv`, `map.svg` and
+    /// finally `metrics.json`, each atomically. Returns the metrics written.
+    pub fn finish(self) -> Result<Metrics, SinkError> {
+        self.trajectory.sync()?;
+        for writer in [&self.ground_truth, &self.dead_reckoning]
+            .into_iter()
+            .flatten()
+        {
+            writer.sync()?;
+        }
+        let trajectory: Vec<[f64; 2]> =
+            self.estimates.values().map(|e| e.pose.position()).collect();
+        let stats = self.score(|e| Some(e.pose));
+        let dead_reckoning_stats = self.score(|e| e.dead_reckoning);
+        let map_corner_rmse_m = stats.and_then(|s| {
+            let aligned: Vec<[f64; 2]> = self
+                .map
+                .iter()
+                .map(|c| s.alignment.apply([c.x, c.y]))
+                .collect();
+            nearest_rmse(&aligned, &self.true_corners)
+        });
+        let metrics = self.metrics(&trajectory, stats, dead_reckoning_stats, map_corner_rmse_m);
+
+        write_atomic(
+            &self.dir.join(MAP_CORNERS_FILE),
+            corners_csv(&self.map).as_bytes(),
+        )?;
+        let svg = self.picture(&trajectory, stats, &metrics);
+        write_atomic(&self.dir.join(MAP_SVG_FILE), svg.as_bytes())?;
+        let mut json = serde_json::to_string_pretty(&metrics)?;
+        json.push('\n');
+        write_atomic(&self.dir.join(METRICS_FILE), json.as_bytes())?;
+        Ok(metrics)
+    }
+
+    fn touch(&mut self) {
+        let now = Instant::now();
+        self.first_message.get_or_insert(now);
+        self.last_message = Some(now);
+    }
+
+    fn project(&mut self, pose: Pose2, points: &[[f64; 2]]) {
+        for p in points {
+            self.grid.add(pose.transform_point(*p));
+        }
+    }
+
+    /// ATE of the trajectory `pick` takes from each estimate, over the scans with truth.
+    fn score(&self, pick: impl Fn(&Estimate) -> Option<Pose2>) -> Option<AteStats> {
+        let (est, truth): (Vec<[f64; 2]>, Vec<[f64; 2]>) = self
+            .estimates
+            .iter()
+            .filter_map(|(seq, e)| Some((pick(e)?.position(), self.truth.get(seq)?.position())))
+            .unzip();
+        ate(&est, &truth)
+    }
+
+    fn metrics(
+        &self,
+        trajectory: &[[f64; 2]],
+        stats: Option<AteStats>,
+        dead_reckoning: Option<AteStats>,
+        map_corner_rmse_m: Option<f64>,
+    ) -> Metrics {
+        let counts = self.counts.unwrap_or_else(|| {
+            let processed = self.estimates.len() as u64;
+            let published = processed.max(self.scans_seen);
+            FrameCounts {
+                published,
+                processed,
+                dropped: published - processed,
+            }
+        });
+        let measured = match (self.first_message, self.last_message) {
+            (Some(first), Some(last)) => last.duration_since(first).as_secs_f64(),
+            _ => 0.0,
+        };
+        let wall_s = self.wall_s.unwrap_or(measured);
+        let latencies_ms: Vec<f64> = self
+            .latencies_ns
+            .iter()
+            .map(|&ns| ns as f64 / 1e6)
+            .collect();
+        Metrics {
+            frames_published: counts.published,
+            frames_processed: counts.processed,
+            frames_dropped: counts.dropped,
+            path_length_m: trajectory.windows(2).map(|w| distance(w[0], w[1])).sum(),
+            map_corners: self.map.len(),
+            wall_s,
+            scans_per_s: (wall_s > 0.0).then(|| counts.processed as f64 / wall_s),
+            latency_ms_p50: percentile(&latencies_ms, 50.0),
+            latency_ms_p99: percentile(&latencies_ms, 99.0),
+            ate_rmse_m: stats.map(|s| s.rmse_m),
+            ate_max_m: stats.map(|s| s.max_m),
+            final_error_m: stats.map(|s| s.final_error_m),
+            map_corner_rmse_m,
+            dead_reckoning_ate_rmse_m: dead_reckoning.map(|s| s.rmse_m),
+        }
+    }
+
+    /// The picture is drawn in the world frame when there is an alignment: the estimate,
+    /// its map, the dead reckoning (which shares the SLAM frame) and the scan hits are moved
+    /// by the trajectory alignment onto the truth. Without one (no truth, or no scan with
+    /// both an estimate and truth) it is drawn in the SLAM frame and the truth is left out.
+    fn picture(
+        &self,
+        trajectory: &[[f64; 2]],
+        stats: Option<AteStats>,
+        metrics: &Metrics,
+    ) -> String {
+        let placement = stats.map_or(Se2Alignment::IDENTITY, |s| s.alignment);
+        let trajectory: Vec<[f64; 2]> = trajectory.iter().map(|p| placement.apply(*p)).collect();
+        let dead_reckoning: Vec<[f64; 2]> = self
+            .estimates
+            .values()
+            .filter_map(|e| e.dead_reckoning.map(|p| placement.apply(p.position())))
+            .collect();
+        let map_corners: Vec<MapCorner> =
+            self.map.iter().map(|c| placement.apply_corner(c)).collect();
+        let (ground_truth, true_corners): (Vec<[f64; 2]>, &[[f64; 2]]) = if stats.is_some() {
+            (
+                self.truth.values().map(Pose2::position).collect(),
+                &self.true_corners,
+            )
+        } else {
+            (Vec::new(), &[])
+        };
+        let note = if stats.is_some() {
+            "World frame: the estimate, its map, its scan hits and the dead reckoning are moved onto the truth by the least-squares SE(2) fit of the estimated to the true positions."
+        } else {
+            "SLAM frame: the first pose is the origin, facing +x."
+        };
+        let cells = self.grid.cells();
+        let subtitle = subtitle(metrics);
+        render_svg(&SvgInput {
+            title: &self.options.title,
+            subtitle: &subtitle,
+            note,
+            cell_m: self.grid.cell_m(),
+            cells: &cells,
+            cells_placement: placement,
+            trajectory: &trajectory,
+            ground_truth: &ground_truth,
+            dead_reckoning: &dead_reckoning,
+            map_corners: &map_corners,
+            true_corners,
+        })
+    }
+}
+
+/// Appends to a TUM file created on first use, so a run without truth (or without dead
+/// reckoning) leaves no empty file suggesting otherwise.
+fn append_lazily(
+    writer: &mut Option<TumWriter>,
+    dir: &Path,
+    name: &str,
+    stamp_ns: u64,
+    pose: Pose2,
+) -> Result<(), SinkError> {
+    let writer = match writer {
+        Some(writer) => writer,
+        None => writer.insert(TumWriter::create(&dir.join(name))?),
+    };
+    writer.append(stamp_ns, pose)
+}
+
+/// The picture's metric lines.
+fn subtitle(m: &Metrics) -> Vec<String> {
+    let optional = |v: Option<f64>, unit: &str| {
+        v.map_or_else(|| "n/a".to_owned(), |v| format!("{v:.2} {unit}"))
+    };
+    let first = format!(
+        "{} scans processed, {} dropped  ·  path {:.1} m  ·  {} map corners  ·  {}  ·  latency p50 {}, p99 {}",
+        m.frames_processed,
+        m.frames_dropped,
+        m.path_length_m,
+        m.map_corners,
+        optional(m.scans_per_s, "scans/s"),
+        optional(m.latency_ms_p50, "ms"),
+        optional(m.latency_ms_p99, "ms"),
+    );
+    let second = match (m.ate_rmse_m, m.ate_max_m, m.final_error_m) {
+        (Some(rmse), Some(max), Some(last)) => {
+            let mut line = format!("ATE RMSE {rmse:.3} m, max {max:.3} m, final {last:.3} m");
+            if let Some(v) = m.map_corner_rmse_m {
+                line.push_str(&format!("  ·  map corner RMSE {v:.3} m"));
+            }
+            if let Some(v) = m.dead_reckoning_ate_rmse_m {
+                line.push_str(&format!("  ·  dead reckoning ATE RMSE {v:.3} m"));
+            }
+            line
+        }
+        _ => "no ground truth".to_owned(),
+    };
+    vec![first, second]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scans_meet_their_pose_in_either_order() -> Result<(), SinkError> {
+        let dir = std::env::temp_dir().join(format!("map-sink-unit-order-{}", std::process::id()));
+        let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+        let ranges = [1.0_f32, 2.0, 3.0];
+        recorder.record_scan(0, 0.0, 0.5, 0.1, 10.0, &ranges);
+        assert!(recorder.grid.is_empty(), "no pose yet");
+        recorder.record_pose(0, 0, Pose2::default(), None, None)?;
+        assert_eq!(recorder.grid.len(), 3);
+        recorder.record_pose(1, 1, Pose2::new(50.0, 0.0, 0.0), None, None)?;
+        recorder.record_scan(1, 0.0, 0.5, 0.1, 10.0, &ranges);
+        assert_eq!(recorder.grid.len(), 6);
+        assert!(recorder.pending_scans.is_empty());
+        // A scan whose pose never comes is eventually forgotten.
+        for seq in 100..100 + MAX_PENDING_SCANS as u64 + 10 {
+            recorder.record_scan(seq, 0.0, 0.5, 0.1, 10.0, &ranges);
+        }
+        assert_eq!(recorder.pending_scans.len(), MAX_PENDING_SCANS);
+        let _ = std::fs::remove_dir_all(&dir);
+        Ok(())
+    }
+}

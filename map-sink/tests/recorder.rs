@@ -1,0 +1,263 @@
+//! A whole run through the recorder: the files it leaves and what is in them.
+
+mod common;
+
+use std::fs;
+use std::path::Path;
+
+use common::Synthetic;
+use map_sink::{
+    FrameCounts, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Pose2, Recorder,
+    RecorderOptions, SinkError, TRAJECTORY_FILE, corners_csv_header, read_tum,
+};
+
+type TestResult = Result<(), Box<dyn std::error::Error>>;
+
+const BASE_KEYS: [&str; 9] = [
+    "frames_published",
+    "frames_processed",
+    "frames_dropped",
+    "path_length_m",
+    "map_corners",
+    "wall_s",
+    "scans_per_s",
+    "latency_ms_p50",
+    "latency_ms_p99",
+];
+const TRUTH_KEYS: [&str; 5] = [
+    "ate_rmse_m",
+    "ate_max_m",
+    "final_error_m",
+    "map_corner_rmse_m",
+    "dead_reckoning_ate_rmse_m",
+];
+
+/// The keys of the metrics file, in the order they appear in the text.
+fn keys_in_order(json: &str) -> Result<Vec<String>, Box<dyn std::error::Error>> {
+    let value: serde_json::Value = serde_json::from_str(json)?;
+    let object = value.as_object().ok_or("metrics.json is not an object")?;
+    let mut keys: Vec<(usize, String)> = object
+        .keys()
+        .map(|k| {
+            (
+                json.find(&format!("\"{k}\":")).unwrap_or(usize::MAX),
+                k.clone(),
+            )
+        })
+        .collect();
+    keys.sort();
+    Ok(keys.into_iter().map(|(_, k)| k).collect())
+}
+
+/// Proves the picture is well-formed XML with an `svg` root, and counts its elements.
+fn check_svg(svg: &str) -> Result<usize, Box<dyn std::error::Error>> {
+    assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(80)]);
+    let doc = roxmltree::Document::parse(svg)?;
+    assert_eq!(doc.root_element().tag_name().name(), "svg");
+    Ok(doc.descendants().filter(|n| n.is_element()).count())
+}
+
+fn no_tmp_files(dir: &Path) -> TestResult {
+    for entry in fs::read_dir(dir)? {
+        let name = entry?.file_name();
+        assert!(
+            !name.to_string_lossy().ends_with(".tmp"),
+            "left behind: {name:?}"
+        );
+    }
+    Ok(())
+}
+
+#[test]
+fn full_run_writes_every_file() -> TestResult {
+    let dir = common::scratch_dir("full-run");
+    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+    let run = Synthetic {
+        scans: 200,
+        beams: 361,
+        truth: true,
+        dead_reckoning: true,
+    };
+    common::drive(&mut recorder, run)?;
+    recorder.set_counts(FrameCounts {
+        published: 205,
+        processed: 200,
+        dropped: 5,
+    });
+    let metrics = recorder.finish()?;
+
+    assert_eq!(read_tum(&dir.join(TRAJECTORY_FILE))?.len(), 200);
+    assert_eq!(read_tum(&dir.join(GROUND_TRUTH_FILE))?.len(), 200);
+    assert_eq!(read_tum(&dir.join("dead_reckoning.tum"))?.len(), 200);
+    no_tmp_files(&dir)?;
+
+    let csv = fs::read_to_string(dir.join(MAP_CORNERS_FILE))?;
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "x,y,heading,angle,cov_xx,cov_xy,cov_xh,cov_xa,cov_yy,cov_yh,cov_ya,cov_hh,cov_ha,cov_aa,observations"
+        )
+    );
+    assert_eq!(corners_csv_header().split(',').count(), 15);
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), common::World::new().corners.len());
+    assert!(rows.iter().all(|r| r.split(',').count() == 15));
+
+    let json = fs::read_to_string(dir.join(METRICS_FILE))?;
+    let expected: Vec<&str> = BASE_KEYS.iter().chain(&TRUTH_KEYS).copied().collect();
+    assert_eq!(keys_in_order(&json)?, expected);
+    assert_eq!((metrics.frames_published, metrics.frames_dropped), (205, 5));
+    let ate = metrics.ate_rmse_m.ok_or("no ATE")?;
+    assert!(ate > 0.005 && ate < 0.06, "ATE {ate}");
+    let corners = metrics.map_corner_rmse_m.ok_or("no corner RMSE")?;
+    assert!(corners < 0.1, "corner RMSE {corners}");
+    let dr = metrics
+        .dead_reckoning_ate_rmse_m
+        .ok_or("no dead-reckoning ATE")?;
+    assert!(dr > 2.0 * ate, "dead reckoning {dr} vs {ate}");
+    // An ellipse of semi-axes 5 and 3.2 is about 26 m round.
+    assert!(
+        (metrics.path_length_m - 26.0).abs() < 1.5,
+        "{}",
+        metrics.path_length_m
+    );
+    let p50 = metrics.latency_ms_p50.ok_or("no latency")?;
+    assert!((2.0..5.0).contains(&p50));
+
+    let svg = fs::read_to_string(dir.join(MAP_SVG_FILE))?;
+    assert!(check_svg(&svg)? > 20);
+    assert_eq!(
+        svg.matches("<polyline").count(),
+        3,
+        "estimate, truth, dead reckoning"
+    );
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+#[test]
+fn run_without_truth_has_no_truth_keys() -> TestResult {
+    let dir = common::scratch_dir("no-truth");
+    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+    let run = Synthetic {
+        scans: 60,
+        beams: 181,
+        truth: false,
+        dead_reckoning: false,
+    };
+    common::drive(&mut recorder, run)?;
+    let metrics = recorder.finish()?;
+    let json = fs::read_to_string(dir.join(METRICS_FILE))?;
+    assert_eq!(keys_in_order(&json)?, BASE_KEYS);
+    assert!(metrics.ate_rmse_m.is_none() && metrics.map_corner_rmse_m.is_none());
+    // Derived counts: every scan got its pose.
+    assert_eq!(
+        (
+            metrics.frames_published,
+            metrics.frames_processed,
+            metrics.frames_dropped
+        ),
+        (60, 60, 0)
+    );
+    assert!(!dir.join(GROUND_TRUTH_FILE).exists());
+    let svg = fs::read_to_string(dir.join(MAP_SVG_FILE))?;
+    check_svg(&svg)?;
+    assert!(svg.contains("no ground truth"));
+    no_tmp_files(&dir)?;
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+#[test]
+fn empty_run_still_finishes() -> TestResult {
+    let dir = common::scratch_dir("empty");
+    let metrics = Recorder::create(&dir, RecorderOptions::default())?.finish()?;
+    assert_eq!(metrics.frames_processed, 0);
+    assert_eq!(metrics.scans_per_s, None);
+    let json = fs::read_to_string(dir.join(METRICS_FILE))?;
+    assert!(json.contains("\"latency_ms_p50\": null"), "{json}");
+    check_svg(&fs::read_to_string(dir.join(MAP_SVG_FILE))?)?;
+    assert_eq!(
+        fs::read_to_string(dir.join(MAP_CORNERS_FILE))?
+            .lines()
+            .count(),
+        1
+    );
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+#[test]
+fn killed_run_keeps_its_trajectory_and_no_stale_results() -> TestResult {
+    let dir = common::scratch_dir("killed");
+    fs::create_dir_all(&dir)?;
+    fs::write(dir.join(METRICS_FILE), "{}")?;
+    fs::write(dir.join(GROUND_TRUTH_FILE), "1.0 0 0 0 0 0 0 1\n")?;
+    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+    assert!(!dir.join(METRICS_FILE).exists() && !dir.join(GROUND_TRUTH_FILE).exists());
+    for seq in 0..25_u64 {
+        recorder.record_pose(
+            seq,
+            seq * 1_000_000,
+            Pose2::new(seq as f64, 0.0, 0.1),
+            None,
+            None,
+        )?;
+    }
+    // Read while the recorder is alive: every line is already in the file.
+    assert_eq!(read_tum(&dir.join(TRAJECTORY_FILE))?.len(), 25);
+    drop(recorder);
+    assert_eq!(read_tum(&dir.join(TRAJECTORY_FILE))?.len(), 25);
+    assert!(!dir.join(METRICS_FILE).exists());
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+#[test]
+fn invalid_cell_size_is_refused() {
+    let dir = common::scratch_dir("invalid");
+    let options = RecorderOptions {
+        cell_m: 0.0,
+        ..RecorderOptions::default()
+    };
+    assert!(matches!(
+        Recorder::create(&dir, options),
+        Err(SinkError::InvalidOption(_))
+    ));
+}
+
+/// A run of the size the pipeline produces (1200 scans of 1081 beams). Set
+/// `MAP_SINK_EXAMPLE_SVG=/some/path.svg` to keep its picture for a look.
+#[test]
+fn example_picture_of_a_full_run() -> TestResult {
+    let dir = common::scratch_dir("example");
+    let options = RecorderOptions {
+        title: "map-sink example: synthetic room, one lap around the pillar".to_owned(),
+        ..RecorderOptions::default()
+    };
+    let mut recorder = Recorder::create(&dir, options)?;
+    let run = Synthetic {
+        scans: 1200,
+        beams: 1081,
+        truth: true,
+        dead_reckoning: true,
+    };
+    common::drive(&mut recorder, run)?;
+    recorder.set_counts(FrameCounts {
+        published: 1203,
+        processed: 1200,
+        dropped: 3,
+    });
+    recorder.set_wall_time(121.5);
+    let metrics = recorder.finish()?;
+    assert!((metrics.scans_per_s.unwrap_or(0.0) - 1200.0 / 121.5).abs() < 1e-9);
+    let svg = fs::read_to_string(dir.join(MAP_SVG_FILE))?;
+    assert!(svg.len() < 5_000_000, "{} bytes", svg.len());
+    check_svg(&svg)?;
+    if let Some(path) = std::env::var_os("MAP_SINK_EXAMPLE_SVG") {
+        fs::write(path, &svg)?;
+    }
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
