@@ -55,7 +55,7 @@ pub use messages::*;
 pub use topic::Topic;
 pub use transport::{
     Delivery, Inlet, LATEST_QUEUE, LOSSLESS_QUEUE, OpenError, Outlet, PublishError, ReceiveError,
-    WaitError, Wake, Wakeable, wait_any,
+    WaitError, Wake, Wakeable, wait_any, wait_for_topic,
 };
 pub use zeroed::Zeroable;
 
@@ -64,6 +64,6 @@ pub mod prelude {
     pub use crate::messages::*;
     pub use crate::{
         Delivery, Domain, Header, Inlet, Message, Outlet, Wake, Zeroable, now_ns, shutdown, topic,
-        wait_any,
+        wait_any, wait_for_topic,
     };
 }

@@ -16,6 +16,7 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::port::{BackpressureAction, BackpressureInfo};
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
 use crate::domain::Domain;
@@ -258,10 +259,53 @@ fn on_backpressure(domain: &Domain, info: &BackpressureInfo) -> BackpressureActi
         return BackpressureAction::DiscardDataAndFail;
     }
     let sweeps_due = info.elapsed_time.as_millis() / DEAD_NODE_SWEEP.as_millis();
-    if sweeps_due > 0 && info.retries % 64 == 0 {
+    if sweeps_due > 0 && info.retries.is_multiple_of(64) {
         domain.cleanup_dead_nodes();
     }
     BackpressureAction::Retry
+}
+
+/// Waits until a publisher has created `topic`, without subscribing to it. Logs every few
+/// seconds while it waits; stops on a signal.
+pub fn wait_for_topic<T: Message>(
+    node: &Node<ipc::Service>,
+    topic: Topic<T>,
+) -> Result<(), OpenError> {
+    wait_for_service(node, topic).map(drop)
+}
+
+fn wait_for_service<T: Message>(
+    node: &Node<ipc::Service>,
+    topic: Topic<T>,
+) -> Result<PubSubFactory<ipc::Service, T, ()>, OpenError> {
+    let name = topic.name();
+    let service_name = service_name(name)?;
+    let start = Instant::now();
+    let mut next_log = Duration::from_secs(5);
+    loop {
+        match node
+            .service_builder(&service_name)
+            .publish_subscribe::<T>()
+            .open()
+        {
+            Ok(service) => return Ok(service),
+            Err(PublishSubscribeOpenError::DoesNotExist) => {}
+            Err(e) => {
+                return Err(OpenError::Service {
+                    service: name.to_owned(),
+                    cause: format!("{e:?}"),
+                });
+            }
+        }
+        if shutdown::requested() {
+            return Err(OpenError::Stopped(name.to_owned()));
+        }
+        if start.elapsed() >= next_log {
+            eprintln!("waiting for a publisher to create '{name}'");
+            next_log += Duration::from_secs(5);
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
 }
 
 /// Subscribes to one message type on one topic.
@@ -283,36 +327,9 @@ impl<T: Message> std::fmt::Debug for Inlet<T> {
 
 impl<T: Message> Inlet<T> {
     /// Subscribes to `topic`, waiting until its publisher has created it (so the publisher
-    /// chooses the delivery). Logs once a few seconds while it waits; stops on a signal.
+    /// chooses the delivery). Logs every few seconds while it waits; stops on a signal.
     pub fn open(node: &Node<ipc::Service>, topic: Topic<T>) -> Result<Self, OpenError> {
-        let name = topic.name();
-        let service_name = service_name(name)?;
-        let start = Instant::now();
-        let mut next_log = Duration::from_secs(5);
-        let service = loop {
-            match node
-                .service_builder(&service_name)
-                .publish_subscribe::<T>()
-                .open()
-            {
-                Ok(service) => break service,
-                Err(iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist) => {}
-                Err(e) => {
-                    return Err(OpenError::Service {
-                        service: name.to_owned(),
-                        cause: format!("{e:?}"),
-                    });
-                }
-            }
-            if shutdown::requested() {
-                return Err(OpenError::Stopped(name.to_owned()));
-            }
-            if start.elapsed() >= next_log {
-                eprintln!("waiting for a publisher to create '{name}'");
-                next_log += Duration::from_secs(5);
-            }
-            std::thread::sleep(Duration::from_millis(10));
-        };
+        let service = wait_for_service(node, topic)?;
         Self::from_service(node, topic, &service)
     }
 
@@ -324,7 +341,7 @@ impl<T: Message> Inlet<T> {
             .open()
         {
             Ok(service) => Self::from_service(node, topic, &service).map(Some),
-            Err(iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist) => Ok(None),
+            Err(PublishSubscribeOpenError::DoesNotExist) => Ok(None),
             Err(e) => Err(OpenError::Service {
                 service: topic.name().to_owned(),
                 cause: format!("{e:?}"),
