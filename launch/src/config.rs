@@ -53,6 +53,64 @@ impl Default for SimSection {
     }
 }
 
+/// Which publisher feeds the pipeline.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum SourceKind {
+    /// `lidar-sim` in a simulated world, with ground truth.
+    #[default]
+    Sim,
+    /// `lidar-replay` of a recorded log.
+    Replay,
+    /// `lidar-hokuyo`, a live Hokuyo scanner over Ethernet (SCIP 2.0).
+    Hokuyo,
+}
+
+/// A recorded log to replay.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReplaySection {
+    /// The log file.
+    pub file: Option<PathBuf>,
+    /// `seed-csv` or `carmen`.
+    pub format: String,
+    /// Scans per second relative to the log's timing (1 = as recorded); 0 = lockstep.
+    pub rate: f64,
+    /// Publish the log's odometry (when it has any).
+    pub odometry: bool,
+}
+
+impl Default for ReplaySection {
+    fn default() -> Self {
+        Self {
+            file: None,
+            format: "carmen".into(),
+            rate: 0.0,
+            odometry: true,
+        }
+    }
+}
+
+/// A live Hokuyo scanner.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct HokuyoSection {
+    /// `HOST:PORT` of the scanner.
+    pub addr: String,
+    /// Anything else `lidar-hokuyo` takes, as `--key value` (e.g. `cluster = 2`).
+    #[serde(flatten)]
+    pub extra: toml::Table,
+}
+
+impl Default for HokuyoSection {
+    fn default() -> Self {
+        Self {
+            addr: "192.168.0.10:10940".into(),
+            extra: toml::Table::new(),
+        }
+    }
+}
+
 /// SLAM settings; `extra` goes to `slam-proc --config` as is.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -81,7 +139,10 @@ impl Default for SlamSection {
 #[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
+    pub source: SourceKind,
     pub sim: SimSection,
+    pub replay: ReplaySection,
+    pub hokuyo: HokuyoSection,
     pub features: toml::Table,
     pub slam: SlamSection,
 }
@@ -106,6 +167,25 @@ impl RunConfig {
                 "rate must be 0 (lockstep) or a positive number of scans per second, not {}",
                 self.sim.rate
             )));
+        }
+        if self.source == SourceKind::Replay {
+            if self.replay.file.is_none() {
+                return Err(ConfigError::Invalid(
+                    "a replay needs a log file (--replay FILE)".into(),
+                ));
+            }
+            if !matches!(self.replay.format.as_str(), "seed-csv" | "carmen") {
+                return Err(ConfigError::Invalid(format!(
+                    "replay format must be seed-csv or carmen, not '{}'",
+                    self.replay.format
+                )));
+            }
+            if !(self.replay.rate.is_finite() && self.replay.rate >= 0.0) {
+                return Err(ConfigError::Invalid(format!(
+                    "replay rate must be 0 (lockstep) or positive, not {}",
+                    self.replay.rate
+                )));
+            }
         }
         if self.slam.particles == 0 {
             return Err(ConfigError::Invalid("particles must be at least 1".into()));

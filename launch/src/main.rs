@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use ipc_types::{Domain, shutdown};
-use launch::config::RunConfig;
+use launch::config::{RunConfig, SourceKind};
 use launch::supervisor::{self, Display, Outcome, StagePlan};
 
 /// Runs lidar-sim -> feature-proc -> slam-proc -> map-sink as separate processes over
@@ -22,13 +22,29 @@ struct Args {
     /// TOML file with [sim], [features] and [slam] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
+    /// Where the scans come from (default: sim; --replay implies replay).
+    #[arg(long, value_enum)]
+    source: Option<SourceKind>,
     /// World to simulate: hall, office, corridor or a world file (JSON).
     #[arg(long)]
     world: Option<String>,
+    /// Replay this recorded log instead of simulating.
+    #[arg(long, value_name = "FILE")]
+    replay: Option<PathBuf>,
+    /// Format of the replayed log: seed-csv or carmen.
+    #[arg(long)]
+    format: Option<String>,
+    /// HOST:PORT of a live Hokuyo scanner (with --source hokuyo).
+    #[arg(long)]
+    addr: Option<String>,
+    /// Do not use the odometry of a replayed log.
+    #[arg(long)]
+    no_odometry: bool,
     /// Scans to simulate (0 = the whole path of the world).
     #[arg(long)]
     frames: Option<u64>,
-    /// Scans per second; 0 = lockstep: nothing is lost and a run repeats exactly for its seed.
+    /// Scans per second (a replay: times the log's own speed); 0 = lockstep: nothing is lost
+    /// and a run repeats exactly.
     #[arg(long)]
     rate: Option<f64>,
     /// Seed of the simulator's noise and of the particle filter.
@@ -83,13 +99,11 @@ fn run() -> Result<ExitCode> {
             .map(Path::to_path_buf)
             .context("this program has no directory")?,
     };
-    let out = args.out.clone().unwrap_or_else(|| {
-        let stem = Path::new(&config.sim.world)
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "run".into());
-        PathBuf::from("runs").join(stem)
-    });
+    let label = source_label(&config);
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs").join(&label));
     let config_dir = out.join("config");
     let log_dir = out.join("logs");
     for dir in [&out, &config_dir, &log_dir] {
@@ -121,8 +135,9 @@ fn run() -> Result<ExitCode> {
 
     let plan = plan(&config, &domain, &bin_dir, &out, &config_dir)?;
     let display = Display {
-        label: config.sim.world.clone(),
-        total_frames: (config.sim.frames > 0).then_some(config.sim.frames),
+        label,
+        total_frames: (config.source == SourceKind::Sim && config.sim.frames > 0)
+            .then_some(config.sim.frames),
         quiet: args.quiet,
     };
     let outcome = supervisor::run(&plan, &domain, &log_dir, &display)?;
@@ -134,6 +149,11 @@ fn run() -> Result<ExitCode> {
 
     match outcome {
         Outcome::Finished => {
+            print_summary(&out)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        // A live sensor has no end: Ctrl-C is how its run finishes.
+        Outcome::Interrupted if config.source == SourceKind::Hokuyo => {
             print_summary(&out)?;
             Ok(ExitCode::SUCCESS)
         }
@@ -149,7 +169,46 @@ fn run() -> Result<ExitCode> {
     }
 }
 
+/// A short name of the source, for the progress line and the default output directory.
+fn source_label(config: &RunConfig) -> String {
+    let stem = |path: &Path| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "run".into())
+    };
+    match config.source {
+        SourceKind::Sim => stem(Path::new(&config.sim.world)),
+        SourceKind::Replay => config
+            .replay
+            .file
+            .as_deref()
+            .map(stem)
+            .unwrap_or_else(|| "replay".into()),
+        SourceKind::Hokuyo => "hokuyo".into(),
+    }
+}
+
 fn apply_overrides(config: &mut RunConfig, args: &Args) {
+    if let Some(source) = args.source {
+        config.source = source;
+    } else if args.replay.is_some() {
+        config.source = SourceKind::Replay;
+    }
+    if let Some(file) = &args.replay {
+        config.replay.file = Some(file.clone());
+    }
+    if let Some(format) = &args.format {
+        config.replay.format = format.clone();
+    }
+    if let Some(addr) = &args.addr {
+        config.hokuyo.addr = addr.clone();
+    }
+    if args.no_odometry {
+        config.replay.odometry = false;
+    }
+    if let Some(rate) = args.rate {
+        config.replay.rate = rate;
+    }
     if let Some(world) = &args.world {
         config.sim.world = world.clone();
     }
@@ -220,25 +279,58 @@ fn plan(
     slam.extend(section("slam", &config.slam.extra)?);
     let mut features = vec!["--domain".into(), d.clone()];
     features.extend(section("features", &config.features)?);
-    let mut sim = vec![
-        "--world".into(),
-        config.sim.world.clone(),
-        "--frames".into(),
-        config.sim.frames.to_string(),
-        "--rate".into(),
-        config.sim.rate.to_string(),
-        "--seed".into(),
-        config.sim.seed.to_string(),
-        "--domain".into(),
-        d,
-        // feature-proc and map-sink take the scans.
-        "--subscribers".into(),
-        "2".into(),
-    ];
-    if config.sim.odometry {
-        sim.push("--odometry".into());
-    }
-    sim.extend(section("sim", &config.sim.extra)?);
+    let source = match config.source {
+        SourceKind::Sim => sim_stage(config, &d, &section, &program)?,
+        SourceKind::Replay => {
+            let mut args = vec![
+                "--format".into(),
+                config.replay.format.clone(),
+                "--file".into(),
+                config
+                    .replay
+                    .file
+                    .as_deref()
+                    .map(|f| f.display().to_string())
+                    .unwrap_or_default(),
+                "--rate".into(),
+                config.replay.rate.to_string(),
+                "--domain".into(),
+                d.clone(),
+                "--subscribers".into(),
+                "2".into(),
+            ];
+            if !config.replay.odometry {
+                args.push("--no-odometry".into());
+            }
+            StagePlan {
+                name: "lidar-replay".into(),
+                program: program("lidar-replay")?,
+                args,
+            }
+        }
+        SourceKind::Hokuyo => {
+            let mut args = vec![
+                "--addr".into(),
+                config.hokuyo.addr.clone(),
+                "--domain".into(),
+                d.clone(),
+                "--subscribers".into(),
+                "2".into(),
+            ];
+            for (key, value) in &config.hokuyo.extra {
+                args.push(format!("--{}", key.replace('_', "-")));
+                args.push(match value {
+                    toml::Value::String(s) => s.clone(),
+                    other => other.to_string(),
+                });
+            }
+            StagePlan {
+                name: "lidar-hokuyo".into(),
+                program: program("lidar-hokuyo")?,
+                args,
+            }
+        }
+    };
 
     Ok(vec![
         StagePlan {
@@ -256,12 +348,41 @@ fn plan(
             program: program("feature-proc")?,
             args: features,
         },
-        StagePlan {
-            name: "lidar-sim".into(),
-            program: program("lidar-sim")?,
-            args: sim,
-        },
+        source,
     ])
+}
+
+/// The simulator's stage.
+fn sim_stage(
+    config: &RunConfig,
+    domain: &str,
+    section: &dyn Fn(&str, &toml::Table) -> Result<Vec<String>>,
+    program: &dyn Fn(&str) -> Result<PathBuf>,
+) -> Result<StagePlan> {
+    let mut sim = vec![
+        "--world".into(),
+        config.sim.world.clone(),
+        "--frames".into(),
+        config.sim.frames.to_string(),
+        "--rate".into(),
+        config.sim.rate.to_string(),
+        "--seed".into(),
+        config.sim.seed.to_string(),
+        "--domain".into(),
+        domain.to_owned(),
+        // feature-proc and map-sink take the scans.
+        "--subscribers".into(),
+        "2".into(),
+    ];
+    if config.sim.odometry {
+        sim.push("--odometry".into());
+    }
+    sim.extend(section("sim", &config.sim.extra)?);
+    Ok(StagePlan {
+        name: "lidar-sim".into(),
+        program: program("lidar-sim")?,
+        args: sim,
+    })
 }
 
 /// Prints the key numbers of metrics.json.
