@@ -23,7 +23,9 @@ pub enum ConfigError {
 
 /// Where the scans come from.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+// No deny_unknown_fields: serde cannot combine it with `flatten`; the keys left over go to
+// the process, which refuses what it does not know.
+#[serde(default)]
 pub struct SimSection {
     /// `hall`, `office`, `corridor` or a world file (JSON).
     pub world: String,
@@ -93,7 +95,9 @@ impl Default for ReplaySection {
 
 /// A live Hokuyo scanner.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+// No deny_unknown_fields: serde cannot combine it with `flatten`; the keys left over go to
+// the process, which refuses what it does not know.
+#[serde(default)]
 pub struct HokuyoSection {
     /// `HOST:PORT` of the scanner.
     pub addr: String,
@@ -113,7 +117,9 @@ impl Default for HokuyoSection {
 
 /// SLAM settings; `extra` goes to `slam-proc --config` as is.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+// No deny_unknown_fields: serde cannot combine it with `flatten`; the keys left over go to
+// the process, which refuses what it does not know.
+#[serde(default)]
 pub struct SlamSection {
     pub particles: usize,
     pub seed: u64,
