@@ -1,0 +1,46 @@
+//! A simulated 2D lidar in a world of walls, the library half of the `lidar-sim` process.
+//!
+//! - [`World`]: wall polylines, a waypoint path and a speed; built in (`hall`, `office`,
+//!   `corridor`) or read from JSON, with errors that name the offending item.
+//! - [`World::true_corners`]: the ground-truth corner features (docs/CONVENTIONS.md).
+//! - [`RayCaster`]: exact first-hit distances through a uniform grid over the segments.
+//! - [`LidarModel`] with [`SensorConfig`] (default: Hokuyo UTM-30LX): noise, dropouts and
+//!   REP 117 invalid ranges.
+//! - [`Vehicle`]: a pure-pursuit follower of the path with limited yaw rate and
+//!   acceleration; [`Odometer`] integrates its motion with noise.
+//! - [`Simulation`]: ties them together into deterministic [`Frame`]s for a seed.
+//!
+//! Metres, radians and seconds throughout; poses are `world_from_robot` and the sensor sits
+//! at the robot origin.
+
+mod builtin;
+mod config_error;
+mod corners;
+pub mod geometry;
+mod lidar;
+mod odometry;
+mod outline;
+mod path;
+mod pose;
+mod ray_caster;
+mod sensor;
+mod sim_error;
+mod simulation;
+mod vehicle;
+mod visibility;
+mod world;
+mod world_error;
+
+pub use config_error::ConfigError;
+pub use corners::TrueCorner;
+pub use lidar::LidarModel;
+pub use odometry::{Odometer, OdometryConfig};
+pub use pose::{Point2, Pose2, wrap_angle};
+pub use ray_caster::RayCaster;
+pub use sensor::SensorConfig;
+pub use sim_error::SimError;
+pub use simulation::{Frame, Simulation};
+pub use vehicle::{Vehicle, VehicleConfig};
+pub use visibility::visible_corners;
+pub use world::{BUILTIN_WORLDS, World};
+pub use world_error::WorldError;

@@ -1,0 +1,213 @@
+//! `lidar-sim`: a simulated Hokuyo UTM-30LX-class lidar driving through a world, publishing
+//! scans, ground truth, the world's true corners and optionally noisy odometry.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use ipc_types::prelude::*;
+use lidar_sim::{SensorConfig, Simulation, VehicleConfig, World};
+use serde::Deserialize;
+
+/// What `--config` may set: the sensor and the vehicle (every field optional).
+#[derive(Debug, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct SimFileConfig {
+    sensor: SensorConfig,
+    vehicle: VehicleConfig,
+}
+
+impl SimFileConfig {
+    fn load(path: &std::path::Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        toml::from_str(&text).with_context(|| format!("config {}", path.display()))
+    }
+}
+
+/// Simulated 2D lidar with ground truth, on the shared-memory scan topic of a domain.
+#[derive(Debug, Parser)]
+#[command(name = "lidar-sim", version)]
+struct Args {
+    /// hall, office, corridor, or a world file: {"walls": [[[x, y], ...], ...],
+    /// "waypoints": [[x, y], ...], "speed": 1.0}
+    #[arg(long, default_value = "office")]
+    world: String,
+    /// Scans to publish; 0 = until the end of the path.
+    #[arg(long, default_value_t = 0)]
+    frames: u64,
+    /// Scans per second; 0 = lockstep: each scan is sent only when every subscriber has taken
+    /// the previous one, so nothing is lost and a run repeats exactly for its seed.
+    #[arg(long, default_value_t = 0.0)]
+    rate: f64,
+    /// Seed of the sensor and odometry noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// iceoryx2 domain of the run.
+    #[arg(long, default_value = "default")]
+    domain: String,
+    /// Scan subscribers to wait for before streaming (lockstep loses nothing at start).
+    #[arg(long, default_value_t = 1)]
+    subscribers: usize,
+    /// Publish noisy wheel odometry as well.
+    #[arg(long)]
+    odometry: bool,
+    /// TOML file with sensor and vehicle settings.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("lidar-sim: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    anyhow::ensure!(
+        args.rate.is_finite() && args.rate >= 0.0,
+        "--rate must be 0 (lockstep) or a positive number of scans per second, not {}",
+        args.rate
+    );
+    shutdown::install().context("cannot install the Ctrl-C handler")?;
+    let settings = match &args.config {
+        Some(path) => SimFileConfig::load(path)?,
+        None => SimFileConfig::default(),
+    };
+    let world = World::resolve(&args.world).with_context(|| format!("world '{}'", args.world))?;
+    let true_corners: Vec<TrueCorner> = world
+        .true_corners()
+        .iter()
+        .map(|c| TrueCorner {
+            x: c.x,
+            y: c.y,
+            heading: c.heading,
+            angle: c.angle,
+        })
+        .collect();
+    let sensor = settings.sensor.clone();
+    let odometry_noise = settings.vehicle.odometry.clone();
+    let mut sim = Simulation::new(world, settings.sensor, settings.vehicle, args.seed)?;
+
+    let delivery = if args.rate == 0.0 {
+        Delivery::Lossless
+    } else {
+        Delivery::Latest
+    };
+    let domain = Domain::new(&args.domain)?;
+    let node = domain.node("lidar-sim")?;
+    // Everything a subscriber of the scans may want is created before the scan topic, so a
+    // process that has found the scans finds the rest too.
+    let truth = Outlet::create(&domain, &node, topic::GROUND_TRUTH, delivery, 0)?;
+    let corners = Outlet::create(&domain, &node, topic::WORLD_CORNERS, delivery, 1)?;
+    let odometry = if args.odometry {
+        Some(Outlet::create(
+            &domain,
+            &node,
+            topic::ODOMETRY,
+            delivery,
+            0,
+        )?)
+    } else {
+        None
+    };
+    corners.publish(|message| {
+        message.header = Header::new(0, 0, "map");
+        if let Err(e) = message.set(&true_corners) {
+            eprintln!("lidar-sim: only part of the world's corners are published: {e}");
+            let _ = message.set(&true_corners[..ipc_types::MAX_WORLD_CORNERS]);
+        }
+    })?;
+    let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
+    println!("ready");
+
+    let wait = match delivery {
+        Delivery::Lossless => None,
+        // A live sensor does not wait for anyone for long.
+        Delivery::Latest => Some(Duration::from_secs(10)),
+    };
+    scans.wait_for_subscribers(args.subscribers, wait)?;
+
+    let period = (args.rate > 0.0).then(|| Duration::from_secs_f64(1.0 / args.rate));
+    let start = Instant::now();
+    let mut published = 0u64;
+    let mut last_stamp = 0;
+    // Odometry's covariance grows with the distance and turn it has integrated.
+    let mut odometry_variance = [0.0f64; 3];
+    let mut last_odometry: Option<lidar_sim::Pose2> = None;
+    while args.frames == 0 || published < args.frames {
+        if shutdown::requested() {
+            break;
+        }
+        let Some(frame) = sim.next_frame() else {
+            break;
+        };
+        if let Some(period) = period {
+            let due = start + period.mul_f64(published as f64);
+            if let Some(wait) = due.checked_duration_since(Instant::now()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let header = Header::new(frame.seq, frame.stamp_ns, "laser");
+        truth.publish(|message| {
+            message.header = header;
+            message.header.set_frame_id("map");
+            message.pose = Pose2::new(frame.pose.x, frame.pose.y, frame.pose.yaw);
+        })?;
+        if let Some(odometry) = &odometry {
+            if let Some(last) = last_odometry {
+                let step = (frame.odometry.x - last.x).hypot(frame.odometry.y - last.y);
+                let turn = lidar_sim::wrap_angle(frame.odometry.yaw - last.yaw).abs();
+                odometry_variance[0] += odometry_noise.sigma_forward.powi(2) * step;
+                odometry_variance[1] += odometry_noise.sigma_lateral.powi(2) * step;
+                odometry_variance[2] += odometry_noise.sigma_yaw_per_m.powi(2) * step
+                    + odometry_noise.sigma_yaw_per_rad.powi(2) * turn;
+            }
+            last_odometry = Some(frame.odometry);
+            let position_variance = odometry_variance[0] + odometry_variance[1];
+            odometry.publish(|message| {
+                message.header = header;
+                message.header.set_frame_id("odom");
+                message.pose = Pose2::new(frame.odometry.x, frame.odometry.y, frame.odometry.yaw);
+                message.covariance[0] = position_variance;
+                message.covariance[4] = position_variance;
+                message.covariance[8] = odometry_variance[2];
+                message.linear_velocity = frame.linear_velocity;
+                message.angular_velocity = frame.angular_velocity;
+            })?;
+        }
+        let mut fill_error = None;
+        scans.publish(|scan| {
+            scan.header = header;
+            scan.angle_min = sensor.angle_min as f32;
+            scan.angle_increment = sensor.angle_increment as f32;
+            scan.scan_time = (1.0 / sensor.rate) as f32;
+            // A UTM-30LX sweeps 1440 steps per turn.
+            scan.time_increment = scan.scan_time / 1440.0;
+            scan.range_min = sensor.range_min as f32;
+            scan.range_max = sensor.range_max as f32;
+            fill_error = scan.set_beams(&frame.ranges, &[]).err();
+        })?;
+        if let Some(e) = fill_error {
+            anyhow::bail!("scan {}: {e}", frame.seq);
+        }
+        // Hand the world's corners to subscribers that connected late.
+        corners.update_connections()?;
+        last_stamp = frame.stamp_ns;
+        published += 1;
+    }
+    if shutdown::requested() {
+        eprintln!("lidar-sim: stopped after {published} scans");
+        return Ok(());
+    }
+    scans.publish_end_of_stream(published, last_stamp)?;
+    eprintln!("lidar-sim: published {published} scans");
+    Ok(())
+}
