@@ -1,0 +1,39 @@
+//! Line and corner features from planar lidar scans, the library half of the
+//! `feature-proc` process.
+//!
+//! Pipeline per scan ([`Extractor::extract`]):
+//! 1. valid readings become sensor-frame points (REP 117 validity plus a range cap);
+//! 2. the adaptive breakpoint detector cuts them into segments, with a break distance that
+//!    grows with range and beam spacing;
+//! 3. split-and-merge turns segments into straight runs, merges collinear neighbours, moves
+//!    the points at each shared boundary to the line they lie on and hands stubs left
+//!    around a corner to its two walls;
+//! 4. each run gets a total-least-squares line `(rho, theta)` with its covariance
+//!    propagated from the range and bearing noise (scaled up when the residuals say the
+//!    wall is rougher than that noise);
+//! 5. neighbouring lines whose ends meet at their intersection form a corner
+//!    `(x, y, heading, angle)` with a covariance propagated from both lines.
+//!
+//! Conventions (frames, corner heading and angle) are those of docs/CONVENTIONS.md; every
+//! threshold is in [`FeatureConfig`]. [`seed_hall`] loads the shared real recording and
+//! [`eval`] scores corners against ground truth, for this crate's tests and others'.
+
+#![forbid(unsafe_code)]
+
+mod angle;
+mod config;
+mod corner;
+pub mod eval;
+mod extractor;
+mod features;
+mod line_fit;
+mod scan;
+pub mod seed_hall;
+mod segment;
+mod split_merge;
+
+pub use angle::wrap_angle;
+pub use config::{ConfigError, FeatureConfig};
+pub use extractor::Extractor;
+pub use features::{Corner, FeatureSet, Line};
+pub use scan::{MAX_BEAMS, ScanError, ScanInput};
