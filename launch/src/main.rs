@@ -265,6 +265,13 @@ fn plan(
         "--out".into(),
         out.display().to_string(),
         "--status".into(),
+        "--title".into(),
+        format!(
+            "{}: {} particles, seed {}",
+            source_label(config),
+            config.slam.particles,
+            config.slam.seed
+        ),
     ];
     let mut slam = vec![
         "--domain".into(),

@@ -49,25 +49,20 @@ struct Progress {
     neff: f64,
     particles: u32,
     map: u32,
-    rate_window: (u64, Option<Instant>),
-    rate: f64,
+    first_pose: Option<Instant>,
 }
 
 impl Progress {
-    fn line(&mut self) -> String {
-        let now = Instant::now();
-        match self.rate_window.1 {
-            Some(since) if now.duration_since(since) >= Duration::from_secs(1) => {
-                let dt = now.duration_since(since).as_secs_f64();
-                self.rate = (self.poses - self.rate_window.0) as f64 / dt;
-                self.rate_window = (self.poses, Some(now));
-            }
-            Some(_) => {}
-            None => self.rate_window = (self.poses, Some(now)),
-        }
+    fn line(&self) -> String {
+        let elapsed = self.first_pose.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        let rate = if elapsed > 0.0 {
+            self.poses.saturating_sub(1) as f64 / elapsed
+        } else {
+            0.0
+        };
         format!(
-            "status frames={} scans_per_s={:.1} latency_ms={:.2} neff={:.1} particles={} map={}",
-            self.poses, self.rate, self.latency_ms, self.neff, self.particles, self.map
+            "status frames={} scans_per_s={rate:.1} latency_ms={:.2} neff={:.1} particles={} map={}",
+            self.poses, self.latency_ms, self.neff, self.particles, self.map
         )
     }
 }
@@ -147,6 +142,7 @@ fn run() -> Result<()> {
                 latency,
             )?;
             progress.poses += 1;
+            progress.first_pose.get_or_insert_with(Instant::now);
             progress.latency_ms = latency.unwrap_or(0) as f64 * 1e-6;
             progress.neff = sample.effective_particles;
             progress.particles = sample.particle_count;

@@ -1,0 +1,307 @@
+//! Every parameter of the filter, with defaults for a planar lidar at 10-40 Hz on a ground
+//! robot or a UAV (steps up to ~0.2 m and ~0.2 rad between scans).
+
+use serde::{Deserialize, Serialize};
+
+/// FastSLAM parameters. Metres, radians, probabilities in `(0, 1)`.
+///
+/// Read from the `[slam]` section of a run's TOML file; every field is optional and an
+/// unknown key is an error, so a typo cannot silently leave a default in place.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SlamConfig {
+    /// Number of particles.
+    pub particles: usize,
+    /// Resample when the effective number of particles falls below this fraction of the
+    /// particle count. Resampling only then keeps diversity that constant resampling loses.
+    pub resample_threshold: f64,
+
+    /// Largest believable translation between consecutive scans, metres. A corner fit
+    /// beyond it is a wrong match, and the prior is used instead.
+    pub motion_max_translation: f64,
+    /// Largest believable rotation between consecutive scans, radians.
+    pub motion_max_rotation: f64,
+    /// Standard deviation of the constant-velocity prior's translation, metres. Generous:
+    /// it only has to keep the true matches inside the gate.
+    pub motion_prior_sigma_xy: f64,
+    /// Standard deviation of the constant-velocity prior's rotation, radians.
+    pub motion_prior_sigma_yaw: f64,
+    /// Gate for candidate matches between consecutive scans under the motion prior.
+    pub motion_gate_probability: f64,
+    /// Gate for inliers of a motion hypothesis (no prior uncertainty left).
+    pub motion_inlier_probability: f64,
+    /// Candidate matches kept per corner of the current scan, best first. Bounds the
+    /// hypotheses of the robust fit, which tries every pair of candidates.
+    pub motion_candidates: usize,
+    /// Smallest standard deviation of an odometry increment's translation, metres: a
+    /// reported covariance that does not grow would otherwise make the prior absolute.
+    pub odometry_min_sigma_xy: f64,
+    /// Smallest standard deviation of an odometry increment's rotation, radians.
+    pub odometry_min_sigma_yaw: f64,
+
+    /// Particle translation noise per step: `sigma = base + per_metre * |t| + per_radian * |dyaw|`.
+    pub noise_xy_base: f64,
+    pub noise_xy_per_metre: f64,
+    pub noise_xy_per_radian: f64,
+    /// Particle rotation noise per step: `sigma = base + per_radian * |dyaw| + per_metre * |t|`.
+    pub noise_yaw_base: f64,
+    pub noise_yaw_per_radian: f64,
+    pub noise_yaw_per_metre: f64,
+    /// Noise multiplier for a step without a corner fit (constant velocity or odometry
+    /// alone): the motion is a guess, so the particles must spread wider.
+    pub fallback_noise_scale: f64,
+
+    /// Added in quadrature to each observation's position standard deviation, metres:
+    /// covers what the extractor's propagated covariance leaves out (wall roughness,
+    /// timing, a moving sensor).
+    pub observation_extra_sigma_xy: f64,
+    /// Added in quadrature to each observation's heading and angle standard deviations.
+    pub observation_extra_sigma_angle: f64,
+
+    /// Gate probability of the individual (4 dof) and joint (4k dof) chi-square tests.
+    pub association_probability: f64,
+    /// Map corners farther than this from an observation's predicted position are not
+    /// considered for it, metres. Must cover the gate: pose and corner uncertainty at range.
+    pub search_radius: f64,
+    /// Cell size of each map's spatial hash grid, metres. At least twice the search radius
+    /// keeps a query to four cells.
+    pub grid_cell_size: f64,
+    /// Search nodes JCBB may visit per particle and scan before it settles for the best
+    /// hypothesis found so far. Bounds the time of pathological scans.
+    pub jcbb_max_nodes: usize,
+
+    /// Log density of an observation that no map corner explains (a new or spurious
+    /// corner), over `(x, y, heading, angle)`. Roughly `-ln(visible area * 2 pi * pi)`.
+    pub new_corner_log_likelihood: f64,
+    /// Observations after which a corner is confirmed; before that it is tentative, left
+    /// out of the published map and dropped when it is not seen again.
+    pub confirm_observations: u32,
+    /// A tentative corner is dropped after this many scans in which it was in view and not
+    /// observed.
+    pub tentative_max_misses: u32,
+    /// A corner closer than this to the robot is in view, metres (at most the sensor's range).
+    pub view_range: f64,
+    /// Field of view, centred on the robot's x axis, radians.
+    pub view_fov: f64,
+    /// An unexplained observation within this distance of a map corner of similar heading
+    /// starts no new corner (it is that corner, seen badly), metres.
+    pub duplicate_radius: f64,
+    /// Headings closer than this are similar for the duplicate test, radians.
+    pub duplicate_heading: f64,
+}
+
+impl Default for SlamConfig {
+    fn default() -> Self {
+        Self {
+            particles: 100,
+            resample_threshold: 0.5,
+            motion_max_translation: 0.5,
+            motion_max_rotation: 0.5,
+            motion_prior_sigma_xy: 0.25,
+            motion_prior_sigma_yaw: 0.25,
+            motion_gate_probability: 0.999,
+            motion_inlier_probability: 0.99,
+            motion_candidates: 4,
+            odometry_min_sigma_xy: 0.005,
+            odometry_min_sigma_yaw: 0.002,
+            noise_xy_base: 0.01,
+            noise_xy_per_metre: 0.05,
+            noise_xy_per_radian: 0.02,
+            noise_yaw_base: 0.004,
+            noise_yaw_per_radian: 0.05,
+            noise_yaw_per_metre: 0.01,
+            fallback_noise_scale: 3.0,
+            observation_extra_sigma_xy: 0.01,
+            observation_extra_sigma_angle: 0.01,
+            association_probability: 0.999,
+            search_radius: 1.5,
+            grid_cell_size: 3.0,
+            jcbb_max_nodes: 10_000,
+            new_corner_log_likelihood: -9.0,
+            confirm_observations: 2,
+            tentative_max_misses: 3,
+            view_range: 14.0,
+            view_fov: 270f64.to_radians(),
+            duplicate_radius: 0.5,
+            duplicate_heading: 30f64.to_radians(),
+        }
+    }
+}
+
+/// A configuration value outside its meaningful range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("slam config: {field} = {value} {reason}")]
+pub struct ConfigError {
+    /// The offending field.
+    pub field: &'static str,
+    /// Its value (counts converted to `f64`).
+    pub value: f64,
+    /// What it should be.
+    pub reason: &'static str,
+}
+
+fn check(
+    field: &'static str,
+    value: f64,
+    ok: bool,
+    reason: &'static str,
+) -> Result<(), ConfigError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ConfigError {
+            field,
+            value,
+            reason,
+        })
+    }
+}
+
+impl SlamConfig {
+    /// Checks that every parameter is usable; [`crate::FastSlam::new`] refuses a
+    /// configuration that fails this.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let positive = [
+            ("motion_max_translation", self.motion_max_translation),
+            ("motion_max_rotation", self.motion_max_rotation),
+            ("motion_prior_sigma_xy", self.motion_prior_sigma_xy),
+            ("motion_prior_sigma_yaw", self.motion_prior_sigma_yaw),
+            ("odometry_min_sigma_xy", self.odometry_min_sigma_xy),
+            ("odometry_min_sigma_yaw", self.odometry_min_sigma_yaw),
+            ("noise_xy_base", self.noise_xy_base),
+            ("noise_yaw_base", self.noise_yaw_base),
+            ("search_radius", self.search_radius),
+            ("grid_cell_size", self.grid_cell_size),
+            ("view_range", self.view_range),
+            ("view_fov", self.view_fov),
+        ];
+        for (field, value) in positive {
+            check(
+                field,
+                value,
+                value.is_finite() && value > 0.0,
+                "must be finite and > 0",
+            )?;
+        }
+        let non_negative = [
+            ("noise_xy_per_metre", self.noise_xy_per_metre),
+            ("noise_xy_per_radian", self.noise_xy_per_radian),
+            ("noise_yaw_per_radian", self.noise_yaw_per_radian),
+            ("noise_yaw_per_metre", self.noise_yaw_per_metre),
+            (
+                "observation_extra_sigma_xy",
+                self.observation_extra_sigma_xy,
+            ),
+            (
+                "observation_extra_sigma_angle",
+                self.observation_extra_sigma_angle,
+            ),
+            ("duplicate_radius", self.duplicate_radius),
+            ("duplicate_heading", self.duplicate_heading),
+        ];
+        for (field, value) in non_negative {
+            check(
+                field,
+                value,
+                value.is_finite() && value >= 0.0,
+                "must be finite and >= 0",
+            )?;
+        }
+        let probabilities = [
+            ("motion_gate_probability", self.motion_gate_probability),
+            ("motion_inlier_probability", self.motion_inlier_probability),
+            ("association_probability", self.association_probability),
+        ];
+        for (field, value) in probabilities {
+            check(
+                field,
+                value,
+                value > 0.0 && value < 1.0,
+                "must be in (0, 1)",
+            )?;
+        }
+        let r = self.resample_threshold;
+        check(
+            "resample_threshold",
+            r,
+            (0.0..=1.0).contains(&r),
+            "must be in [0, 1]",
+        )?;
+        let s = self.fallback_noise_scale;
+        check(
+            "fallback_noise_scale",
+            s,
+            s.is_finite() && s >= 1.0,
+            "must be finite and >= 1",
+        )?;
+        let l = self.new_corner_log_likelihood;
+        check(
+            "new_corner_log_likelihood",
+            l,
+            l.is_finite(),
+            "must be finite",
+        )?;
+        let n = self.particles;
+        check(
+            "particles",
+            n as f64,
+            (1..=1_000_000).contains(&n),
+            "must be in 1..=1000000",
+        )?;
+        let k = self.motion_candidates;
+        check(
+            "motion_candidates",
+            k as f64,
+            (1..=64).contains(&k),
+            "must be in 1..=64",
+        )?;
+        let j = self.jcbb_max_nodes;
+        check("jcbb_max_nodes", j as f64, j >= 1, "must be >= 1")?;
+        let c = self.confirm_observations;
+        check("confirm_observations", f64::from(c), c >= 1, "must be >= 1")?;
+        let fov = self.view_fov;
+        check(
+            "view_fov",
+            fov,
+            fov <= std::f64::consts::TAU,
+            "must be at most 2 pi",
+        )?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        assert_eq!(SlamConfig::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn toml_sets_fields_and_refuses_unknown_keys() {
+        let config: SlamConfig = toml::from_str("particles = 7\nview_range = 9.5").unwrap();
+        assert_eq!(config.particles, 7);
+        assert_eq!(config.view_range, 9.5);
+        assert_eq!(config.search_radius, SlamConfig::default().search_radius);
+        assert!(toml::from_str::<SlamConfig>("particle = 7").is_err());
+    }
+
+    #[test]
+    fn invalid_values_name_their_field() {
+        let config = SlamConfig {
+            association_probability: 1.0,
+            ..SlamConfig::default()
+        };
+        assert_eq!(
+            config.validate().map_err(|e| e.field),
+            Err("association_probability")
+        );
+        let config = SlamConfig {
+            particles: 0,
+            ..SlamConfig::default()
+        };
+        assert_eq!(config.validate().map_err(|e| e.field), Err("particles"));
+    }
+}

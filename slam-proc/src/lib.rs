@@ -1,0 +1,50 @@
+//! FastSLAM over corner maps, the library half of the `slam-proc` process.
+//!
+//! Each scan brings corner features in the sensor frame (docs/CONVENTIONS.md) and,
+//! optionally, an odometry pose. [`FastSlam::process`] then
+//! 1. estimates the motion since the last scan from matched corners (RANSAC over pairs of
+//!    matches gated by a Mahalanobis test under a constant-velocity or odometry prior, then
+//!    a weighted Kabsch fit refined with headings and the prior);
+//! 2. moves every particle by that motion composed in its own frame, with noise that grows
+//!    with the step;
+//! 3. associates the corners with each particle's map by Joint Compatibility Branch and
+//!    Bound, the shared pose uncertainty included, over the map corners near each
+//!    observation (a spatial hash grid);
+//! 4. updates matched corners with a 4-D Kalman filter, starts tentative corners for the
+//!    unexplained ones and drops tentative corners that are not seen again, and weights the
+//!    particles in log space by the joint likelihood of the scan;
+//! 5. resamples systematically when the effective particle count falls below a threshold.
+//!
+//! Maps are persistent (copy-on-write) trees: a resampled particle shares its parent's
+//! map and copies only what it changes. Particles are updated in parallel with rayon; each
+//! draws from its own random stream, so a seed gives the same result on any thread count.
+//! Every parameter is in [`SlamConfig`]. The first pose is the map frame.
+
+mod angle;
+mod chi2;
+mod config;
+mod corner_model;
+mod estimate;
+mod grid;
+mod jcbb;
+mod kalman;
+mod linalg;
+mod map;
+mod motion;
+mod observation;
+mod particle;
+mod persistent;
+mod pose;
+mod predict;
+mod resample;
+mod rigid_fit;
+mod rng;
+mod slam;
+
+pub use angle::wrap_angle;
+pub use config::{ConfigError, SlamConfig};
+pub use estimate::{Estimate, StageTiming};
+pub use map::MapCorner;
+pub use observation::{Observation, OdometryInput};
+pub use pose::Pose2;
+pub use slam::FastSlam;

@@ -1,0 +1,172 @@
+//! Small symmetric positive definite solves, written out for 3x3 and 4x4: every particle
+//! does several per observation, and the generic decompositions spend more time on loop
+//! control than on arithmetic at these sizes.
+
+use nalgebra::{ArrayStorage, Matrix3, Matrix4, Vector3};
+
+/// The lower Cholesky factor of an `N x N` matrix given by `a(i, j)`; `None` unless the
+/// matrix is positive definite (a NaN is not).
+#[inline]
+fn cholesky<const N: usize>(a: impl Fn(usize, usize) -> f64) -> Option<([[f64; N]; N], [f64; N])> {
+    // The reciprocals of the diagonal are kept: the solves multiply by them instead of
+    // dividing, and divisions dominate the latency at this size.
+    let mut l = [[0.0; N]; N];
+    let mut inverse_diagonal = [0.0; N];
+    for j in 0..N {
+        let mut d = a(j, j);
+        for k in 0..j {
+            d -= l[j][k] * l[j][k];
+        }
+        if !(d > 0.0) {
+            return None;
+        }
+        let d = d.sqrt();
+        let r = 1.0 / d;
+        l[j][j] = d;
+        inverse_diagonal[j] = r;
+        for i in j + 1..N {
+            let mut s = a(i, j);
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            l[i][j] = s * r;
+        }
+    }
+    Some((l, inverse_diagonal))
+}
+
+/// `ln det` from a Cholesky factor: one logarithm of the product of the diagonal (the
+/// entries of covariances in metres and radians are far from over- or underflow).
+#[inline]
+fn log_det<const N: usize>(l: &[[f64; N]; N]) -> f64 {
+    2.0 * (0..N).map(|i| l[i][i]).product::<f64>().ln()
+}
+
+/// `a b` for 4x4 matrices, as combinations of `a`'s columns on the raw column-major
+/// arrays: that form inlines and vectorises, the generic product does neither at this size.
+#[inline]
+pub(crate) fn mul4(a: &Matrix4<f64>, b: &Matrix4<f64>) -> Matrix4<f64> {
+    let (a, b) = (&a.data.0, &b.data.0);
+    let mut c = [[0.0; 4]; 4];
+    for j in 0..4 {
+        for k in 0..4 {
+            let bkj = b[j][k];
+            for i in 0..4 {
+                c[j][i] += a[k][i] * bkj;
+            }
+        }
+    }
+    Matrix4::from_data(ArrayStorage(c))
+}
+
+/// `a b^T` for 4x4 matrices whose product is known to be symmetric, made exactly
+/// symmetric by averaging it with its transpose (the Joseph form's symmetrisation).
+#[inline]
+pub(crate) fn mul4_symmetric_transpose(a: &Matrix4<f64>, b: &Matrix4<f64>) -> Matrix4<f64> {
+    let (a, b) = (&a.data.0, &b.data.0);
+    let mut c = [[0.0; 4]; 4];
+    for j in 0..4 {
+        for k in 0..4 {
+            // (b^T)[k][j] = b[j][k], stored at column k, row j.
+            let bjk = b[k][j];
+            for i in 0..4 {
+                c[j][i] += a[k][i] * bjk;
+            }
+        }
+    }
+    let mut m = [[0.0; 4]; 4];
+    for j in 0..4 {
+        for i in 0..4 {
+            m[j][i] = 0.5 * (c[j][i] + c[i][j]);
+        }
+    }
+    Matrix4::from_data(ArrayStorage(m))
+}
+
+/// The inverse of a symmetric positive definite 4x4 matrix and its log-determinant.
+#[inline]
+pub(crate) fn spd_inverse4(m: &Matrix4<f64>) -> Option<(Matrix4<f64>, f64)> {
+    let (l, r) = cholesky::<4>(|i, j| m[(i, j)])?;
+    // L^-1 by forward substitution, then A^-1 = L^-T L^-1.
+    let mut li = [[0.0; 4]; 4];
+    for j in 0..4 {
+        li[j][j] = r[j];
+        for i in j + 1..4 {
+            let mut s = 0.0;
+            for k in j..i {
+                s -= l[i][k] * li[k][j];
+            }
+            li[i][j] = s * r[i];
+        }
+    }
+    let mut inverse = Matrix4::zeros();
+    for i in 0..4 {
+        for j in 0..=i {
+            let mut s = 0.0;
+            for k in i..4 {
+                s += li[k][i] * li[k][j];
+            }
+            inverse[(i, j)] = s;
+            inverse[(j, i)] = s;
+        }
+    }
+    Some((inverse, log_det(&l)))
+}
+
+/// `ln det m` of a symmetric positive definite 3x3 `m`.
+pub(crate) fn spd_log_det3(m: &Matrix3<f64>) -> Option<f64> {
+    cholesky::<3>(|i, j| m[(i, j)]).map(|(l, _)| log_det(&l))
+}
+
+/// `x` with `m x = b` for a symmetric positive definite 3x3 `m`.
+#[inline]
+pub(crate) fn spd_solve3(m: &Matrix3<f64>, b: &Vector3<f64>) -> Option<Vector3<f64>> {
+    let (l, r) = cholesky::<3>(|i, j| m[(i, j)])?;
+    let mut y = [0.0; 3];
+    for i in 0..3 {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[i][k] * y[k];
+        }
+        y[i] = s * r[i];
+    }
+    let mut x = Vector3::zeros();
+    for i in (0..3).rev() {
+        let mut s = y[i];
+        for k in i + 1..3 {
+            s -= l[k][i] * x[k];
+        }
+        x[i] = s * r[i];
+    }
+    Some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn agrees_with_the_general_routines() {
+        let a = Matrix4::new(
+            4.0, 1.0, 0.5, 0.2, 1.0, 3.0, 0.3, 0.1, 0.5, 0.3, 2.0, 0.4, 0.2, 0.1, 0.4, 1.5,
+        );
+        let (inverse, ln_det) = spd_inverse4(&a).unwrap();
+        assert!((inverse * a - Matrix4::identity()).abs().max() < 1e-12);
+        assert!((ln_det - a.determinant().ln()).abs() < 1e-12);
+        let m = Matrix3::new(2.0, 0.5, 0.1, 0.5, 1.0, 0.2, 0.1, 0.2, 3.0);
+        let b = Vector3::new(1.0, -2.0, 0.5);
+        let x = spd_solve3(&m, &b).unwrap();
+        assert!((m * x - b).abs().max() < 1e-12);
+        assert!((spd_log_det3(&m).unwrap() - m.determinant().ln()).abs() < 1e-12);
+        assert!(spd_inverse4(&(-a)).is_none());
+        let c = Matrix4::from_fn(|i, j| (i * 4 + j) as f64 * 0.1 - 0.5);
+        assert!((mul4(&a, &c) - a * c).abs().max() < 1e-12);
+        assert!(
+            (mul4_symmetric_transpose(&(c * a), &c) - c * a * c.transpose())
+                .abs()
+                .max()
+                < 1e-12
+        );
+        assert!(spd_solve3(&(m * f64::NAN), &b).is_none());
+    }
+}

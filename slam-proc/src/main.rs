@@ -1,0 +1,229 @@
+//! `slam-proc`: FastSLAM over corner maps, from the features topic to pose and map topics.
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use ipc_types::prelude::*;
+use slam_proc::{FastSlam, Observation, OdometryInput, SlamConfig};
+
+/// Subscribes to features (and odometry when anyone publishes it), publishes a pose
+/// estimate for every scan and the best particle's map every few scans and at the end.
+#[derive(Debug, Parser)]
+#[command(name = "slam-proc", version)]
+struct Args {
+    /// iceoryx2 domain of the run.
+    #[arg(long, default_value = "default")]
+    domain: String,
+    /// Particles of the filter (overrides the config file).
+    #[arg(long)]
+    particles: Option<usize>,
+    /// Seed of the filter's noise: the same seed gives the same run.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Publish the map every this many scans (and at the end).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..))]
+    map_every: u64,
+    /// TOML file with filter settings (every field optional).
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Pose subscribers to wait for before the first lockstep publish.
+    #[arg(long, default_value_t = 1)]
+    subscribers: usize,
+}
+
+/// Odometry messages kept to find the one that goes with a scan.
+const ODOMETRY_BACKLOG: usize = 64;
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("slam-proc: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load_config(path: Option<&PathBuf>) -> Result<SlamConfig> {
+    let Some(path) = path else {
+        return Ok(SlamConfig::default());
+    };
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    toml::from_str(&text).with_context(|| format!("config {}", path.display()))
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    shutdown::install().context("cannot install the Ctrl-C handler")?;
+    let mut config = load_config(args.config.as_ref())?;
+    if let Some(particles) = args.particles {
+        anyhow::ensure!(particles > 0, "--particles must be at least 1");
+        config.particles = particles;
+    }
+    let mut slam = FastSlam::new(config, args.seed)?;
+
+    let domain = Domain::new(&args.domain)?;
+    let node = domain.node("slam-proc")?;
+    let features = Inlet::open(&node, topic::FEATURES)?;
+    let mut odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
+    let delivery = features.delivery();
+    let maps = Outlet::create(&domain, &node, topic::MAP, delivery, 1)?;
+    let poses = Outlet::create(&domain, &node, topic::POSE, delivery, 0)?;
+    println!("ready");
+    if delivery == Delivery::Lossless {
+        poses.wait_for_subscribers(args.subscribers, None)?;
+    }
+
+    let mut odometry_backlog: VecDeque<Odometry> = VecDeque::with_capacity(ODOMETRY_BACKLOG);
+    let mut observations = Vec::new();
+    let mut processed = 0u64;
+    let mut last_header = Header::new(0, 0, "map");
+    let mut last_odometry_probe = Instant::now();
+    loop {
+        let wake = match &odometry {
+            Some(odometry) => wait_any(&[&features, odometry], Duration::from_millis(100))?,
+            None => wait_any(&[&features], Duration::from_millis(100))?,
+        };
+        if wake == Wake::Shutdown {
+            break;
+        }
+        if odometry.is_none() && last_odometry_probe.elapsed() > Duration::from_secs(1) {
+            // Odometry may start after us (a robot's driver, a replayed log).
+            odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
+            last_odometry_probe = Instant::now();
+        }
+        if let Some(inlet) = &odometry {
+            while let Some(sample) = inlet.receive()? {
+                if odometry_backlog.len() == ODOMETRY_BACKLOG {
+                    odometry_backlog.pop_front();
+                }
+                odometry_backlog.push_back(*sample);
+            }
+        }
+        while let Some(sample) = features.receive()? {
+            if sample.header.is_end_of_stream() {
+                publish_map(&maps, &slam, last_header)?;
+                poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
+                eprintln!("slam-proc: {processed} scans");
+                return Ok(());
+            }
+            // Odometry arrives before or with its scan; a late one is still in the queue.
+            if let Some(inlet) = &odometry {
+                while let Some(sample) = inlet.receive()? {
+                    if odometry_backlog.len() == ODOMETRY_BACKLOG {
+                        odometry_backlog.pop_front();
+                    }
+                    odometry_backlog.push_back(*sample);
+                }
+            }
+            observations.clear();
+            observations.extend(sample.corners().iter().map(to_observation));
+            let stamp = sample.header.stamp_ns;
+            let odometry_input = odometry_backlog
+                .iter()
+                .rev()
+                .find(|o| o.header.stamp_ns <= stamp)
+                .map(to_odometry);
+            let estimate = slam.process(stamp, &observations, odometry_input.as_ref());
+            let header = sample.header;
+            poses.publish(|pose| {
+                pose.header = header;
+                pose.header.set_frame_id("map");
+                pose.scan_sent_ns = sample.scan_sent_ns;
+                pose.best = to_pose(&estimate.best);
+                pose.mean = to_pose(&estimate.mean);
+                pose.dead_reckoning = to_pose(&estimate.dead_reckoning);
+                for r in 0..3 {
+                    for c in 0..3 {
+                        pose.covariance[r * 3 + c] = estimate.covariance[(r, c)];
+                    }
+                }
+                pose.effective_particles = estimate.effective_particles;
+                pose.particle_count = estimate.particle_count as u32;
+                pose.map_corners = estimate.map_size as u32;
+                pose.timing = StageTiming {
+                    motion_ns: estimate.timing.motion_ns,
+                    predict_ns: estimate.timing.predict_ns,
+                    update_ns: estimate.timing.update_ns,
+                    resample_ns: estimate.timing.resample_ns,
+                    total_ns: estimate.timing.total_ns,
+                };
+            })?;
+            last_header = header;
+            processed += 1;
+            if processed % args.map_every == 0 {
+                publish_map(&maps, &slam, header)?;
+            }
+        }
+    }
+    // Stopped by a signal: leave the map as far as it got.
+    publish_map(&maps, &slam, last_header)?;
+    eprintln!("slam-proc: stopped after {processed} scans");
+    Ok(())
+}
+
+fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> Result<()> {
+    let corners: Vec<MapCorner> = slam
+        .best_map()
+        .iter()
+        .map(|c| {
+            let mut covariance = [0.0; 16];
+            for r in 0..4 {
+                for k in 0..4 {
+                    covariance[r * 4 + k] = c.covariance[(r, k)];
+                }
+            }
+            MapCorner {
+                corner: Corner {
+                    x: c.x,
+                    y: c.y,
+                    heading: c.heading,
+                    angle: c.angle,
+                    covariance,
+                },
+                observations: c.observations,
+                reserved: 0,
+            }
+        })
+        .collect();
+    let keep = corners.len().min(ipc_types::MAX_MAP_CORNERS);
+    if keep < corners.len() {
+        eprintln!(
+            "slam-proc: the map has {} corners; publishing {keep}",
+            corners.len()
+        );
+    }
+    maps.publish(|message| {
+        message.header = header;
+        message.header.set_frame_id("map");
+        // Cut to capacity above, so this cannot fail.
+        let _ = message.set(&corners[..keep]);
+    })?;
+    Ok(())
+}
+
+fn to_observation(corner: &Corner) -> Observation {
+    Observation {
+        x: corner.x,
+        y: corner.y,
+        heading: corner.heading,
+        angle: corner.angle,
+        covariance: nalgebra::Matrix4::from_row_slice(&corner.covariance),
+    }
+}
+
+fn to_odometry(odometry: &Odometry) -> OdometryInput {
+    OdometryInput {
+        pose: slam_proc::Pose2::new(odometry.pose.x, odometry.pose.y, odometry.pose.yaw),
+        covariance: nalgebra::Matrix3::from_row_slice(&odometry.covariance),
+    }
+}
+
+fn to_pose(pose: &slam_proc::Pose2) -> Pose2 {
+    Pose2::new(pose.x, pose.y, pose.yaw)
+}

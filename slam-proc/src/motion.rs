@@ -1,0 +1,462 @@
+//! The motion between consecutive scans from matched corners.
+//!
+//! 1. A prior: the odometry increment when the robot has odometry, else the last motion
+//!    at constant velocity, with a generous covariance.
+//! 2. Candidate matches: every pair of corners (current, previous) whose 4-D Mahalanobis
+//!    distance under the prior passes a chi-square gate. The opening angle does not change
+//!    with motion, so it gates sharply; position and heading gate through the prior.
+//! 3. RANSAC over every pair of candidates: each minimal hypothesis is fitted, its inliers
+//!    counted one-to-one, and the best is refitted on its inliers (weighted Kabsch, then
+//!    Gauss-Newton with headings and the prior, so the prior is fused with the fit).
+//! 4. Fewer than two consistent matches, or a fit beyond the per-step limits: the prior.
+
+use nalgebra::{Cholesky, Matrix3, Matrix4, Matrix4x3, Vector2, Vector3, Vector4};
+
+use crate::angle::wrap_angle;
+use crate::chi2::quantile_even;
+use crate::config::SlamConfig;
+use crate::observation::{OdometryInput, Prepared};
+use crate::pose::Pose2;
+use crate::rigid_fit::{Prior, kabsch, refine};
+
+/// The motion from the previous scan to this one (`previous_from_current`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Motion {
+    pub delta: Pose2,
+    pub covariance: Matrix3<f64>,
+    /// Whether corners fixed it; otherwise it is the prior alone.
+    pub fitted: bool,
+    /// Matches the fit used.
+    pub inliers: usize,
+}
+
+/// A candidate match: current corner `current` may be previous corner `previous`.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    current: usize,
+    previous: usize,
+    distance: f64,
+    /// Information of the residual without the prior's uncertainty, for inlier tests.
+    information: Matrix4<f64>,
+}
+
+/// Keeps what the next scan's estimate needs: the last corners, motion, stamp, odometry.
+#[derive(Debug, Clone)]
+pub(crate) struct MotionEstimator {
+    previous: Option<Vec<Prepared>>,
+    last_delta: Pose2,
+    last_stamp: Option<u64>,
+    last_interval: Option<u64>,
+    last_odometry: Option<OdometryInput>,
+    gate: f64,
+    inlier_gate: f64,
+}
+
+impl MotionEstimator {
+    pub fn new(config: &SlamConfig) -> Self {
+        Self {
+            previous: None,
+            last_delta: Pose2::IDENTITY,
+            last_stamp: None,
+            last_interval: None,
+            last_odometry: None,
+            gate: quantile_even(config.motion_gate_probability, 4),
+            inlier_gate: quantile_even(config.motion_inlier_probability, 4),
+        }
+    }
+
+    /// The motion since the previous call. The first call returns the identity: the first
+    /// pose is the map frame.
+    pub fn estimate(
+        &mut self,
+        stamp_ns: u64,
+        observations: &[Prepared],
+        odometry: Option<&OdometryInput>,
+        config: &SlamConfig,
+    ) -> Motion {
+        let interval = self
+            .last_stamp
+            .and_then(|last| stamp_ns.checked_sub(last))
+            .filter(|&d| d > 0);
+        let prior = match (odometry, &self.last_odometry) {
+            (Some(now), Some(before)) => odometry_prior(before, now, config),
+            _ => self.constant_velocity_prior(interval, config),
+        };
+        let motion = match &self.previous {
+            None => Motion {
+                delta: Pose2::IDENTITY,
+                covariance: Matrix3::zeros(),
+                fitted: true,
+                inliers: 0,
+            },
+            Some(previous) => self
+                .fit(previous, observations, &prior, config)
+                .unwrap_or(Motion {
+                    delta: prior.delta,
+                    covariance: prior.covariance,
+                    fitted: false,
+                    inliers: 0,
+                }),
+        };
+        self.previous = Some(observations.to_vec());
+        self.last_delta = motion.delta;
+        self.last_stamp = Some(stamp_ns);
+        self.last_interval = interval;
+        self.last_odometry = odometry.copied();
+        motion
+    }
+
+    /// Replaces the last motion by a better estimate of it: the filter's posterior
+    /// increment, which the map has corrected. Without this a wrong step would repeat at
+    /// constant velocity for as long as the scans have too few corners to fit.
+    pub fn set_last_motion(&mut self, delta: Pose2) {
+        self.last_delta = delta;
+    }
+
+    /// The last motion, scaled to this scan's interval when both intervals are known.
+    fn constant_velocity_prior(&self, interval: Option<u64>, config: &SlamConfig) -> Prior {
+        let scale = match (interval, self.last_interval) {
+            // Scans can be dropped or arrive late; a velocity, not a step, is constant.
+            (Some(now), Some(before)) => (now as f64 / before as f64).clamp(0.0, 4.0),
+            _ => 1.0,
+        };
+        let d = self.last_delta;
+        let (xy, yaw) = (config.motion_prior_sigma_xy, config.motion_prior_sigma_yaw);
+        Prior {
+            delta: Pose2::new(d.x * scale, d.y * scale, wrap_angle(d.yaw * scale)),
+            covariance: Matrix3::from_diagonal(&Vector3::new(xy * xy, xy * xy, yaw * yaw)),
+        }
+    }
+
+    fn fit(
+        &self,
+        previous: &[Prepared],
+        current: &[Prepared],
+        prior: &Prior,
+        config: &SlamConfig,
+    ) -> Option<Motion> {
+        let candidates = self.candidates(previous, current, prior, config);
+        let mut best: Option<(usize, f64, Pose2)> = None;
+        let mut matched = Vec::new();
+        for (i, a) in candidates.iter().enumerate() {
+            for b in &candidates[i + 1..] {
+                if a.current == b.current || a.previous == b.previous {
+                    continue;
+                }
+                let points = [
+                    (xy(&current[a.current]), xy(&previous[a.previous]), 1.0),
+                    (xy(&current[b.current]), xy(&previous[b.previous]), 1.0),
+                ];
+                let Some(hypothesis) = kabsch(&points) else {
+                    continue;
+                };
+                if !within_limits(&hypothesis, config) {
+                    continue;
+                }
+                let cost = self.inliers(&hypothesis, previous, current, &candidates, &mut matched);
+                let better = best.is_none_or(|(count, best_cost, _)| {
+                    matched.len() > count || (matched.len() == count && cost < best_cost)
+                });
+                if better {
+                    best = Some((matched.len(), cost, hypothesis));
+                }
+            }
+        }
+        let (_, _, mut estimate) = best?;
+        let mut covariance = Matrix3::zeros();
+        // Refit on the inliers; the refined transform may gain or lose a match, so refit
+        // once more on the inliers it has.
+        for _ in 0..2 {
+            self.inliers(&estimate, previous, current, &candidates, &mut matched);
+            if matched.len() < 2 {
+                return None;
+            }
+            let points: Vec<_> = matched
+                .iter()
+                .map(|c| {
+                    let (s, t) = (&current[c.current], &previous[c.previous]);
+                    let variance = s.covariance[(0, 0)]
+                        + s.covariance[(1, 1)]
+                        + t.covariance[(0, 0)]
+                        + t.covariance[(1, 1)];
+                    (xy(s), xy(t), 1.0 / variance)
+                })
+                .collect();
+            let start = kabsch(&points)?;
+            let pairs: Vec<_> = matched
+                .iter()
+                .map(|c| (&previous[c.previous], &current[c.current]))
+                .collect();
+            (estimate, covariance) = refine(start, &pairs, prior)?;
+        }
+        within_limits(&estimate, config).then_some(Motion {
+            delta: estimate,
+            covariance,
+            fitted: true,
+            inliers: matched.len(),
+        })
+    }
+
+    /// Candidate matches under the prior, grouped by current corner, best first, at most
+    /// `motion_candidates` each.
+    fn candidates(
+        &self,
+        previous: &[Prepared],
+        current: &[Prepared],
+        prior: &Prior,
+        config: &SlamConfig,
+    ) -> Vec<Candidate> {
+        let u = prior.delta;
+        let (s, c) = u.yaw.sin_cos();
+        let mut rotation = Matrix4::identity();
+        rotation
+            .fixed_view_mut::<2, 2>(0, 0)
+            .copy_from(&u.rotation());
+        let mut candidates = Vec::new();
+        let mut group = Vec::new();
+        for (ci, cur) in current.iter().enumerate() {
+            let predicted = predict(&u, cur);
+            let rotated = rotation * cur.covariance * rotation.transpose();
+            // Jacobian of the prediction with respect to the motion (tx, ty, yaw).
+            let mut jacobian = Matrix4x3::zeros();
+            jacobian[(0, 0)] = 1.0;
+            jacobian[(1, 1)] = 1.0;
+            jacobian[(0, 2)] = -s * cur.z.x - c * cur.z.y;
+            jacobian[(1, 2)] = c * cur.z.x - s * cur.z.y;
+            jacobian[(2, 2)] = 1.0;
+            let from_prior = jacobian * prior.covariance * jacobian.transpose();
+            group.clear();
+            for (pi, prev) in previous.iter().enumerate() {
+                let nu = residual(&prev.z, &predicted);
+                let without_prior = prev.covariance + rotated;
+                // The angle alone bounds the 4-D distance from below: a cheap exact reject.
+                if nu.w * nu.w > self.gate * without_prior[(3, 3)] {
+                    continue;
+                }
+                let Some(distance) = mahalanobis(&nu, &(without_prior + from_prior)) else {
+                    continue;
+                };
+                if distance > self.gate {
+                    continue;
+                }
+                let Some(information) = Cholesky::new(without_prior).map(|ch| ch.inverse()) else {
+                    continue;
+                };
+                group.push(Candidate {
+                    current: ci,
+                    previous: pi,
+                    distance,
+                    information,
+                });
+            }
+            group.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+            candidates.extend(group.iter().take(config.motion_candidates));
+        }
+        candidates
+    }
+
+    /// The one-to-one inliers of `hypothesis` among `candidates` into `matched` (greedy per
+    /// current corner, best residual first); returns their summed squared distance.
+    fn inliers(
+        &self,
+        hypothesis: &Pose2,
+        previous: &[Prepared],
+        current: &[Prepared],
+        candidates: &[Candidate],
+        matched: &mut Vec<Candidate>,
+    ) -> f64 {
+        matched.clear();
+        let mut cost = 0.0;
+        let mut start = 0;
+        while start < candidates.len() {
+            let ci = candidates[start].current;
+            let end = candidates[start..]
+                .iter()
+                .position(|c| c.current != ci)
+                .map_or(candidates.len(), |n| start + n);
+            let predicted = predict(hypothesis, &current[ci]);
+            let mut chosen: Option<(f64, Candidate)> = None;
+            for candidate in &candidates[start..end] {
+                if matched.iter().any(|m| m.previous == candidate.previous) {
+                    continue;
+                }
+                let nu = residual(&previous[candidate.previous].z, &predicted);
+                let d = nu.dot(&(candidate.information * nu));
+                if d <= self.inlier_gate && chosen.is_none_or(|(best, _)| d < best) {
+                    chosen = Some((d, *candidate));
+                }
+            }
+            if let Some((d, candidate)) = chosen {
+                cost += d;
+                matched.push(candidate);
+            }
+            start = end;
+        }
+        cost
+    }
+}
+
+fn xy(p: &Prepared) -> Vector2<f64> {
+    Vector2::new(p.z.x, p.z.y)
+}
+
+/// A current corner moved into the previous frame by `u`.
+fn predict(u: &Pose2, current: &Prepared) -> Vector4<f64> {
+    let p = u.transform(xy(current));
+    Vector4::new(p.x, p.y, wrap_angle(current.z.z + u.yaw), current.z.w)
+}
+
+/// `observed - predicted`, heading and angle wrapped.
+fn residual(observed: &Vector4<f64>, predicted: &Vector4<f64>) -> Vector4<f64> {
+    Vector4::new(
+        observed.x - predicted.x,
+        observed.y - predicted.y,
+        wrap_angle(observed.z - predicted.z),
+        wrap_angle(observed.w - predicted.w),
+    )
+}
+
+fn mahalanobis(nu: &Vector4<f64>, covariance: &Matrix4<f64>) -> Option<f64> {
+    Cholesky::new(*covariance).map(|ch| nu.dot(&ch.solve(nu)))
+}
+
+fn within_limits(delta: &Pose2, config: &SlamConfig) -> bool {
+    delta.translation_norm() <= config.motion_max_translation
+        && delta.yaw.abs() <= config.motion_max_rotation
+}
+
+/// The odometry increment between two readings, in the earlier robot frame. Its covariance
+/// is the growth of the reported covariance over the step, rotated into that frame, its
+/// diagonal floored (a covariance that does not grow would claim a perfect increment).
+fn odometry_prior(before: &OdometryInput, now: &OdometryInput, config: &SlamConfig) -> Prior {
+    let delta = before.pose.between(&now.pose);
+    let growth = now.covariance - before.covariance;
+    let (s, c) = before.pose.yaw.sin_cos();
+    let to_robot = Matrix3::new(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);
+    let local = to_robot * growth * to_robot.transpose();
+    let (xy, yaw) = (config.odometry_min_sigma_xy, config.odometry_min_sigma_yaw);
+    let floor = Vector3::new(xy * xy, xy * xy, yaw * yaw);
+    let diagonal = Vector3::from_fn(|i, _| {
+        let v = local[(i, i)].abs();
+        if v.is_finite() {
+            v.max(floor[i])
+        } else {
+            floor[i]
+        }
+    });
+    Prior {
+        delta,
+        covariance: Matrix3::from_diagonal(&diagonal),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn corner(x: f64, y: f64, heading: f64, angle: f64) -> Prepared {
+        Prepared {
+            z: Vector4::new(x, y, heading, angle),
+            covariance: Matrix4::from_diagonal(&Vector4::new(1e-4, 1e-4, 3e-4, 3e-4)),
+        }
+    }
+
+    /// `corners` (previous frame) as seen from `delta` (the current frame).
+    fn seen_from(delta: &Pose2, corners: &[Prepared]) -> Vec<Prepared> {
+        let inverse = delta.inverse();
+        corners
+            .iter()
+            .map(|c| {
+                let p = inverse.transform(xy(c));
+                corner(p.x, p.y, wrap_angle(c.z.z - delta.yaw), c.z.w)
+            })
+            .collect()
+    }
+
+    fn scene() -> Vec<Prepared> {
+        vec![
+            corner(3.0, 1.0, 0.5, 1.2),
+            corner(5.0, -2.0, 2.0, 1.6),
+            corner(-1.0, 4.0, -1.0, 1.9),
+            corner(7.0, 3.0, 3.0, 1.4),
+            corner(2.0, -5.0, -2.5, 1.0),
+        ]
+    }
+
+    #[test]
+    fn recovers_a_step_from_corners_despite_a_wrong_match() {
+        let config = SlamConfig::default();
+        let mut estimator = MotionEstimator::new(&config);
+        let previous = scene();
+        estimator.estimate(0, &previous, None, &config);
+        let truth = Pose2::new(0.12, 0.03, 0.15);
+        let mut current = seen_from(&truth, &previous);
+        // An outlier: a corner whose descriptor matches corner 0 but sits 0.4 m off.
+        current[1] = corner(
+            current[0].z.x + 0.4,
+            current[0].z.y,
+            current[0].z.z,
+            current[0].z.w,
+        );
+        let motion = estimator.estimate(25_000_000, &current, None, &config);
+        assert!(motion.fitted);
+        assert_eq!(motion.inliers, 4);
+        assert!(
+            (motion.delta.x - truth.x).abs() < 1e-3,
+            "{:?}",
+            motion.delta
+        );
+        assert!((motion.delta.y - truth.y).abs() < 1e-3);
+        assert!((motion.delta.yaw - truth.yaw).abs() < 1e-3);
+    }
+
+    #[test]
+    fn falls_back_to_constant_velocity_without_matches() {
+        let config = SlamConfig::default();
+        let mut estimator = MotionEstimator::new(&config);
+        let previous = scene();
+        estimator.estimate(0, &previous, None, &config);
+        let step = Pose2::new(0.1, 0.0, 0.05);
+        let current = seen_from(&step, &previous);
+        estimator.estimate(10, &current, None, &config);
+        // Same interval, a single corner: the last step again.
+        let motion = estimator.estimate(20, &current[..1], None, &config);
+        assert!(!motion.fitted);
+        assert!((motion.delta.x - 0.1).abs() < 1e-3 && (motion.delta.yaw - 0.05).abs() < 1e-3);
+        // Twice the interval: twice the step.
+        let motion = estimator.estimate(40, &[], None, &config);
+        assert!((motion.delta.x - 0.2).abs() < 2e-3);
+    }
+
+    #[test]
+    fn odometry_is_the_prior_and_corners_correct_it() {
+        let config = SlamConfig::default();
+        let mut estimator = MotionEstimator::new(&config);
+        let previous = scene();
+        let odom = |x: f64, yaw: f64, var: f64| OdometryInput {
+            pose: Pose2::new(x, 1.0, yaw),
+            covariance: Matrix3::identity() * var,
+        };
+        estimator.estimate(0, &previous, Some(&odom(5.0, 0.0, 0.0)), &config);
+        let truth = Pose2::new(0.1, 0.0, 0.02);
+        // Odometry says 0.15 m +- 0.1 m; the corners say 0.1 m +- 1 cm and win.
+        let current = seen_from(&truth, &previous);
+        let motion = estimator.estimate(10, &current, Some(&odom(5.15, 0.02, 1e-2)), &config);
+        assert!(motion.fitted);
+        assert!(
+            (motion.delta.x - truth.x).abs() < 5e-3,
+            "{:?}",
+            motion.delta
+        );
+        // Without corners the odometry increment is the motion.
+        let motion = estimator.estimate(20, &[], Some(&odom(5.35, 0.02, 1e-2 + 1e-4)), &config);
+        assert!(!motion.fitted);
+        let expected = Pose2::new(5.15, 1.0, 0.02).between(&Pose2::new(5.35, 1.0, 0.02));
+        assert!(
+            (motion.delta.x - expected.x).abs() < 1e-9
+                && (motion.delta.y - expected.y).abs() < 1e-9
+        );
+        assert!(motion.delta.yaw.abs() < 1e-9);
+        assert!((motion.covariance[(0, 0)] - 1e-4).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,109 @@
+//! What the filter is given each scan: corner features in the sensor frame and, when the
+//! robot has it, an odometry pose.
+
+use std::f64::consts::PI;
+
+use nalgebra::{Cholesky, Matrix3, Matrix4, Vector4};
+
+use crate::pose::Pose2;
+
+/// A corner feature in the sensor frame (docs/CONVENTIONS.md): the walls' intersection
+/// `(x, y)`, the `heading` of the bisector towards the tip and the opening `angle`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observation {
+    pub x: f64,
+    pub y: f64,
+    /// Bisector towards the tip, in `[-pi, pi)`.
+    pub heading: f64,
+    /// Opening angle between the walls, in `(0, pi)`.
+    pub angle: f64,
+    /// Covariance of `(x, y, heading, angle)`, symmetric positive definite.
+    pub covariance: Matrix4<f64>,
+}
+
+/// An odometry reading: `odom_from_robot` in the odometry's own (drifting) frame, with the
+/// covariance of `(x, y, yaw)`. Only increments between consecutive readings are used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OdometryInput {
+    pub pose: Pose2,
+    pub covariance: Matrix3<f64>,
+}
+
+/// An observation checked and made ready for the filter: its vector and a covariance that
+/// is symmetric, inflated by the configured floor, and known to be positive definite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Prepared {
+    pub z: Vector4<f64>,
+    pub covariance: Matrix4<f64>,
+}
+
+impl Prepared {
+    /// `None` for an observation the filter cannot use (non-finite values, an opening
+    /// angle outside `(0, pi)`, a covariance that is not positive definite): one bad
+    /// feature must not poison every particle's map.
+    pub fn new(
+        observation: &Observation,
+        extra_sigma_xy: f64,
+        extra_sigma_angle: f64,
+    ) -> Option<Self> {
+        let z = Vector4::new(
+            observation.x,
+            observation.y,
+            observation.heading,
+            observation.angle,
+        );
+        if !z.iter().all(|v| v.is_finite()) || !(observation.angle > 0.0 && observation.angle < PI)
+        {
+            return None;
+        }
+        let c = observation.covariance;
+        if !c.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let (pos, ang) = (
+            extra_sigma_xy * extra_sigma_xy,
+            extra_sigma_angle * extra_sigma_angle,
+        );
+        let covariance =
+            (c + c.transpose()) * 0.5 + Matrix4::from_diagonal(&Vector4::new(pos, pos, ang, ang));
+        Cholesky::new(covariance)?;
+        Some(Self { z, covariance })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn observation() -> Observation {
+        Observation {
+            x: 1.0,
+            y: 2.0,
+            heading: 0.3,
+            angle: 1.5,
+            covariance: Matrix4::identity() * 1e-4,
+        }
+    }
+
+    #[test]
+    fn bad_observations_are_refused() {
+        assert!(Prepared::new(&observation(), 0.0, 0.0).is_some());
+        let mut bad = observation();
+        bad.angle = PI;
+        assert!(Prepared::new(&bad, 0.0, 0.0).is_none());
+        let mut bad = observation();
+        bad.x = f64::NAN;
+        assert!(Prepared::new(&bad, 0.0, 0.0).is_none());
+        let mut bad = observation();
+        bad.covariance[(3, 3)] = -1.0;
+        assert!(Prepared::new(&bad, 0.0, 0.0).is_none());
+    }
+
+    #[test]
+    fn the_floor_is_added_to_the_diagonal() {
+        let p = Prepared::new(&observation(), 0.01, 0.02);
+        let c = p.map(|p| p.covariance).unwrap_or_else(Matrix4::zeros);
+        assert!((c[(0, 0)] - 2e-4).abs() < 1e-15);
+        assert!((c[(3, 3)] - 5e-4).abs() < 1e-15);
+    }
+}

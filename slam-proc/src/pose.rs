@@ -1,0 +1,89 @@
+//! Planar rigid transforms `world_from_robot` (docs/CONVENTIONS.md).
+
+use nalgebra::{Matrix2, Vector2};
+
+use crate::angle::wrap_angle;
+
+/// A planar pose `world_from_robot`: position in metres, yaw in radians in `[-pi, pi)`.
+/// A point `p` in the robot frame is `R(yaw) p + (x, y)` in the world.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose2 {
+    pub x: f64,
+    pub y: f64,
+    pub yaw: f64,
+}
+
+impl Pose2 {
+    /// The identity: the map frame's origin.
+    pub const IDENTITY: Self = Self::new(0.0, 0.0, 0.0);
+
+    pub const fn new(x: f64, y: f64, yaw: f64) -> Self {
+        Self { x, y, yaw }
+    }
+
+    /// `self * other`: `other` expressed in the frame of `self` taken to the outer frame.
+    pub fn compose(&self, other: &Self) -> Self {
+        let (s, c) = self.yaw.sin_cos();
+        Self {
+            x: self.x + c * other.x - s * other.y,
+            y: self.y + s * other.x + c * other.y,
+            yaw: wrap_angle(self.yaw + other.yaw),
+        }
+    }
+
+    /// The inverse transform, `robot_from_world`.
+    pub fn inverse(&self) -> Self {
+        let (s, c) = self.yaw.sin_cos();
+        Self {
+            x: -c * self.x - s * self.y,
+            y: s * self.x - c * self.y,
+            yaw: wrap_angle(-self.yaw),
+        }
+    }
+
+    /// `self^-1 * other`: the pose of `other` in the frame of `self` (the increment from
+    /// `self` to `other`).
+    pub fn between(&self, other: &Self) -> Self {
+        self.inverse().compose(other)
+    }
+
+    /// Maps a point of this pose's frame into the outer frame.
+    pub fn transform(&self, point: Vector2<f64>) -> Vector2<f64> {
+        self.rotation() * point + Vector2::new(self.x, self.y)
+    }
+
+    /// The rotation matrix `R(yaw)`.
+    pub fn rotation(&self) -> Matrix2<f64> {
+        let (s, c) = self.yaw.sin_cos();
+        Matrix2::new(c, -s, s, c)
+    }
+
+    /// Distance of the translation from the origin, metres.
+    pub fn translation_norm(&self) -> f64 {
+        self.x.hypot(self.y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: &Pose2, b: &Pose2) -> bool {
+        (a.x - b.x).abs() < 1e-12
+            && (a.y - b.y).abs() < 1e-12
+            && wrap_angle(a.yaw - b.yaw).abs() < 1e-12
+    }
+
+    #[test]
+    fn compose_inverse_and_between_agree() {
+        let a = Pose2::new(1.0, -2.0, 2.5);
+        let b = Pose2::new(-0.3, 0.7, -2.9);
+        assert!(close(&a.compose(&a.inverse()), &Pose2::IDENTITY));
+        assert!(close(&a.compose(&a.between(&b)), &b));
+        let p = Vector2::new(0.4, 1.1);
+        let there = a.compose(&b).transform(p);
+        let stepwise = a.transform(b.transform(p));
+        assert!((there - stepwise).norm() < 1e-12);
+        assert!(a.compose(&b).yaw >= -std::f64::consts::PI);
+    }
+}

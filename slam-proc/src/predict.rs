@@ -1,0 +1,107 @@
+//! The prediction step: each particle moves by the motion estimate composed in its own
+//! frame, perturbed by noise that has a floor and grows with the step.
+
+use nalgebra::{Matrix3, Vector3};
+use rand::Rng;
+use rand_distr::StandardNormal;
+
+use crate::config::SlamConfig;
+use crate::pose::Pose2;
+
+/// Standard deviations of one step's noise, in the particle's frame before the step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MotionNoise {
+    pub sigma_xy: f64,
+    pub sigma_yaw: f64,
+}
+
+impl MotionNoise {
+    /// The noise of a step `delta`; `fitted` is false when no corner fit backs the step.
+    pub fn for_step(delta: &Pose2, fitted: bool, config: &SlamConfig) -> Self {
+        let (t, r) = (delta.translation_norm(), delta.yaw.abs());
+        let scale = if fitted {
+            1.0
+        } else {
+            config.fallback_noise_scale
+        };
+        Self {
+            sigma_xy: scale
+                * (config.noise_xy_base
+                    + config.noise_xy_per_metre * t
+                    + config.noise_xy_per_radian * r),
+            sigma_yaw: scale
+                * (config.noise_yaw_base
+                    + config.noise_yaw_per_radian * r
+                    + config.noise_yaw_per_metre * t),
+        }
+    }
+
+    /// No noise at all (the first scan: the first pose is the map frame by definition).
+    pub const NONE: Self = Self {
+        sigma_xy: 0.0,
+        sigma_yaw: 0.0,
+    };
+
+    /// Covariance of the noise in the world frame. The translation noise is isotropic, so
+    /// it is the same in every frame.
+    pub fn covariance(&self) -> Matrix3<f64> {
+        let (t, r) = (
+            self.sigma_xy * self.sigma_xy,
+            self.sigma_yaw * self.sigma_yaw,
+        );
+        Matrix3::from_diagonal(&Vector3::new(t, t, r))
+    }
+}
+
+/// The noisy increment `delta + noise` a particle moves by, in its own frame.
+pub(crate) fn sample(delta: &Pose2, noise: &MotionNoise, rng: &mut impl Rng) -> Pose2 {
+    let nx: f64 = rng.sample(StandardNormal);
+    let ny: f64 = rng.sample(StandardNormal);
+    let nr: f64 = rng.sample(StandardNormal);
+    // The increment's yaw is not wrapped here: composing it with the pose wraps the sum.
+    Pose2::new(
+        delta.x + noise.sigma_xy * nx,
+        delta.y + noise.sigma_xy * ny,
+        delta.yaw + noise.sigma_yaw * nr,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn noise_grows_with_the_step_and_without_a_fit() {
+        let config = SlamConfig::default();
+        let small = MotionNoise::for_step(&Pose2::new(0.01, 0.0, 0.0), true, &config);
+        let large = MotionNoise::for_step(&Pose2::new(0.3, 0.0, 0.2), true, &config);
+        let guess = MotionNoise::for_step(&Pose2::new(0.3, 0.0, 0.2), false, &config);
+        assert!(small.sigma_xy < large.sigma_xy && small.sigma_yaw < large.sigma_yaw);
+        assert!((guess.sigma_xy - config.fallback_noise_scale * large.sigma_xy).abs() < 1e-15);
+    }
+
+    #[test]
+    fn samples_spread_around_the_composed_pose_in_the_particle_frame() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let pose = Pose2::new(1.0, 2.0, std::f64::consts::FRAC_PI_2);
+        let delta = Pose2::new(1.0, 0.0, 0.1);
+        let noise = MotionNoise {
+            sigma_xy: 0.05,
+            sigma_yaw: 0.01,
+        };
+        let n = 20_000;
+        let samples: Vec<Pose2> = (0..n)
+            .map(|_| pose.compose(&sample(&delta, &noise, &mut rng)))
+            .collect();
+        let mean_x = samples.iter().map(|p| p.x).sum::<f64>() / n as f64;
+        let mean_y = samples.iter().map(|p| p.y).sum::<f64>() / n as f64;
+        // Forward in a frame turned by 90 degrees is +y in the world.
+        assert!((mean_x - 1.0).abs() < 0.003 && (mean_y - 3.0).abs() < 0.003);
+        let var_x = samples.iter().map(|p| (p.x - mean_x).powi(2)).sum::<f64>() / n as f64;
+        assert!((var_x.sqrt() - 0.05).abs() < 0.003);
+        let exact = MotionNoise::NONE;
+        assert_eq!(sample(&delta, &exact, &mut rng), delta);
+    }
+}

@@ -1,0 +1,197 @@
+//! Rigid fits of matched corners between two frames: the closed-form weighted Kabsch fit of
+//! the positions, then a Gauss-Newton refinement that also uses the headings, each pair's
+//! full covariance and a prior on the transform.
+
+use nalgebra::{Cholesky, Matrix2, Matrix3, Vector2, Vector3};
+
+use crate::angle::wrap_angle;
+use crate::observation::Prepared;
+use crate::pose::Pose2;
+
+/// Least-squares rigid transform `T` with `target ≈ R source + t`, each point weighted;
+/// `None` when the points do not fix a rotation (fewer than two distinct points).
+pub(crate) fn kabsch(points: &[(Vector2<f64>, Vector2<f64>, f64)]) -> Option<Pose2> {
+    let total: f64 = points.iter().map(|p| p.2).sum();
+    if !(total > 0.0) {
+        return None;
+    }
+    let source_mean = points.iter().map(|(s, _, w)| s * *w).sum::<Vector2<f64>>() / total;
+    let target_mean = points.iter().map(|(_, t, w)| t * *w).sum::<Vector2<f64>>() / total;
+    let mut h = Matrix2::zeros();
+    let mut spread = 0.0;
+    for (s, t, w) in points {
+        let (ds, dt) = (s - source_mean, t - target_mean);
+        h += ds * dt.transpose() * *w;
+        spread += ds.norm_squared() * *w;
+    }
+    if spread < 1e-12 * total {
+        return None;
+    }
+    let svd = h.svd(true, true);
+    let (u, v) = (svd.u?, svd.v_t?.transpose());
+    // The reflection guard: a least-squares orthogonal matrix may be a reflection when the
+    // points are noisy or nearly collinear; flipping the last axis gives the best rotation.
+    let d = (v * u.transpose()).determinant().signum();
+    let rotation = v * Matrix2::new(1.0, 0.0, 0.0, d) * u.transpose();
+    let yaw = rotation[(1, 0)].atan2(rotation[(0, 0)]);
+    let t = target_mean - rotation * source_mean;
+    Some(Pose2::new(t.x, t.y, wrap_angle(yaw)))
+}
+
+/// A Gaussian belief about a transform: the prior of a motion fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Prior {
+    pub delta: Pose2,
+    pub covariance: Matrix3<f64>,
+}
+
+/// Refines `start` (`target ≈ T source` for each `(target, source)` pair) by Gauss-Newton
+/// on positions and headings with their covariances, plus `prior` as one more residual, so
+/// the result is the maximum a posteriori transform. Returns it with its covariance.
+pub(crate) fn refine(
+    start: Pose2,
+    pairs: &[(&Prepared, &Prepared)],
+    prior: &Prior,
+) -> Option<(Pose2, Matrix3<f64>)> {
+    let prior_information = Cholesky::new(prior.covariance)?.inverse();
+    let mut estimate = start;
+    // Gauss-Newton converges in two or three steps from a minimal-sample start.
+    for _ in 0..6 {
+        let (information, gradient) = normal_equations(&estimate, pairs, prior, &prior_information);
+        let step = -Cholesky::new(information)?.solve(&gradient);
+        estimate = Pose2::new(
+            estimate.x + step.x,
+            estimate.y + step.y,
+            wrap_angle(estimate.yaw + step.z),
+        );
+        if step.x.abs() < 1e-9 && step.y.abs() < 1e-9 && step.z.abs() < 1e-10 {
+            break;
+        }
+    }
+    let (information, _) = normal_equations(&estimate, pairs, prior, &prior_information);
+    Some((estimate, Cholesky::new(information)?.inverse()))
+}
+
+/// `J^T W J` and `J^T W r` of every residual at `estimate`, parameters `(tx, ty, yaw)`.
+fn normal_equations(
+    estimate: &Pose2,
+    pairs: &[(&Prepared, &Prepared)],
+    prior: &Prior,
+    prior_information: &Matrix3<f64>,
+) -> (Matrix3<f64>, Vector3<f64>) {
+    let (s, c) = estimate.yaw.sin_cos();
+    let rotation = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    let mut information = *prior_information;
+    let prior_residual = Vector3::new(
+        prior.delta.x - estimate.x,
+        prior.delta.y - estimate.y,
+        wrap_angle(prior.delta.yaw - estimate.yaw),
+    );
+    // The prior residual's Jacobian is -I.
+    let mut gradient = -(prior_information * prior_residual);
+    for (target, source) in pairs {
+        let (sx, sy) = (source.z.x, source.z.y);
+        let residual = Vector3::new(
+            target.z.x - (c * sx - s * sy + estimate.x),
+            target.z.y - (s * sx + c * sy + estimate.y),
+            wrap_angle(target.z.z - source.z.z - estimate.yaw),
+        );
+        let jacobian = Matrix3::new(
+            -1.0,
+            0.0,
+            s * sx + c * sy,
+            0.0,
+            -1.0,
+            -(c * sx - s * sy),
+            0.0,
+            0.0,
+            -1.0,
+        );
+        let covariance = target.covariance.fixed_view::<3, 3>(0, 0)
+            + rotation * source.covariance.fixed_view::<3, 3>(0, 0) * rotation.transpose();
+        // A pair whose covariance is not positive definite carries no usable information.
+        let Some(weight) = Cholesky::new(covariance).map(|ch| ch.inverse()) else {
+            continue;
+        };
+        let jw = jacobian.transpose() * weight;
+        information += jw * jacobian;
+        gradient += jw * residual;
+    }
+    (information, gradient)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix4, Vector4};
+
+    fn prepared(x: f64, y: f64, heading: f64) -> Prepared {
+        Prepared {
+            z: Vector4::new(x, y, heading, 1.5),
+            covariance: Matrix4::from_diagonal(&Vector4::new(1e-4, 1e-4, 1e-4, 1e-4)),
+        }
+    }
+
+    #[test]
+    fn kabsch_recovers_a_transform() {
+        let truth = Pose2::new(0.3, -0.2, 0.25);
+        let source = [
+            Vector2::new(1.0, 2.0),
+            Vector2::new(-3.0, 0.5),
+            Vector2::new(4.0, -1.0),
+        ];
+        let points: Vec<_> = source
+            .iter()
+            .map(|s| (*s, truth.transform(*s), 1.0))
+            .collect();
+        let fit = kabsch(&points).unwrap();
+        assert!((fit.x - truth.x).abs() < 1e-12 && (fit.y - truth.y).abs() < 1e-12);
+        assert!((fit.yaw - truth.yaw).abs() < 1e-12);
+    }
+
+    #[test]
+    fn kabsch_never_returns_a_reflection() {
+        // A mirrored target: the best proper rotation, not the reflection that fits exactly.
+        let source = [
+            Vector2::new(1.0, 0.0),
+            Vector2::new(0.0, 1.0),
+            Vector2::new(-1.0, -1.0),
+        ];
+        let points: Vec<_> = source
+            .iter()
+            .map(|s| (*s, Vector2::new(s.x, -s.y), 1.0))
+            .collect();
+        let fit = kabsch(&points).unwrap();
+        let r = fit.rotation();
+        assert!((r.determinant() - 1.0).abs() < 1e-12);
+        assert!(kabsch(&[(Vector2::new(1.0, 1.0), Vector2::new(0.0, 0.0), 1.0)]).is_none());
+    }
+
+    #[test]
+    fn refinement_uses_headings_and_shrinks_towards_the_prior() {
+        let truth = Pose2::new(0.1, 0.05, 0.1);
+        let sources = [prepared(2.0, 1.0, 0.4), prepared(-1.0, 3.0, -2.0)];
+        let targets: Vec<Prepared> = sources
+            .iter()
+            .map(|s| {
+                let p = truth.transform(Vector2::new(s.z.x, s.z.y));
+                prepared(p.x, p.y, wrap_angle(s.z.z + truth.yaw))
+            })
+            .collect();
+        let pairs: Vec<_> = targets.iter().zip(&sources).collect();
+        let loose = Prior {
+            delta: Pose2::IDENTITY,
+            covariance: Matrix3::identity() * 1e6,
+        };
+        let (fit, covariance) = refine(Pose2::IDENTITY, &pairs, &loose).unwrap();
+        assert!((fit.x - truth.x).abs() < 1e-6 && (fit.yaw - truth.yaw).abs() < 1e-6);
+        assert!(covariance[(2, 2)] < 1e-4);
+        // A tight prior at the identity pulls the estimate towards it.
+        let tight = Prior {
+            delta: Pose2::IDENTITY,
+            covariance: Matrix3::identity() * 1e-6,
+        };
+        let (pulled, _) = refine(Pose2::IDENTITY, &pairs, &tight).unwrap();
+        assert!(pulled.translation_norm() < 0.01 && pulled.yaw.abs() < 0.01);
+    }
+}

@@ -1,0 +1,324 @@
+//! The filter: motion estimate, prediction, association and update, resampling.
+
+use std::time::Instant;
+
+use rand::Rng;
+use rayon::prelude::*;
+
+use crate::chi2::Gates;
+use crate::config::{ConfigError, SlamConfig};
+use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
+use crate::jcbb::PoseUncertainty;
+use crate::map::{CornerMap, CornerState, MapCorner};
+use crate::motion::MotionEstimator;
+use crate::observation::{Observation, OdometryInput, Prepared};
+use crate::particle::{Particle, ScanContext, Scratch};
+use crate::pose::Pose2;
+use crate::predict::{self, MotionNoise};
+use crate::resample::{effective_sample_size, log_sum_exp, normalise, systematic};
+use crate::rng::Streams;
+
+/// FastSLAM over corner maps. Feed it every scan's corners in order with [`FastSlam::process`].
+///
+/// The result depends only on the configuration, the seed and the inputs: particles are
+/// updated in parallel, each drawing from its own random stream, so the thread count does
+/// not change a single bit of it.
+#[derive(Debug, Clone)]
+pub struct FastSlam {
+    config: SlamConfig,
+    streams: Streams,
+    /// Scans processed so far.
+    scans: u64,
+    particles: Vec<Particle>,
+    motion: MotionEstimator,
+    dead_reckoning: Pose2,
+    /// The particle with the highest weight at the last scan (after resampling, one of
+    /// its copies).
+    best: usize,
+    gates: Gates,
+    log_weights: Vec<f64>,
+    weights: Vec<f64>,
+    parents: Vec<usize>,
+}
+
+impl FastSlam {
+    /// A filter with every particle at the origin and an empty map.
+    pub fn new(config: SlamConfig, seed: u64) -> Result<Self, ConfigError> {
+        Self::with_prior_map(config, seed, &[])
+    }
+
+    /// A filter whose particles start at the origin with `corners` as a confirmed map, for
+    /// localising in a known map. Every particle shares the one map until it updates it.
+    /// Corners with non-finite values are skipped.
+    pub fn with_prior_map(
+        config: SlamConfig,
+        seed: u64,
+        corners: &[MapCorner],
+    ) -> Result<Self, ConfigError> {
+        config.validate()?;
+        let mut map = CornerMap::new(config.grid_cell_size);
+        for corner in corners {
+            let state = CornerState {
+                mean: nalgebra::Vector4::new(corner.x, corner.y, corner.heading, corner.angle),
+                covariance: corner.covariance,
+                observations: corner.observations.max(config.confirm_observations),
+            };
+            if state
+                .mean
+                .iter()
+                .chain(state.covariance.iter())
+                .all(|v| v.is_finite())
+            {
+                map.insert(state, config.confirm_observations);
+            }
+        }
+        Ok(Self {
+            streams: Streams::new(seed),
+            scans: 0,
+            particles: vec![Particle::new(map); config.particles],
+            motion: MotionEstimator::new(&config),
+            dead_reckoning: Pose2::IDENTITY,
+            best: 0,
+            gates: Gates::new(config.association_probability),
+            log_weights: Vec::new(),
+            weights: Vec::new(),
+            parents: Vec::new(),
+            config,
+        })
+    }
+
+    pub fn config(&self) -> &SlamConfig {
+        &self.config
+    }
+
+    /// Scans processed so far.
+    pub fn scans(&self) -> u64 {
+        self.scans
+    }
+
+    /// Every particle's pose, in particle order.
+    pub fn particle_poses(&self) -> impl Iterator<Item = Pose2> + '_ {
+        self.particles.iter().map(|p| p.pose)
+    }
+
+    /// The confirmed corners of the best particle's map.
+    pub fn best_map(&self) -> Vec<MapCorner> {
+        self.particles
+            .get(self.best)
+            .map(|p| p.map.confirmed(self.config.confirm_observations))
+            .unwrap_or_default()
+    }
+
+    /// Updates the filter with one scan: its acquisition time, its corners in the sensor
+    /// frame and, when the robot has odometry, the odometry pose at the scan. Corners that
+    /// are not usable (non-finite, an angle outside `(0, pi)`, a covariance that is not
+    /// positive definite) are ignored.
+    pub fn process(
+        &mut self,
+        stamp_ns: u64,
+        observations: &[Observation],
+        odometry: Option<&OdometryInput>,
+    ) -> Estimate {
+        let start = Instant::now();
+        let config = &self.config;
+        let prepared: Vec<Prepared> = observations
+            .iter()
+            .filter_map(|o| {
+                Prepared::new(
+                    o,
+                    config.observation_extra_sigma_xy,
+                    config.observation_extra_sigma_angle,
+                )
+            })
+            .collect();
+        let motion = self.motion.estimate(stamp_ns, &prepared, odometry, config);
+        self.dead_reckoning = self.dead_reckoning.compose(&motion.delta);
+        let motion_done = Instant::now();
+
+        // The first scan defines the map frame: nothing moves.
+        let noise = if self.scans == 0 {
+            MotionNoise::NONE
+        } else {
+            MotionNoise::for_step(&motion.delta, motion.fitted, config)
+        };
+        if self.scans > 0 {
+            let (streams, scan, delta) = (&self.streams, self.scans, motion.delta);
+            self.particles
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(i, particle)| {
+                    let mut rng = streams.particle(scan, i);
+                    particle.increment = predict::sample(&delta, &noise, &mut rng);
+                    particle.pose = particle.pose.compose(&particle.increment);
+                });
+        }
+        let predict_done = Instant::now();
+
+        self.gates.ensure(prepared.len());
+        let variance = noise.covariance();
+        let context = ScanContext {
+            observations: &prepared,
+            pose: PoseUncertainty::from_variances(
+                variance[(0, 0)],
+                variance[(1, 1)],
+                variance[(2, 2)],
+            ),
+            gates: &self.gates,
+            config,
+        };
+        self.particles
+            .par_iter_mut()
+            .for_each_init(Scratch::default, |scratch, particle| {
+                particle.log_weight += particle.update(&context, scratch);
+            });
+        let update_done = Instant::now();
+
+        let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
+        let map_size = self
+            .particles
+            .get(self.best)
+            .map_or(0, |p| p.map.confirmed_count());
+        self.scans += 1;
+        let end = Instant::now();
+        let ns =
+            |from: Instant, to: Instant| u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX);
+        Estimate {
+            best,
+            mean,
+            covariance,
+            effective_particles,
+            particle_count: self.particles.len(),
+            dead_reckoning: self.dead_reckoning,
+            map_size,
+            timing: StageTiming {
+                motion_ns: ns(start, motion_done),
+                predict_ns: ns(motion_done, predict_done),
+                update_ns: ns(predict_done, update_done),
+                resample_ns: ns(update_done, end),
+                total_ns: ns(start, end),
+            },
+        }
+    }
+
+    /// Normalises the weights, takes the statistics of the weighted particles and resamples
+    /// when too few particles carry the weight. Returns the effective particle count, the
+    /// best pose, the mean pose and the spread.
+    fn weigh_and_resample(&mut self) -> (f64, Pose2, Pose2, nalgebra::Matrix3<f64>) {
+        self.log_weights.clear();
+        self.log_weights
+            .extend(self.particles.iter().map(|p| p.log_weight));
+        normalise(&self.log_weights, &mut self.weights);
+        let effective = effective_sample_size(&self.weights);
+        // The first of equals: ties must not depend on anything but the order.
+        let mut best = 0;
+        for (i, w) in self.weights.iter().enumerate() {
+            if *w > self.weights[best] {
+                best = i;
+            }
+        }
+        self.best = best;
+        let best_pose = self.particles.get(best).map_or(Pose2::IDENTITY, |p| p.pose);
+        let samples = self
+            .particles
+            .iter()
+            .zip(&self.weights)
+            .map(|(p, w)| (p.pose, *w));
+        let (mean, covariance) = weighted_mean_and_covariance(samples);
+        let increments = self
+            .particles
+            .iter()
+            .zip(&self.weights)
+            .map(|(p, w)| (p.increment, *w));
+        let (increment, _) = weighted_mean_and_covariance(increments);
+        self.motion.set_last_motion(increment);
+
+        let n = self.particles.len();
+        if effective < self.config.resample_threshold * n as f64 {
+            let u = self.streams.resample(self.scans).random::<f64>();
+            systematic(&self.weights, u, &mut self.parents);
+            // Cloning a particle copies its pose and three pointers of its map: the copies
+            // share every corner until one of them writes.
+            let resampled: Vec<Particle> = self
+                .parents
+                .iter()
+                .map(|&i| Particle {
+                    log_weight: 0.0,
+                    ..self.particles[i].clone()
+                })
+                .collect();
+            self.particles = resampled;
+            self.best = self.parents.iter().position(|&p| p == best).unwrap_or(0);
+        } else {
+            // Keep the log weights near zero so they never lose precision.
+            let total = log_sum_exp(&self.log_weights);
+            if total.is_finite() {
+                for p in &mut self.particles {
+                    p.log_weight -= total;
+                }
+            }
+        }
+        (effective, best_pose, mean, covariance)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Matrix4;
+
+    fn observation(x: f64, y: f64, heading: f64, angle: f64) -> Observation {
+        Observation {
+            x,
+            y,
+            heading,
+            angle,
+            covariance: Matrix4::identity() * 1e-4,
+        }
+    }
+
+    fn scan() -> Vec<Observation> {
+        vec![
+            observation(3.0, 1.0, 0.5, 1.2),
+            observation(5.0, -2.0, 2.0, 1.6),
+            observation(-1.0, 4.0, -1.0, 1.9),
+            observation(7.0, 3.0, 3.0, 1.4),
+        ]
+    }
+
+    #[test]
+    fn resampled_particles_share_maps_and_writes_stay_private() {
+        let config = SlamConfig {
+            particles: 50,
+            ..SlamConfig::default()
+        };
+        let mut slam = FastSlam::new(config, 3).unwrap();
+        for k in 0..3 {
+            slam.process(k * 25_000_000, &scan(), None);
+        }
+        // Make one particle carry all the weight: everyone becomes its copy.
+        for (i, p) in slam.particles.iter_mut().enumerate() {
+            p.log_weight = if i == 7 { 0.0 } else { -1e3 };
+        }
+        slam.weigh_and_resample();
+        assert_eq!(slam.particles.len(), 50);
+        // 50 pointer copies of one map, not 50 maps.
+        assert_eq!(slam.particles[0].map.corner_tree_holders(), 50);
+        assert!(
+            slam.particles
+                .iter()
+                .all(|p| p.map.shares_corners_with(&slam.particles[0].map))
+        );
+
+        let before: Vec<_> = slam.particles[1].map.confirmed(2);
+        let mut changed = slam.particles[0].map.clone();
+        let id = 0;
+        let corner = *changed.get(id).unwrap();
+        changed.update(id, corner.mean.add_scalar(0.5), corner.covariance, 2);
+        slam.particles[0].map = changed;
+        assert_eq!(slam.particles[1].map.confirmed(2), before);
+        assert!(
+            (slam.particles[0].map.get(id).unwrap().mean.x - corner.mean.x - 0.5).abs() < 1e-12
+        );
+        assert_eq!(slam.particles[1].map.corner_tree_holders(), 49);
+    }
+}
