@@ -93,9 +93,18 @@ pub fn read_tum(path: &Path) -> Vec<[f64; 5]> {
         .map(|(i, line)| {
             let fields: Vec<f64> = line
                 .split_whitespace()
-                .map(|f| f.parse().unwrap_or_else(|_| panic!("line {}: {line}", i + 1)))
+                .map(|f| {
+                    f.parse()
+                        .unwrap_or_else(|_| panic!("line {}: {line}", i + 1))
+                })
                 .collect();
-            assert_eq!(fields.len(), 8, "line {} of {}: {line}", i + 1, path.display());
+            assert_eq!(
+                fields.len(),
+                8,
+                "line {} of {}: {line}",
+                i + 1,
+                path.display()
+            );
             [fields[0], fields[1], fields[2], fields[6], fields[7]]
         })
         .collect()

@@ -23,11 +23,24 @@ fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> serde_
     let output = launch(
         &domain,
         &out,
-        &["--world", world, "--frames", &frames_arg, "--particles", &particles_arg, "--seed", "1"],
+        &[
+            "--world",
+            world,
+            "--frames",
+            &frames_arg,
+            "--particles",
+            &particles_arg,
+            "--seed",
+            "1",
+        ],
     );
     assert_success(&output);
     for file in RESULT_FILES {
-        assert!(out.join(file).is_file(), "{file} missing in {}", out.display());
+        assert!(
+            out.join(file).is_file(),
+            "{file} missing in {}",
+            out.display()
+        );
     }
     let metrics = metrics(&out);
     let published = number(&metrics, "frames_published");
@@ -36,19 +49,32 @@ fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> serde_
     assert_eq!(number(&metrics, "frames_dropped"), 0.0, "{metrics}");
     let trajectory = read_tum(&out.join("trajectory.tum"));
     assert_eq!(trajectory.len() as f64, published);
-    assert_eq!(read_tum(&out.join("ground_truth.tum")).len() as f64, published);
+    assert_eq!(
+        read_tum(&out.join("ground_truth.tum")).len() as f64,
+        published
+    );
     assert!(
         trajectory.windows(2).all(|w| w[1][0] > w[0][0]),
         "stamps must increase"
     );
     let ate = number(&metrics, "ate_rmse_m");
-    assert!(ate <= ate_limit, "{world}: ATE RMSE {ate} m > {ate_limit} m: {metrics}");
+    assert!(
+        ate <= ate_limit,
+        "{world}: ATE RMSE {ate} m > {ate_limit} m: {metrics}"
+    );
     let csv = std::fs::read_to_string(out.join("map_corners.csv")).unwrap();
     assert!(csv.starts_with("x,y,heading,angle,"));
-    assert_eq!(csv.lines().count() - 1, number(&metrics, "map_corners") as usize);
+    assert_eq!(
+        csv.lines().count() - 1,
+        number(&metrics, "map_corners") as usize
+    );
     let svg = std::fs::read_to_string(out.join("map.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.trim_end().ends_with("</svg>"));
-    assert!(shm_leftovers(&domain).is_empty(), "{:?}", shm_leftovers(&domain));
+    assert!(
+        shm_leftovers(&domain).is_empty(),
+        "{:?}",
+        shm_leftovers(&domain)
+    );
     metrics
 }
 
@@ -74,7 +100,16 @@ fn two_pipelines_at_once_do_not_cross_and_repeat_exactly() {
             Command::new(bin("slam-launch"))
                 .args(["--quiet", "--domain", domain, "--out"])
                 .arg(out)
-                .args(["--world", "office", "--frames", "300", "--particles", "30", "--seed", "7"])
+                .args([
+                    "--world",
+                    "office",
+                    "--frames",
+                    "300",
+                    "--particles",
+                    "30",
+                    "--seed",
+                    "7",
+                ])
                 .stdout(std::process::Stdio::piped())
                 .stderr(std::process::Stdio::piped())
                 .spawn()
@@ -119,7 +154,10 @@ fn sigterm_halfway_leaves_a_valid_trajectory() {
         < 40
     {
         assert!(Instant::now() < deadline, "no poses after 60 s");
-        assert!(child.try_wait().unwrap().is_none(), "slam-launch ended early");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "slam-launch ended early"
+        );
         std::thread::sleep(Duration::from_millis(100));
     }
     // SAFETY: kill(2) on our own child.
@@ -127,11 +165,27 @@ fn sigterm_halfway_leaves_a_valid_trajectory() {
         libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
     }
     let output = child.wait_with_output().unwrap();
-    assert_eq!(output.status.code(), Some(130), "{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(
+        output.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     let poses = read_tum(&trajectory);
-    assert!(poses.len() >= 40 && poses.len() < 2000, "{} poses", poses.len());
-    assert!(out.join("metrics.json").is_file(), "map-sink writes its results on SIGTERM");
-    assert!(shm_leftovers(&domain).is_empty(), "{:?}", shm_leftovers(&domain));
+    assert!(
+        poses.len() >= 40 && poses.len() < 2000,
+        "{} poses",
+        poses.len()
+    );
+    assert!(
+        out.join("metrics.json").is_file(),
+        "map-sink writes its results on SIGTERM"
+    );
+    assert!(
+        shm_leftovers(&domain).is_empty(),
+        "{:?}",
+        shm_leftovers(&domain)
+    );
 }
 
 #[test]
@@ -140,7 +194,13 @@ fn a_world_file_works_like_a_builtin_world() {
     let world = dir.join("square.json");
     // A 20 x 14 m room with four pillars, driven round once.
     let pillar = |x: f64, y: f64| {
-        format!("[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]", x + 0.8, x + 0.8, y + 0.8, y + 0.8)
+        format!(
+            "[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]",
+            x + 0.8,
+            x + 0.8,
+            y + 0.8,
+            y + 0.8
+        )
     };
     let text = format!(
         r#"{{"walls": [[[0,0],[20,0],[20,14],[0,14],[0,0]], {}, {}, {}, {}],
@@ -153,7 +213,11 @@ fn a_world_file_works_like_a_builtin_world() {
     std::fs::write(&world, text).unwrap();
     let domain = domain("world-file");
     let out = dir.join("run");
-    let output = launch(&domain, &out, &["--world", world.to_str().unwrap(), "--frames", "400"]);
+    let output = launch(
+        &domain,
+        &out,
+        &["--world", world.to_str().unwrap(), "--frames", "400"],
+    );
     assert_success(&output);
     let metrics = metrics(&out);
     assert_eq!(number(&metrics, "frames_processed"), 400.0);
@@ -164,9 +228,17 @@ fn a_world_file_works_like_a_builtin_world() {
 fn a_bad_world_file_is_refused_by_name() {
     let dir = scratch("bad-world");
     let world = dir.join("bad.json");
-    std::fs::write(&world, r#"{"walls": [[[0,0],[1,0]]], "waypoints": [[0.5, 0.5]]}"#).unwrap();
+    std::fs::write(
+        &world,
+        r#"{"walls": [[[0,0],[1,0]]], "waypoints": [[0.5, 0.5]]}"#,
+    )
+    .unwrap();
     let domain = domain("bad-world");
-    let output = launch(&domain, &dir.join("run"), &["--world", world.to_str().unwrap()]);
+    let output = launch(
+        &domain,
+        &dir.join("run"),
+        &["--world", world.to_str().unwrap()],
+    );
     assert!(!output.status.success());
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("lidar-sim"), "names the process: {stderr}");
