@@ -1,0 +1,237 @@
+//! The log formats, one reader over either, and the check that refuses a file that is not
+//! of its format before anything is published.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+
+use crate::carmen::CarmenReader;
+use crate::error::{CheckError, OpenError, ReadError};
+use crate::record::LogRecord;
+use crate::seed_csv::SeedCsvReader;
+
+/// A file whose first scan is not among its first this many lines is refused: CARMEN logs
+/// open with a few hundred `PARAM` lines at most.
+pub const SNIFF_LINES: u64 = 5_000;
+
+/// The formats `lidar-replay` reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LogFormat {
+    /// `seed-hall/scans.csv`: 1081 ranges in millimetres a line, no stamps, no odometry.
+    SeedCsv,
+    /// CARMEN `.clf`: `FLASER`, `ROBOTLASER1` and `ODOM` lines.
+    Carmen,
+}
+
+impl LogFormat {
+    /// Name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::SeedCsv => "seed-csv",
+            Self::Carmen => "carmen",
+        }
+    }
+
+    /// Whether logs of this format can carry odometry at all.
+    pub fn can_have_odometry(self) -> bool {
+        match self {
+            Self::SeedCsv => false,
+            Self::Carmen => true,
+        }
+    }
+}
+
+impl std::fmt::Display for LogFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for LogFormat {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "seed-csv" => Ok(Self::SeedCsv),
+            "carmen" => Ok(Self::Carmen),
+            other => Err(format!("unknown log format '{other}' (seed-csv or carmen)")),
+        }
+    }
+}
+
+/// Reads a log of either format as [`LogRecord`]s in publishing order. A malformed line
+/// comes as [`ReadError::Line`] and the next call goes on after it.
+#[derive(Debug)]
+pub enum LogReader<R> {
+    SeedCsv(SeedCsvReader<R>),
+    Carmen(CarmenReader<R>),
+}
+
+impl<R: BufRead> LogReader<R> {
+    pub fn new(format: LogFormat, reader: R) -> Self {
+        match format {
+            LogFormat::SeedCsv => Self::SeedCsv(SeedCsvReader::new(reader)),
+            LogFormat::Carmen => Self::Carmen(CarmenReader::new(reader)),
+        }
+    }
+
+    /// Number of the line read last (0 before the first).
+    pub fn line_number(&self) -> u64 {
+        match self {
+            Self::SeedCsv(reader) => reader.line_number(),
+            Self::Carmen(reader) => reader.line_number(),
+        }
+    }
+
+    /// Record types the reader skipped as not its business, with their line counts.
+    pub fn skipped_records(&self) -> Vec<(String, u64)> {
+        match self {
+            Self::SeedCsv(_) => Vec::new(),
+            Self::Carmen(reader) => reader
+                .skipped_records()
+                .iter()
+                .map(|(name, count)| (name.clone(), *count))
+                .collect(),
+        }
+    }
+}
+
+impl<R: BufRead> Iterator for LogReader<R> {
+    type Item = Result<LogRecord, ReadError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self {
+            Self::SeedCsv(reader) => reader.next(),
+            Self::Carmen(reader) => reader.next(),
+        }
+    }
+}
+
+/// Reads `reader` as `format` until its first scan. `Err` says why the data is not a log of
+/// that format: no valid scan in the first [`SNIFF_LINES`] lines or before the end.
+pub fn check_format<R: BufRead>(format: LogFormat, reader: R) -> Result<(), CheckError> {
+    let mut log = LogReader::new(format, reader);
+    let mut first_problem = None;
+    while log.line_number() < SNIFF_LINES {
+        match log.next() {
+            Some(Ok(LogRecord::Scan(_))) => return Ok(()),
+            Some(Ok(LogRecord::Odometry(_))) => {}
+            Some(Err(ReadError::Line(e))) => {
+                first_problem.get_or_insert(e);
+            }
+            Some(Err(ReadError::Io(e))) => return Err(e.into()),
+            None => break,
+        }
+    }
+    let lines = log.line_number();
+    let mut reason = if lines < SNIFF_LINES {
+        format!("no valid scan in its {lines} lines")
+    } else {
+        format!("no valid scan in its first {SNIFF_LINES} lines")
+    };
+    if let Some(problem) = first_problem {
+        reason.push_str(&format!(" (first problem: {problem})"));
+    }
+    let skipped = log.skipped_records();
+    if !skipped.is_empty() {
+        let list: Vec<String> = skipped
+            .iter()
+            .map(|(name, count)| format!("{name} x{count}"))
+            .collect();
+        reason.push_str(&format!("; records not replayed: {}", list.join(", ")));
+    }
+    Err(CheckError::Mismatch(reason))
+}
+
+/// Opens a log for replay after checking that it is of `format` (see [`check_format`]).
+pub fn open_log(format: LogFormat, path: &Path) -> Result<LogReader<BufReader<File>>, OpenError> {
+    let open = || {
+        File::open(path)
+            .map(BufReader::new)
+            .map_err(|source| OpenError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+    };
+    check_format(format, open()?).map_err(|e| match e {
+        CheckError::Io(source) => OpenError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        CheckError::Mismatch(reason) => OpenError::NotThisFormat {
+            path: path.to_path_buf(),
+            format,
+            reason,
+        },
+    })?;
+    // Read again from the top, so the lines looked at are replayed and reported as usual.
+    Ok(LogReader::new(format, open()?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn refusal(format: LogFormat, text: &str) -> String {
+        match check_format(format, text.as_bytes()) {
+            Err(CheckError::Mismatch(reason)) => reason,
+            other => panic!("not refused: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_csv_is_not_a_carmen_log() {
+        let csv = "14029,14083\n14029,14083\n";
+        assert_eq!(
+            refusal(LogFormat::Carmen, csv),
+            "no valid scan in its 2 lines (first problem: line 1: not a CARMEN record: \
+             \"14029,14083\")"
+        );
+    }
+
+    #[test]
+    fn a_carmen_log_is_not_a_seed_csv() {
+        let clf = "# message formats\nFLASER 2 1.0 2.0 0 0 0 0 0 0 1.0 h 0\n";
+        let reason = refusal(LogFormat::SeedCsv, clf);
+        assert!(reason.starts_with("no valid scan in its 2 lines (first problem: line 1: "));
+    }
+
+    #[test]
+    fn other_record_types_are_named_when_there_is_no_scan() {
+        let clf = "PARAM a 1 h 0\nRAWLASER1 whatever\nRAWLASER1 whatever\n";
+        assert_eq!(
+            refusal(LogFormat::Carmen, clf),
+            "no valid scan in its 3 lines; records not replayed: PARAM x1, RAWLASER1 x2"
+        );
+    }
+
+    #[test]
+    fn an_empty_file_is_refused() {
+        assert_eq!(
+            refusal(LogFormat::Carmen, ""),
+            "no valid scan in its 0 lines"
+        );
+    }
+
+    #[test]
+    fn the_first_scan_must_come_early() {
+        let mut text = "PARAM a 1 h 0\n".repeat(SNIFF_LINES as usize);
+        text.push_str("FLASER 2 1.0 2.0 0 0 0 0 0 0 1.0 h 0\n");
+        assert_eq!(
+            refusal(LogFormat::Carmen, &text),
+            format!(
+                "no valid scan in its first {SNIFF_LINES} lines; records not replayed: PARAM x{SNIFF_LINES}"
+            )
+        );
+        let text = "PARAM a 1 h 0\nbad\nFLASER 2 1.0 2.0 0 0 0 0 0 0 1.0 h 0\n";
+        assert!(check_format(LogFormat::Carmen, text.as_bytes()).is_ok());
+    }
+
+    #[test]
+    fn formats_parse_from_their_names() {
+        assert_eq!("seed-csv".parse(), Ok(LogFormat::SeedCsv));
+        assert_eq!("carmen".parse(), Ok(LogFormat::Carmen));
+        assert!("csv".parse::<LogFormat>().is_err());
+        assert_eq!(LogFormat::Carmen.to_string(), "carmen");
+    }
+}

@@ -1,0 +1,42 @@
+//! # lidar-replay
+//!
+//! Recorded lidar logs replayed onto the pipeline's topics exactly as a live driver would
+//! publish them: `LaserScan` on the scan topic and, where the log has it, `Odometry` before
+//! the scan it goes with. The `lidar-replay` process is a thin shell around this library.
+//!
+//! * Readers ([`SeedCsvReader`], [`CarmenReader`], or [`LogReader`] over either) yield
+//!   [`LogRecord`]s in publishing order; a malformed line is a [`LineError`] naming its line,
+//!   and reading goes on after it.
+//! * [`open_log`] refuses a file that is not of its format ([`check_format`]) before anything
+//!   is published.
+//! * Stamps are the log's own, parsed to nanoseconds exactly ([`parse_stamp_ns`]); the
+//!   seed-hall recording has none and is stamped at a nominal 10 Hz
+//!   ([`seed_csv::NOMINAL_PERIOD_NS`]).
+//! * Ranges follow REP 117 (NaN = error, +inf = no return) in the sensor frame of
+//!   docs/CONVENTIONS.md (x forward, y left).
+//! * [`Pacer`] replays in lockstep (rate 0) or at the log's pace scaled by a rate;
+//!   [`fill_scan`] and [`fill_odometry`] write the messages in place, the odometry with a
+//!   covariance that grows with the motion ([`OdometryCovariance`]), as the logs give none.
+
+mod angle;
+pub mod carmen;
+mod error;
+mod fill;
+mod format;
+mod lines;
+mod odometry_noise;
+mod pacing;
+mod record;
+pub mod seed_csv;
+mod stamp;
+
+pub use angle::wrap_angle;
+pub use carmen::CarmenReader;
+pub use error::{CheckError, LineError, OpenError, ReadError};
+pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};
+pub use format::{LogFormat, LogReader, SNIFF_LINES, check_format, open_log};
+pub use odometry_noise::{LOG_ODOMETRY_NOISE, OdometryCovariance, OdometryNoise};
+pub use pacing::Pacer;
+pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
+pub use seed_csv::SeedCsvReader;
+pub use stamp::parse_stamp_ns;

@@ -1,0 +1,218 @@
+//! `lidar-replay`: publishes a recorded lidar log on a domain's scan topic (and its odometry
+//! on the odometry topic) as a live driver would.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use ipc_types::prelude::*;
+use lidar_replay::{
+    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, Pacer, ReadError, fill_odometry,
+    fill_scan, open_log,
+};
+
+/// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
+/// log has it, Odometry (published before the scan it goes with, with the same stamp).
+///
+/// Stamps are the log's own at full precision; seed-csv has none and is stamped every 0.1 s
+/// from 0. Malformed lines are reported with their line numbers and skipped; a file that is
+/// not of the format is refused.
+#[derive(Debug, Parser)]
+#[command(name = "lidar-replay", version)]
+struct Args {
+    /// Log format: seed-csv (seed-hall scans.csv) or carmen (FLASER, ROBOTLASER1, ODOM).
+    #[arg(long)]
+    format: LogFormat,
+    /// The log file.
+    #[arg(long, value_name = "FILE")]
+    file: PathBuf,
+    /// Speed against the log's own timing: 1 = as recorded, 2 = twice as fast; 0 = lockstep:
+    /// each message waits until every subscriber has taken the previous one, nothing is lost.
+    #[arg(long, default_value_t = 0.0)]
+    rate: f64,
+    /// iceoryx2 domain of the run.
+    #[arg(long, default_value = "default")]
+    domain: String,
+    /// Scan subscribers to wait for before streaming (lockstep loses nothing at start).
+    #[arg(long, default_value_t = 1)]
+    subscribers: usize,
+    /// Do not publish the log's odometry.
+    #[arg(long)]
+    no_odometry: bool,
+    /// Scans to publish; 0 = the whole log.
+    #[arg(long, default_value_t = 0)]
+    frames: u64,
+}
+
+/// A real-time source does not wait long for its subscribers, as a live sensor would not.
+const REAL_TIME_SUBSCRIBER_WAIT: Duration = Duration::from_secs(10);
+/// How long the first odometry waits for a subscriber. slam-proc looks for the odometry
+/// topic about once a second after it has found the scans, so without this wait the first
+/// poses would be lost, and which ones would depend on timing.
+const ODOMETRY_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
+/// Malformed lines reported one by one; the rest are only counted.
+const REPORTED_LINES: u64 = 100;
+/// Longest single sleep while pacing, so Ctrl-C is noticed promptly.
+const SLEEP_SLICE: Duration = Duration::from_millis(50);
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("lidar-replay: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    anyhow::ensure!(
+        args.rate.is_finite() && args.rate >= 0.0,
+        "--rate must be 0 (lockstep) or a positive speed factor, not {}",
+        args.rate
+    );
+    shutdown::install().context("cannot install the Ctrl-C handler")?;
+    // Refuse a file that is not of the format before anyone sees a port.
+    let mut log = open_log(args.format, &args.file)?;
+
+    let mut pacer = Pacer::new(args.rate);
+    let delivery = if pacer.is_lockstep() {
+        Delivery::Lossless
+    } else {
+        Delivery::Latest
+    };
+    let domain = Domain::new(&args.domain)?;
+    let node = domain.node("lidar-replay")?;
+    // Consumers look for the scan topic and then for the rest, so the rest comes first.
+    let odometry = if args.format.can_have_odometry() && !args.no_odometry {
+        Some(Outlet::create(
+            &domain,
+            &node,
+            topic::ODOMETRY,
+            delivery,
+            0,
+        )?)
+    } else {
+        None
+    };
+    let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
+    println!("ready");
+
+    let wait = (!pacer.is_lockstep()).then_some(REAL_TIME_SUBSCRIBER_WAIT);
+    scans.wait_for_subscribers(args.subscribers, wait)?;
+
+    let mut published = 0u64;
+    let mut odometry_published = 0u64;
+    let mut odometry_ignored = 0u64;
+    let mut odometry_waited = false;
+    let mut odometry_covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
+    let mut malformed = 0u64;
+    let mut last_stamp = 0;
+    for record in log.by_ref() {
+        if shutdown::requested() || (args.frames > 0 && published == args.frames) {
+            break;
+        }
+        let record = match record {
+            Ok(record) => record,
+            Err(ReadError::Line(e)) => {
+                malformed += 1;
+                if malformed <= REPORTED_LINES {
+                    eprintln!("lidar-replay: {}: {e} (skipped)", args.file.display());
+                }
+                if malformed == REPORTED_LINES {
+                    eprintln!("lidar-replay: further malformed lines are only counted");
+                }
+                continue;
+            }
+            Err(e @ ReadError::Io(_)) => {
+                return Err(e).with_context(|| format!("{}", args.file.display()));
+            }
+        };
+        match record {
+            LogRecord::Odometry(pose) => {
+                let Some(outlet) = &odometry else {
+                    odometry_ignored += 1;
+                    continue;
+                };
+                if !odometry_waited {
+                    odometry_waited = true;
+                    if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
+                        eprintln!(
+                            "lidar-replay: nobody subscribed to the odometry within {} s; \
+                             publishing it anyway",
+                            ODOMETRY_SUBSCRIBER_WAIT.as_secs()
+                        );
+                    }
+                }
+                if !sleep_until(pacer.due(pose.stamp_ns, Instant::now())) {
+                    break;
+                }
+                let covariance = odometry_covariance.update(&pose);
+                outlet.publish(|message| fill_odometry(message, published, &pose, covariance))?;
+                odometry_published += 1;
+            }
+            LogRecord::Scan(scan) => {
+                if !sleep_until(pacer.due(scan.stamp_ns, Instant::now())) {
+                    break;
+                }
+                let mut fill_error = None;
+                scans.publish(|message| fill_error = fill_scan(message, published, &scan).err())?;
+                if let Some(e) = fill_error {
+                    anyhow::bail!("line {}: {e}", scan.line);
+                }
+                last_stamp = scan.stamp_ns;
+                published += 1;
+            }
+        }
+    }
+    if shutdown::requested() {
+        eprintln!("lidar-replay: stopped after {published} scans");
+        return Ok(());
+    }
+    scans.publish_end_of_stream(published, last_stamp)?;
+
+    let mut summary = format!(
+        "lidar-replay: published {published} scans and {odometry_published} odometry poses \
+         from {} ({} lines read)",
+        args.file.display(),
+        log.line_number()
+    );
+    if odometry_ignored > 0 {
+        summary.push_str(&format!(
+            "; {odometry_ignored} odometry poses not published"
+        ));
+    }
+    summary.push_str(&format!("; {malformed} malformed lines skipped"));
+    let skipped = log.skipped_records();
+    if !skipped.is_empty() {
+        let list: Vec<String> = skipped
+            .iter()
+            .map(|(name, count)| format!("{name} x{count}"))
+            .collect();
+        summary.push_str(&format!("; records not replayed: {}", list.join(", ")));
+    }
+    eprintln!("{summary}");
+    Ok(())
+}
+
+/// Sleeps until `due` (at once when `None` or past). Returns false when Ctrl-C came first.
+fn sleep_until(due: Option<Instant>) -> bool {
+    let Some(due) = due else {
+        return !shutdown::requested();
+    };
+    loop {
+        if shutdown::requested() {
+            return false;
+        }
+        let Some(left) = due.checked_duration_since(Instant::now()) else {
+            return true;
+        };
+        if left.is_zero() {
+            return true;
+        }
+        std::thread::sleep(left.min(SLEEP_SLICE));
+    }
+}

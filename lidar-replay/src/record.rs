@@ -1,0 +1,73 @@
+//! What a log yields: scans and odometry, in log order, with the line they came from.
+
+/// Where the beams of a scan point and which ranges are valid, as in a `LaserScan`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanGeometry {
+    /// Bearing of the first beam in the sensor frame (x forward, y left), radians.
+    pub angle_min: f64,
+    /// Bearing step between beams, radians (counter-clockwise when positive).
+    pub angle_increment: f64,
+    /// Time between two beams, seconds (0 when the log does not say).
+    pub time_increment: f64,
+    /// Time between scans, seconds (0 when unknown, e.g. for a log's first scan).
+    pub scan_time: f64,
+    /// Shortest valid range, metres.
+    pub range_min: f64,
+    /// Longest valid range, metres; readings at or beyond it are published as +inf.
+    pub range_max: f64,
+}
+
+/// One scan of a log, ranges already in REP 117 form (NaN = error, +inf = no return).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanRecord {
+    /// 1-based line of the log it was read from.
+    pub line: u64,
+    /// Acquisition time in the log's clock, nanoseconds.
+    pub stamp_ns: u64,
+    pub geometry: ScanGeometry,
+    /// Ranges in metres, beam by beam from `angle_min`.
+    pub ranges: Vec<f32>,
+    /// Intensities, one per beam, or empty when the log has none.
+    pub intensities: Vec<f32>,
+}
+
+/// One odometry pose of a log (`odom_from_robot`), yaw wrapped to `[-pi, pi)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OdometryRecord {
+    /// 1-based line of the log it was read from.
+    pub line: u64,
+    /// Time of the pose in the log's clock, nanoseconds.
+    pub stamp_ns: u64,
+    pub x: f64,
+    pub y: f64,
+    pub yaw: f64,
+    /// Forward speed, m/s (0 when the log does not say).
+    pub linear_velocity: f64,
+    /// Yaw rate, rad/s (0 when the log does not say).
+    pub angular_velocity: f64,
+}
+
+/// A record of a log, in the order it is to be published.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LogRecord {
+    Scan(ScanRecord),
+    Odometry(OdometryRecord),
+}
+
+impl LogRecord {
+    /// The record's time in the log's clock, nanoseconds.
+    pub fn stamp_ns(&self) -> u64 {
+        match self {
+            Self::Scan(scan) => scan.stamp_ns,
+            Self::Odometry(odometry) => odometry.stamp_ns,
+        }
+    }
+
+    /// The 1-based line of the log it was read from.
+    pub fn line(&self) -> u64 {
+        match self {
+            Self::Scan(scan) => scan.line,
+            Self::Odometry(odometry) => odometry.line,
+        }
+    }
+}

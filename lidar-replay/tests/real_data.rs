@@ -1,0 +1,110 @@
+//! The shared real recordings read completely and correctly.
+
+use std::path::PathBuf;
+
+use lidar_replay::{LogFormat, LogRecord, OdometryRecord, ScanRecord, open_log};
+
+/// `$SLAM_DATA_DIR`, else `../shared/data` beside the workspace (docs/CONVENTIONS.md).
+fn data_file(relative: &str) -> PathBuf {
+    let dir = std::env::var_os("SLAM_DATA_DIR").map_or_else(
+        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data")),
+        PathBuf::from,
+    );
+    let path = dir.join(relative);
+    assert!(
+        path.is_file(),
+        "shared recording {} is missing: set SLAM_DATA_DIR to the shared data directory",
+        path.display()
+    );
+    path
+}
+
+/// Every record of a log; any malformed line fails the test with its message.
+fn read_all(format: LogFormat, relative: &str) -> (Vec<ScanRecord>, Vec<OdometryRecord>, Vec<u64>) {
+    let path = data_file(relative);
+    let log = open_log(format, &path).unwrap_or_else(|e| panic!("{e}"));
+    let mut scans = Vec::new();
+    let mut odometry = Vec::new();
+    let mut order = Vec::new();
+    for record in log {
+        match record.unwrap_or_else(|e| panic!("{}: {e}", path.display())) {
+            LogRecord::Scan(scan) => {
+                order.push(scan.stamp_ns);
+                scans.push(scan);
+            }
+            LogRecord::Odometry(pose) => odometry.push(pose),
+        }
+    }
+    (scans, odometry, order)
+}
+
+fn assert_strictly_increasing(stamps: &[u64]) {
+    assert!(
+        stamps.windows(2).all(|w| w[1] > w[0]),
+        "scan stamps must strictly increase"
+    );
+}
+
+#[test]
+fn seed_hall_is_400_scans_of_1081_beams() {
+    let (scans, odometry, stamps) = read_all(LogFormat::SeedCsv, "seed-hall/scans.csv");
+    assert_eq!(scans.len(), 400);
+    assert!(odometry.is_empty());
+    assert!(scans.iter().all(|s| s.ranges.len() == 1081));
+    assert_strictly_increasing(&stamps);
+    assert_eq!(stamps[0], 0);
+    assert_eq!(stamps[399], 39_900_000_000, "nominal 0.1 s period");
+    let readings = 400 * 1081;
+    let no_return = scans
+        .iter()
+        .flat_map(|s| &s.ranges)
+        .filter(|r| **r == f32::INFINITY)
+        .count();
+    let errors = scans
+        .iter()
+        .flat_map(|s| &s.ranges)
+        .filter(|r| r.is_nan())
+        .count();
+    // FORMAT.md: code 1 on about 9.5 % of the readings, code 19 on 22.
+    assert_eq!(errors, 22);
+    let share = no_return as f64 / readings as f64;
+    assert!((0.09..0.10).contains(&share), "no-return share {share}");
+    let longest = scans
+        .iter()
+        .flat_map(|s| &s.ranges)
+        .filter(|r| r.is_finite())
+        .fold(0.0_f32, |a, &b| a.max(b));
+    assert_eq!(longest, 36.881, "every real return is kept");
+}
+
+#[test]
+fn mit_csail_is_1988_scans_of_361_beams_with_odometry() {
+    let (scans, odometry, stamps) = read_all(LogFormat::Carmen, "carmen/mit-csail.clf");
+    assert_eq!(scans.len(), 1988);
+    assert_eq!(odometry.len(), 1988, "one odometry pose per FLASER line");
+    assert!(scans.iter().all(|s| s.ranges.len() == 361));
+    assert_strictly_increasing(&stamps);
+    assert_eq!(stamps[0], 1_134_864_629_895_182_000, "first stamp, exact");
+    assert_eq!(stamps[1987], 1_134_865_053_892_206_000, "last stamp, exact");
+    assert!(
+        scans
+            .iter()
+            .zip(&odometry)
+            .all(|(s, o)| s.stamp_ns == o.stamp_ns && s.line == o.line)
+    );
+    let first = &odometry[0];
+    assert_eq!(
+        (first.x, first.y, first.yaw),
+        (576.536523, 0.106594, -2.255213)
+    );
+    // About 3 % of the readings are the 81.91 m "no return".
+    let readings = 1988 * 361;
+    let no_return = scans
+        .iter()
+        .flat_map(|s| &s.ranges)
+        .filter(|r| **r == f32::INFINITY)
+        .count();
+    let share = no_return as f64 / readings as f64;
+    assert!((0.02..0.05).contains(&share), "no-return share {share}");
+    assert!(scans.iter().flat_map(|s| &s.ranges).all(|r| !r.is_nan()));
+}

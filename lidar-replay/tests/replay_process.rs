@@ -1,0 +1,266 @@
+//! `lidar-replay` as a process: a subscriber in its own domain receives every scan and
+//! odometry pose in order with the log's exact stamps, then the end of the stream.
+
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use ipc_types::prelude::*;
+
+fn fixture(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lidar-replay-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn domain(tag: &str) -> Domain {
+    Domain::new(&format!("replay-test-{tag}-{}", std::process::id())).unwrap()
+}
+
+/// A replay process in its own domain. Dropping it (a test failed half-way) kills the
+/// process and removes the domain's shared memory, so nothing outlives the test.
+struct Replay {
+    child: Option<Child>,
+    domain: Domain,
+}
+
+impl Replay {
+    fn start(domain: Domain, args: &[&str]) -> Self {
+        let child = Command::new(env!("CARGO_BIN_EXE_lidar-replay"))
+            .args(args)
+            .args(["--domain", domain.name()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start lidar-replay");
+        Self {
+            child: Some(child),
+            domain,
+        }
+    }
+
+    /// Waits for the process; it must succeed. Returns its stderr.
+    fn finish(mut self) -> String {
+        let child = self.child.take().expect("running");
+        let output = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(output.status.success(), "lidar-replay failed: {stderr}");
+        stderr
+    }
+}
+
+impl Drop for Replay {
+    fn drop(&mut self) {
+        if let Some(mut child) = self.child.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+        let _ = self.domain.remove_leftovers();
+    }
+}
+
+/// A FLASER line of three beams with the stamp `stamp` and odometry x = `x`.
+fn flaser(x: f64, stamp: &str) -> String {
+    format!("FLASER 3 1.00 81.91 2.50 {x} 0 0 {x} 0 0.5 {stamp} robot 0.1\n")
+}
+
+/// What a subscriber saw.
+#[derive(Debug, Default)]
+struct Received {
+    scans: Vec<(u64, u64)>,
+    odometry: Vec<(u64, u64, f64)>,
+    end: Option<(u64, u64)>,
+    first_to_last_scan: Duration,
+}
+
+/// Subscribes to the replay's topics in `domain` and collects until end of stream.
+fn receive(domain: &Domain, with_odometry: bool) -> Received {
+    let node = domain.node("test-subscriber").unwrap();
+    wait_for_topic(&node, topic::SCAN).unwrap();
+    // The replay creates the odometry topic before the scan topic.
+    let odometry = if with_odometry {
+        Some(Inlet::open(&node, topic::ODOMETRY).unwrap())
+    } else {
+        assert!(Inlet::try_open(&node, topic::ODOMETRY).unwrap().is_none());
+        None
+    };
+    let scans = Inlet::open(&node, topic::SCAN).unwrap();
+    let mut received = Received::default();
+    let mut first_scan = None;
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while received.end.is_none() {
+        assert!(Instant::now() < deadline, "no end of stream: {received:?}");
+        match &odometry {
+            Some(odometry) => wait_any(&[&scans, odometry], Duration::from_millis(50)),
+            None => wait_any(&[&scans], Duration::from_millis(50)),
+        }
+        .unwrap();
+        if let Some(odometry) = &odometry {
+            while let Some(sample) = odometry.receive().unwrap() {
+                assert_eq!(sample.header.frame_id(), "odom");
+                received
+                    .odometry
+                    .push((sample.header.seq, sample.header.stamp_ns, sample.pose.x));
+            }
+        }
+        while let Some(scan) = scans.receive().unwrap() {
+            if scan.header.is_end_of_stream() {
+                received.end = Some((scan.header.seq, scan.header.stamp_ns));
+                break;
+            }
+            assert_eq!(scan.header.frame_id(), "laser");
+            assert_eq!(scan.ranges().len(), 3);
+            assert_eq!(scan.ranges()[0], 1.0);
+            assert_eq!(scan.ranges()[1], f32::INFINITY, "81.91 m = no return");
+            let now = Instant::now();
+            received.first_to_last_scan = now - *first_scan.get_or_insert(now);
+            received.scans.push((scan.header.seq, scan.header.stamp_ns));
+        }
+    }
+    received
+}
+
+#[test]
+fn lockstep_delivers_every_scan_and_odometry_with_exact_stamps() {
+    let mut log = String::from("# CARMEN log fixture\nPARAM robot_use_laser on host 0\n");
+    // 0.1 s apart from 1058295543.123456, written with microseconds as CARMEN does.
+    let stamps: Vec<String> = (0..25u64)
+        .map(|k| 1_058_295_543_123_456 + 100_000 * k)
+        .map(|us| format!("{}.{:06}", us / 1_000_000, us % 1_000_000))
+        .collect();
+    for (k, stamp) in stamps.iter().enumerate() {
+        log.push_str(&flaser(k as f64, stamp));
+        if k == 3 {
+            log.push_str("FLASER 3 1.0 oops\n");
+        }
+    }
+    let file = fixture("lockstep.clf", &log);
+    let file = file.to_str().unwrap();
+    let replay = Replay::start(
+        domain("lockstep"),
+        &[
+            "--format",
+            "carmen",
+            "--file",
+            file,
+            "--rate",
+            "0",
+            "--subscribers",
+            "1",
+        ],
+    );
+    let received = receive(&replay.domain, true);
+    let stderr = replay.finish();
+
+    let expected: Vec<(u64, u64)> = (0..25u64)
+        .map(|k| (k, 1_058_295_543_123_456_000 + k * 100_000_000))
+        .collect();
+    assert_eq!(
+        received.scans, expected,
+        "every scan, in order, exact stamps"
+    );
+    let odometry: Vec<(u64, u64)> = received.odometry.iter().map(|o| (o.0, o.1)).collect();
+    assert_eq!(odometry, expected, "odometry with its scan's seq and stamp");
+    assert!(
+        received
+            .odometry
+            .iter()
+            .enumerate()
+            .all(|(k, o)| o.2 == k as f64)
+    );
+    assert_eq!(received.end, Some((25, expected[24].1)));
+    assert!(
+        stderr.contains("line 7: FLASER: range 2: \"oops\" is not a number (skipped)"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("published 25 scans and 25 odometry poses"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("1 malformed lines skipped"), "{stderr}");
+    assert!(
+        stderr.contains("records not replayed: PARAM x1"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn no_odometry_and_frames_limit_what_is_published() {
+    let log: String = (0..10)
+        .map(|k| flaser(0.0, &format!("{}.5", 100 + k)))
+        .collect();
+    let file = fixture("frames.clf", &log);
+    let file = file.to_str().unwrap();
+    let replay = Replay::start(
+        domain("frames"),
+        &[
+            "--format",
+            "carmen",
+            "--file",
+            file,
+            "--no-odometry",
+            "--frames",
+            "4",
+        ],
+    );
+    let received = receive(&replay.domain, false);
+    let stderr = replay.finish();
+    let seqs: Vec<u64> = received.scans.iter().map(|s| s.0).collect();
+    assert_eq!(seqs, vec![0, 1, 2, 3]);
+    assert_eq!(received.end, Some((4, 103_500_000_000)));
+    assert!(
+        stderr.contains("published 4 scans and 0 odometry poses"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn real_time_follows_the_logs_clock_scaled_by_the_rate() {
+    // Five scans over 2 s of log time, replayed ten times as fast: 0.2 s.
+    let log: String = (0..5)
+        .map(|k| flaser(0.0, &format!("{:.1}", 50.0 + 0.5 * f64::from(k))))
+        .collect();
+    let file = fixture("rate.clf", &log);
+    let file = file.to_str().unwrap();
+    let replay = Replay::start(
+        domain("rate"),
+        &["--format", "carmen", "--file", file, "--rate", "10"],
+    );
+    let received = receive(&replay.domain, true);
+    replay.finish();
+    assert_eq!(received.scans.len(), 5);
+    assert!(
+        received.first_to_last_scan >= Duration::from_millis(180),
+        "{:?}",
+        received.first_to_last_scan
+    );
+}
+
+#[test]
+fn a_file_of_another_format_is_refused_before_publishing() {
+    let csv = fixture("scans.csv", &"1,2,3\n".repeat(5));
+    let output = Command::new(env!("CARGO_BIN_EXE_lidar-replay"))
+        .args(["--format", "carmen", "--file", csv.to_str().unwrap()])
+        .args(["--domain", "replay-refused"])
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("is not a carmen log: no valid scan in its 5 lines"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("line 1: not a CARMEN record"), "{stderr}");
+    assert!(output.stdout.is_empty(), "refused before announcing ready");
+
+    let missing = Command::new(env!("CARGO_BIN_EXE_lidar-replay"))
+        .args(["--format", "seed-csv", "--file", "/nonexistent/scans.csv"])
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    assert!(
+        String::from_utf8_lossy(&missing.stderr).contains("cannot open /nonexistent/scans.csv")
+    );
+}

@@ -1,0 +1,106 @@
+//! `slam-score`: the relative-pose error of a trajectory against ground-truth relations.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use slam_eval::{ErrorStats, Score, Trajectory, format_stamp, read_relations, score};
+
+/// Scores a trajectory with the relative-pose metric of Kuemmerle et al. 2009: for every
+/// ground-truth relation (t1, t2, motion) the trajectory's own motion from t1 to t2 is
+/// compared with it; the translational (m) and rotational (deg) errors are summarised as
+/// mean and standard deviation, plain and squared.
+#[derive(Debug, Parser)]
+#[command(name = "slam-score", version)]
+struct Args {
+    /// Estimated trajectory, TUM format: stamp x y z qx qy qz qw.
+    #[arg(long, value_name = "FILE")]
+    trajectory: PathBuf,
+    /// Ground-truth relations: t1 t2 x y z roll pitch yaw (pose at t2 in the frame at t1).
+    #[arg(long, value_name = "FILE")]
+    relations: PathBuf,
+    /// How far a pose's stamp may be from a relation's, milliseconds.
+    #[arg(long, default_value_t = 1.0)]
+    tolerance_ms: f64,
+    /// Print the score as JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Relations without poses listed one by one; the rest are only counted.
+const LISTED_UNMATCHED: usize = 10;
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("slam-score: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    anyhow::ensure!(
+        args.tolerance_ms.is_finite() && args.tolerance_ms >= 0.0,
+        "--tolerance-ms must be a non-negative number, not {}",
+        args.tolerance_ms
+    );
+    let tolerance_ns = (args.tolerance_ms * 1e6).round() as u64;
+    let trajectory = Trajectory::read_tum(&args.trajectory)?;
+    let relations = read_relations(&args.relations)?;
+    let score = score(&trajectory, &relations, tolerance_ns);
+
+    for unmatched in score.unmatched.iter().take(LISTED_UNMATCHED) {
+        eprintln!(
+            "slam-score: {} line {}: no pose within {} ms of {} ({} -> {})",
+            args.relations.display(),
+            unmatched.line,
+            args.tolerance_ms,
+            unmatched.missing,
+            format_stamp(unmatched.t1_ns),
+            format_stamp(unmatched.t2_ns)
+        );
+    }
+    if score.unmatched.len() > LISTED_UNMATCHED {
+        eprintln!(
+            "slam-score: ... and {} more relations without poses",
+            score.unmatched.len() - LISTED_UNMATCHED
+        );
+    }
+    anyhow::ensure!(
+        score.used > 0,
+        "none of the {} relations has both poses in {} ({} poses) within {} ms",
+        score.relations,
+        args.trajectory.display(),
+        trajectory.len(),
+        args.tolerance_ms
+    );
+
+    if args.json {
+        let text = serde_json::to_string_pretty(&score).context("cannot format the score")?;
+        println!("{text}");
+    } else {
+        print_text(&score);
+    }
+    Ok(())
+}
+
+fn print_text(score: &Score) {
+    println!(
+        "relations: {} used of {} ({} without poses within the tolerance)",
+        score.used,
+        score.relations,
+        score.unmatched.len()
+    );
+    let row = |name: &str, unit: &str, stats: &ErrorStats| {
+        println!(
+            "{name:<12} mean {:.4} +- {:.4} {unit}   squared {:.6} +- {:.6} {unit}^2   max {:.4} {unit}",
+            stats.mean, stats.std, stats.squared_mean, stats.squared_std, stats.max
+        );
+    };
+    row("translation", "m", &score.translation_m);
+    row("rotation", "deg", &score.rotation_deg);
+}

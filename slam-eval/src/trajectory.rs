@@ -1,0 +1,127 @@
+//! The estimated trajectory: a TUM file (`stamp x y z qx qy qz qw`), as map-sink writes it.
+
+use std::path::Path;
+
+use crate::error::EvalError;
+use crate::pose::{Pose, from_tum};
+use crate::text::{expect_fields, number, parse_lines, stamp};
+
+/// Poses sorted by stamp, each stamp once.
+#[derive(Debug, Clone, Default)]
+pub struct Trajectory {
+    stamps_ns: Vec<u64>,
+    poses: Vec<Pose>,
+}
+
+impl Trajectory {
+    /// Builds a trajectory from stamped poses in any order; `Err` names the first stamp given
+    /// twice (which pose would count is ambiguous).
+    pub fn new(mut stamped: Vec<(u64, Pose)>) -> Result<Self, u64> {
+        stamped.sort_by_key(|(stamp, _)| *stamp);
+        if let Some(pair) = stamped.windows(2).find(|w| w[0].0 == w[1].0) {
+            return Err(pair[0].0);
+        }
+        let (stamps_ns, poses) = stamped.into_iter().unzip();
+        Ok(Self { stamps_ns, poses })
+    }
+
+    /// Reads a TUM file; blank lines and `#` comments are skipped.
+    pub fn read_tum(path: &Path) -> Result<Self, EvalError> {
+        let lines = parse_lines(path, parse_tum_line)?;
+        if lines.is_empty() {
+            return Err(EvalError::Empty {
+                path: path.to_path_buf(),
+                what: "poses",
+            });
+        }
+        Self::new(lines.iter().map(|(_, stamped)| *stamped).collect()).map_err(|repeated| {
+            let mut at = lines
+                .iter()
+                .filter(|(_, (stamp_ns, _))| *stamp_ns == repeated)
+                .map(|(line, _)| *line);
+            let first = at.next().unwrap_or_default();
+            EvalError::Malformed {
+                path: path.to_path_buf(),
+                line: at.next().unwrap_or_default(),
+                reason: format!("stamp repeats line {first}"),
+            }
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.poses.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.poses.is_empty()
+    }
+
+    /// The pose whose stamp is nearest to `stamp_ns`, if it is within `tolerance_ns`.
+    pub fn pose_at(&self, stamp_ns: u64, tolerance_ns: u64) -> Option<&Pose> {
+        let after = self.stamps_ns.partition_point(|&s| s < stamp_ns);
+        let candidates = [after.checked_sub(1), Some(after)];
+        candidates
+            .into_iter()
+            .flatten()
+            .filter(|&i| i < self.stamps_ns.len())
+            .map(|i| (self.stamps_ns[i].abs_diff(stamp_ns), i))
+            .filter(|&(distance, _)| distance <= tolerance_ns)
+            .min()
+            .map(|(_, i)| &self.poses[i])
+    }
+}
+
+fn parse_tum_line(fields: &[&str]) -> Result<(u64, Pose), String> {
+    expect_fields(fields, "stamp x y z qx qy qz qw")?;
+    let stamp_ns = stamp(fields[0], "stamp")?;
+    let mut values = [0.0; 7];
+    for (value, (field, name)) in values.iter_mut().zip(
+        fields[1..]
+            .iter()
+            .zip(["x", "y", "z", "qx", "qy", "qz", "qw"]),
+    ) {
+        *value = number(field, name)?;
+    }
+    let [x, y, z, qx, qy, qz, qw] = values;
+    let pose = from_tum([x, y, z], [qx, qy, qz, qw])
+        .ok_or_else(|| "the quaternion has no direction (zero length)".to_owned())?;
+    Ok((stamp_ns, pose))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn planar(x: f64) -> Pose {
+        from_tum([x, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]).unwrap()
+    }
+
+    #[test]
+    fn the_nearest_pose_within_tolerance_is_found() {
+        let trajectory = Trajectory::new(vec![
+            (3_000, planar(3.0)),
+            (1_000, planar(1.0)),
+            (2_000, planar(2.0)),
+        ])
+        .unwrap();
+        let x = |stamp, tolerance| {
+            trajectory
+                .pose_at(stamp, tolerance)
+                .map(|p| p.translation.vector.x)
+        };
+        assert_eq!(x(2_000, 0), Some(2.0), "exact");
+        assert_eq!(x(2_400, 500), Some(2.0), "nearest below");
+        assert_eq!(x(2_600, 500), Some(3.0), "nearest above");
+        assert_eq!(x(2_500, 100), None, "none within tolerance");
+        assert_eq!(x(0, 999), None, "before the start");
+        assert_eq!(x(3_999, 999), Some(3.0), "after the end");
+    }
+
+    #[test]
+    fn repeated_stamps_are_refused() {
+        assert_eq!(
+            Trajectory::new(vec![(5, planar(0.0)), (5, planar(1.0))]).err(),
+            Some(5)
+        );
+    }
+}

@@ -1,0 +1,131 @@
+//! `slam-score` as a program: files in, the score out, bad lines named.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn fixture(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("slam-score-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn slam_score(trajectory: &PathBuf, relations: &PathBuf, extra: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_slam-score"))
+        .arg("--trajectory")
+        .arg(trajectory)
+        .arg("--relations")
+        .arg(relations)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+/// A TUM line of a planar pose.
+fn tum(stamp: &str, x: f64, y: f64, yaw: f64) -> String {
+    let (s, c) = (yaw / 2.0).sin_cos();
+    format!("{stamp} {x} {y} 0 0 0 {s} {c}\n")
+}
+
+/// Poses 1.1 m apart along x at full-precision log stamps: 10 % too long a step. Each test
+/// has its own copy (`tag`), as tests run in parallel.
+fn stretched_trajectory(tag: &str) -> PathBuf {
+    let mut text = String::from("# stamp x y z qx qy qz qw\n");
+    for k in 0..5u32 {
+        let us = 1_134_864_629_895_182_u64 + 100_000 * u64::from(k);
+        let stamp = format!("{}.{:06}", us / 1_000_000, us % 1_000_000);
+        text.push_str(&tum(&stamp, 1.1 * f64::from(k), 0.0, 0.0));
+    }
+    fixture(&format!("stretched-{tag}.tum"), &text)
+}
+
+#[test]
+fn the_score_is_printed_as_json() {
+    let relations = fixture(
+        "truth.relations",
+        "1134864629.895182 1134864629.995182 1 0 0 0 0 0\n\
+         1134864629.995182 1134864630.195182 2 0 0 0 0 0\n\
+         1134864629.995182 1134864640.0 2 0 0 0 0 0\n",
+    );
+    let output = slam_score(&stretched_trajectory("json"), &relations, &["--json"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let score: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(score["relations"], 3);
+    assert_eq!(score["used"], 2);
+    // Errors 0.1 m and 0.2 m: mean 0.15, std 0.05, squared mean 0.025.
+    let t = &score["translation_m"];
+    assert!((t["mean"].as_f64().unwrap() - 0.15).abs() < 1e-9, "{score}");
+    assert!((t["std"].as_f64().unwrap() - 0.05).abs() < 1e-9, "{score}");
+    assert!(
+        (t["squared_mean"].as_f64().unwrap() - 0.025).abs() < 1e-9,
+        "{score}"
+    );
+    assert_eq!(score["rotation_deg"]["mean"], 0.0);
+    assert_eq!(score["unmatched"][0]["line"], 3);
+    assert!(
+        stderr.contains("line 3: no pose within 1 ms of t2"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn the_text_report_names_both_errors() {
+    let relations = fixture(
+        "one.relations",
+        "1134864629.895182 1134864629.995182 1 0 0 0 0 0\n",
+    );
+    let output = slam_score(&stretched_trajectory("text"), &relations, &[]);
+    assert!(output.status.success());
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("relations: 1 used of 1"), "{stdout}");
+    assert!(stdout.contains("translation  mean 0.1000"), "{stdout}");
+    assert!(stdout.contains("rotation     mean 0.0000"), "{stdout}");
+}
+
+#[test]
+fn malformed_lines_are_named() {
+    let relations = fixture(
+        "bad.relations",
+        "# t1 t2 x y z roll pitch yaw\n\n1.0 2.0 1 0 0 0 0 0\n1.0 2.0 1 0 0 0 0\n",
+    );
+    let output = slam_score(&stretched_trajectory("malformed"), &relations, &[]);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("bad.relations, line 4: 7 fields, expected 8 (t1 t2 x y z roll pitch yaw)"),
+        "{stderr}"
+    );
+
+    let trajectory = fixture(
+        "bad.tum",
+        &(tum("1.0", 0.0, 0.0, 0.0) + "2.0 1 0 0 0 0 x 1\n"),
+    );
+    let output = slam_score(&trajectory, &relations, &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("bad.tum, line 2: qz: \"x\" is not a number"),
+        "{stderr}"
+    );
+
+    let repeated = fixture("repeated.tum", &(tum("1.0", 0.0, 0.0, 0.0).repeat(2)));
+    let output = slam_score(&repeated, &relations, &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("repeated.tum, line 2: stamp repeats line 1"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn nothing_to_score_is_an_error() {
+    let relations = fixture("far.relations", "7.0 8.0 1 0 0 0 0 0\n");
+    let output = slam_score(&stretched_trajectory("nothing"), &relations, &[]);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("none of the 1 relations has both poses"),
+        "{stderr}"
+    );
+}
