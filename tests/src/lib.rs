@@ -123,3 +123,50 @@ pub fn shm_leftovers(domain: &str) -> Vec<String> {
         })
         .unwrap_or_default()
 }
+
+/// The shared real recordings: `$SLAM_DATA_DIR`, or `../shared/data` beside the workspace.
+pub fn data_dir() -> PathBuf {
+    let dir = std::env::var_os("SLAM_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data"))
+        });
+    assert!(
+        dir.join("seed-hall/scans.csv").is_file(),
+        "the real recordings are missing: set SLAM_DATA_DIR or put them in {}",
+        dir.display()
+    );
+    dir
+}
+
+/// Map corners from a run's map_corners.csv: `(x, y, heading, angle)`.
+pub fn read_map_corners(out: &Path) -> Vec<[f64; 4]> {
+    let text = std::fs::read_to_string(out.join("map_corners.csv")).expect("map_corners.csv");
+    text.lines()
+        .skip(1)
+        .map(|line| {
+            let fields: Vec<f64> = line
+                .split(',')
+                .map(|f| f.parse().unwrap_or_else(|_| panic!("bad csv line {line}")))
+                .collect();
+            [fields[0], fields[1], fields[2], fields[3]]
+        })
+        .collect()
+}
+
+/// Pairs of map corners closer than `distance` with headings within `heading` radians:
+/// the same wall corner mapped twice.
+pub fn duplicate_corners(corners: &[[f64; 4]], distance: f64, heading: f64) -> Vec<(usize, usize)> {
+    let mut pairs = Vec::new();
+    for (i, a) in corners.iter().enumerate() {
+        for (j, b) in corners.iter().enumerate().skip(i + 1) {
+            let d = (a[0] - b[0]).hypot(a[1] - b[1]);
+            let dh = (a[2] - b[2] + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+            if d < distance && dh.abs() < heading {
+                pairs.push((i, j));
+            }
+        }
+    }
+    pairs
+}

@@ -1,0 +1,118 @@
+//! The pipeline on the real Hokuyo recording: replayed from the log, and served by an
+//! emulated sensor to the live driver.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+
+use tests::*;
+
+#[test]
+fn seed_hall_replay_maps_the_hall_without_duplicate_corners() {
+    let log = data_dir().join("seed-hall/scans.csv");
+    let domain = domain("seed-hall");
+    let out = scratch("seed-hall");
+    let output = launch(
+        &domain,
+        &out,
+        &[
+            "--replay",
+            log.to_str().unwrap(),
+            "--format",
+            "seed-csv",
+            "--particles",
+            "50",
+        ],
+    );
+    assert_success(&output);
+    let metrics = metrics(&out);
+    assert_eq!(number(&metrics, "frames_published"), 400.0);
+    assert_eq!(number(&metrics, "frames_processed"), 400.0);
+    let corners = read_map_corners(&out);
+    assert!(corners.len() >= 20, "{} map corners", corners.len());
+    let duplicates = duplicate_corners(&corners, 0.5, 0.5);
+    assert!(duplicates.is_empty(), "duplicated corners: {duplicates:?}");
+    // About 50 m through the hall, about 0.11 m a scan.
+    let path = number(&metrics, "path_length_m");
+    assert!((30.0..70.0).contains(&path), "path {path} m");
+    assert!(shm_leftovers(&domain).is_empty());
+}
+
+#[test]
+fn emulated_hokuyo_gives_the_same_map_as_the_replayed_log() {
+    let log = data_dir().join("seed-hall/scans.csv");
+    let mut emulator = Command::new(bin("hokuyo-emulator"))
+        .args(["--port", "0", "--file", log.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("hokuyo-emulator");
+    let mut first = String::new();
+    BufReader::new(emulator.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    let addr = first
+        .trim()
+        .strip_prefix("listening on ")
+        .unwrap_or_else(|| panic!("emulator said {first:?}"))
+        .to_owned();
+
+    let live_out = scratch("hokuyo-live");
+    let config = live_out.join("hokuyo.toml");
+    std::fs::write(&config, "[hokuyo]\nframes = 400\n").unwrap();
+    let live_domain = domain("hokuyo-live");
+    let output = launch(
+        &live_domain,
+        &live_out,
+        &[
+            "--source",
+            "hokuyo",
+            "--addr",
+            &addr,
+            "--config",
+            config.to_str().unwrap(),
+            "--particles",
+            "50",
+        ],
+    );
+    let _ = emulator.kill();
+    let _ = emulator.wait();
+    assert_success(&output);
+    assert_eq!(number(&metrics(&live_out), "frames_processed"), 400.0);
+
+    let replay_out = scratch("hokuyo-replay");
+    let replay_domain = domain("hokuyo-replay");
+    let output = launch(
+        &replay_domain,
+        &replay_out,
+        &[
+            "--replay",
+            log.to_str().unwrap(),
+            "--format",
+            "seed-csv",
+            "--particles",
+            "50",
+        ],
+    );
+    assert_success(&output);
+
+    // Same scans, same geometry, same seed: the same map, up to the stamps' effect on the
+    // motion prior (the live sensor runs at 40 Hz, the log is stamped at a nominal 10 Hz).
+    let live = read_map_corners(&live_out);
+    let replayed = read_map_corners(&replay_out);
+    let matched = live
+        .iter()
+        .filter(|a| {
+            replayed
+                .iter()
+                .any(|b| (a[0] - b[0]).hypot(a[1] - b[1]) < 0.05)
+        })
+        .count();
+    assert!(
+        matched as f64 >= 0.95 * live.len() as f64 && live.len().abs_diff(replayed.len()) <= 2,
+        "live map {} corners, replayed {}, {matched} match",
+        live.len(),
+        replayed.len()
+    );
+    assert!(shm_leftovers(&live_domain).is_empty());
+    assert!(shm_leftovers(&replay_domain).is_empty());
+}
