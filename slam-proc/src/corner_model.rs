@@ -46,7 +46,7 @@ impl Frame {
     }
 
     /// A world point in this frame.
-    pub fn to_local(&self, x: f64, y: f64) -> (f64, f64) {
+    pub fn to_local(self, x: f64, y: f64) -> (f64, f64) {
         let (dx, dy) = (x - self.pose.x, y - self.pose.y);
         (
             self.cos * dx + self.sin * dy,
@@ -55,7 +55,7 @@ impl Frame {
     }
 
     /// Takes `observation` from this frame to the world.
-    pub fn to_world(&self, observation: &Prepared) -> WorldObservation {
+    pub fn to_world(self, observation: &Prepared) -> WorldObservation {
         let (pose, s, c) = (&self.pose, self.sin, self.cos);
         let (x, y) = (observation.z.x, observation.z.y);
         let z = Vector4::new(

@@ -12,7 +12,7 @@ use crate::persistent::PersistentArray;
 
 /// Buckets of the hash. Maps of up to tens of thousands of corners keep a few entries per
 /// bucket; distant cells sharing a bucket only cost a comparison.
-const BUCKETS: usize = 256;
+const BUCKETS: usize = 4096;
 
 type Cell = (i32, i32);
 

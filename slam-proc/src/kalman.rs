@@ -8,7 +8,9 @@ use nalgebra::{Matrix4, Vector4};
 
 use crate::angle::wrap_angle;
 use crate::corner_model::innovation;
-use crate::linalg::{mul4, mul4_symmetric_transpose, spd_inverse4};
+#[cfg(test)]
+use crate::linalg::spd_inverse4;
+use crate::linalg::{mul4, mul4_symmetric_transpose};
 
 /// The smallest opening angle kept off 0 and pi: an update never turns a corner into a
 /// straight wall or a spike.
@@ -18,6 +20,7 @@ const ANGLE_MARGIN: f64 = 1e-6;
 /// Joseph form, symmetrised, so the covariance stays symmetric positive definite despite
 /// rounding; heading and angle innovations are wrapped. `None` when `P + R` is not
 /// positive definite.
+#[cfg(test)]
 pub(crate) fn update(
     mean: &Vector4<f64>,
     covariance: &Matrix4<f64>,
@@ -30,7 +33,7 @@ pub(crate) fn update(
     ))
 }
 
-/// [`update`] with `(P + R)^-1` already known (association computed it).
+/// The update with `(P + R)^-1` already known (association computed it).
 pub(crate) fn update_with_inverse(
     mean: &Vector4<f64>,
     covariance: &Matrix4<f64>,
@@ -100,47 +103,5 @@ mod tests {
         // not 0 as plain subtraction would give.
         assert!(wrap_angle(m.z - PI).abs() < 1e-12, "{}", m.z);
         assert!((-PI..PI).contains(&m.z));
-    }
-}
-
-#[cfg(test)]
-mod timing {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn time_variants() {
-        let mut p = Matrix4::from_diagonal(&Vector4::new(0.04, 0.02, 0.01, 0.03));
-        p[(0, 2)] = 0.01;
-        p[(2, 0)] = 0.01;
-        let r = Matrix4::from_diagonal(&Vector4::new(0.01, 0.02, 0.005, 0.01));
-        let (s_inv, _) = spd_inverse4(&(p + r)).unwrap();
-        let mean = Vector4::new(0.0, 0.0, 0.0, 1.0);
-        let obs = Vector4::new(0.2, -0.1, 0.05, 1.1);
-        let n = 2_000_000;
-        let t = std::time::Instant::now();
-        let mut acc = 0.0;
-        for i in 0..n {
-            let o = obs.add_scalar(i as f64 * 1e-9);
-            let (m, c) = update_with_inverse(&mean, &p, &o, &r, &s_inv);
-            acc += m.x + c[(1, 1)];
-        }
-        eprintln!(
-            "mine {:.1} ns {acc}",
-            t.elapsed().as_nanos() as f64 / n as f64
-        );
-        let t = std::time::Instant::now();
-        for i in 0..n {
-            let o = obs.add_scalar(i as f64 * 1e-9);
-            let gain = p * s_inv;
-            let nu = innovation(&o, &mean);
-            let m = mean + gain * nu;
-            let ik = Matrix4::identity() - gain;
-            let j = ik * p * ik.transpose() + gain * r * gain.transpose();
-            acc += m.x + j[(1, 1)];
-        }
-        eprintln!(
-            "nalgebra {:.1} ns {acc}",
-            t.elapsed().as_nanos() as f64 / n as f64
-        );
     }
 }

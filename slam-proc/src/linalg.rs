@@ -2,44 +2,50 @@
 //! does several per observation, and the generic decompositions spend more time on loop
 //! control than on arithmetic at these sizes.
 
+// Index loops are the clearest way to write out matrix factorisations.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{ArrayStorage, Matrix3, Matrix4, Vector3};
 
-/// The lower Cholesky factor of an `N x N` matrix given by `a(i, j)`; `None` unless the
-/// matrix is positive definite (a NaN is not).
+/// `L`, `D` and the reciprocals of `D`.
+type Ldl<const N: usize> = ([[f64; N]; N], [f64; N], [f64; N]);
+
+/// `A = L D L^T` of an `N x N` matrix given by `a(i, j)`: `L` unit lower triangular,
+/// returned with the reciprocals of `D`; `None` unless the matrix is positive definite (a
+/// NaN is not). No square roots and one division per pivot: at this size the latency of
+/// those, not the multiplications, is the cost.
 #[inline]
-fn cholesky<const N: usize>(a: impl Fn(usize, usize) -> f64) -> Option<([[f64; N]; N], [f64; N])> {
-    // The reciprocals of the diagonal are kept: the solves multiply by them instead of
-    // dividing, and divisions dominate the latency at this size.
+fn ldl<const N: usize>(a: impl Fn(usize, usize) -> f64) -> Option<Ldl<N>> {
     let mut l = [[0.0; N]; N];
-    let mut inverse_diagonal = [0.0; N];
+    let mut d = [0.0; N];
+    let mut r = [0.0; N];
     for j in 0..N {
-        let mut d = a(j, j);
+        let mut pivot = a(j, j);
         for k in 0..j {
-            d -= l[j][k] * l[j][k];
+            pivot -= l[j][k] * l[j][k] * d[k];
         }
-        if !(d > 0.0) {
+        if pivot.is_nan() || pivot <= 0.0 {
             return None;
         }
-        let d = d.sqrt();
-        let r = 1.0 / d;
-        l[j][j] = d;
-        inverse_diagonal[j] = r;
+        d[j] = pivot;
+        r[j] = 1.0 / pivot;
+        l[j][j] = 1.0;
         for i in j + 1..N {
             let mut s = a(i, j);
             for k in 0..j {
-                s -= l[i][k] * l[j][k];
+                s -= l[i][k] * l[j][k] * d[k];
             }
-            l[i][j] = s * r;
+            l[i][j] = s * r[j];
         }
     }
-    Some((l, inverse_diagonal))
+    Some((l, d, r))
 }
 
-/// `ln det` from a Cholesky factor: one logarithm of the product of the diagonal (the
-/// entries of covariances in metres and radians are far from over- or underflow).
+/// `ln det A = ln prod D`: one logarithm (covariance entries in metres and radians are
+/// far from over- or underflow).
 #[inline]
-fn log_det<const N: usize>(l: &[[f64; N]; N]) -> f64 {
-    2.0 * (0..N).map(|i| l[i][i]).product::<f64>().ln()
+fn log_det<const N: usize>(d: &[f64; N]) -> f64 {
+    d.iter().product::<f64>().ln()
 }
 
 /// `a b` for 4x4 matrices, as combinations of `a`'s columns on the raw column-major
@@ -86,17 +92,17 @@ pub(crate) fn mul4_symmetric_transpose(a: &Matrix4<f64>, b: &Matrix4<f64>) -> Ma
 /// The inverse of a symmetric positive definite 4x4 matrix and its log-determinant.
 #[inline]
 pub(crate) fn spd_inverse4(m: &Matrix4<f64>) -> Option<(Matrix4<f64>, f64)> {
-    let (l, r) = cholesky::<4>(|i, j| m[(i, j)])?;
-    // L^-1 by forward substitution, then A^-1 = L^-T L^-1.
+    let (l, d, r) = ldl::<4>(|i, j| m[(i, j)])?;
+    // L^-1 (unit lower) by forward substitution, then A^-1 = L^-T D^-1 L^-1.
     let mut li = [[0.0; 4]; 4];
     for j in 0..4 {
-        li[j][j] = r[j];
+        li[j][j] = 1.0;
         for i in j + 1..4 {
             let mut s = 0.0;
             for k in j..i {
                 s -= l[i][k] * li[k][j];
             }
-            li[i][j] = s * r[i];
+            li[i][j] = s;
         }
     }
     let mut inverse = Matrix4::zeros();
@@ -104,39 +110,39 @@ pub(crate) fn spd_inverse4(m: &Matrix4<f64>) -> Option<(Matrix4<f64>, f64)> {
         for j in 0..=i {
             let mut s = 0.0;
             for k in i..4 {
-                s += li[k][i] * li[k][j];
+                s += li[k][i] * r[k] * li[k][j];
             }
             inverse[(i, j)] = s;
             inverse[(j, i)] = s;
         }
     }
-    Some((inverse, log_det(&l)))
+    Some((inverse, log_det(&d)))
 }
 
 /// `ln det m` of a symmetric positive definite 3x3 `m`.
 pub(crate) fn spd_log_det3(m: &Matrix3<f64>) -> Option<f64> {
-    cholesky::<3>(|i, j| m[(i, j)]).map(|(l, _)| log_det(&l))
+    ldl::<3>(|i, j| m[(i, j)]).map(|(_, d, _)| log_det(&d))
 }
 
 /// `x` with `m x = b` for a symmetric positive definite 3x3 `m`.
 #[inline]
 pub(crate) fn spd_solve3(m: &Matrix3<f64>, b: &Vector3<f64>) -> Option<Vector3<f64>> {
-    let (l, r) = cholesky::<3>(|i, j| m[(i, j)])?;
+    let (l, _, r) = ldl::<3>(|i, j| m[(i, j)])?;
     let mut y = [0.0; 3];
     for i in 0..3 {
         let mut s = b[i];
         for k in 0..i {
             s -= l[i][k] * y[k];
         }
-        y[i] = s * r[i];
+        y[i] = s;
     }
     let mut x = Vector3::zeros();
     for i in (0..3).rev() {
-        let mut s = y[i];
+        let mut s = y[i] * r[i];
         for k in i + 1..3 {
             s -= l[k][i] * x[k];
         }
-        x[i] = s * r[i];
+        x[i] = s;
     }
     Some(x)
 }

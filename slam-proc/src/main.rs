@@ -156,7 +156,7 @@ fn run() -> Result<()> {
             })?;
             last_header = header;
             processed += 1;
-            if processed % args.map_every == 0 {
+            if processed.is_multiple_of(args.map_every) {
                 publish_map(&maps, &slam, header)?;
             }
         }

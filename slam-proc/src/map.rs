@@ -97,23 +97,23 @@ impl CornerMap {
         id
     }
 
-    /// Replaces a corner's estimate after one more observation.
+    /// Replaces a corner's estimate by `estimate(old)` after one more observation. One walk
+    /// down the tree, which copies the nodes this map still shares.
     pub fn update(
         &mut self,
         id: u32,
-        mean: Vector4<f64>,
-        covariance: Matrix4<f64>,
         confirm_at: u32,
+        estimate: impl FnOnce(&CornerState) -> (Vector4<f64>, Matrix4<f64>),
     ) {
         let Some(state) = self.corners.get_mut(id as usize).as_mut() else {
             return;
         };
         let from = (state.mean.x, state.mean.y);
-        state.mean = mean;
-        state.covariance = covariance;
+        (state.mean, state.covariance) = estimate(state);
         state.observations = state.observations.saturating_add(1);
         let confirmed_now = state.observations == confirm_at;
-        self.grid.relocate(id, from, (mean.x, mean.y));
+        let to = (state.mean.x, state.mean.y);
+        self.grid.relocate(id, from, to);
         if confirmed_now {
             self.confirmed += 1;
             Arc::make_mut(&mut self.tentative).retain(|t| t.id != id);
@@ -215,12 +215,11 @@ mod tests {
         assert_eq!((map.confirmed_count(), map.tentative_count()), (0, 3));
         let near = |s: &CornerState| s.mean.x < 10.0;
         map.age_tentative(&[kept], near, 2);
-        map.update(
-            kept,
+        let updated = (
             Vector4::new(1.01, 0.0, 0.0, 1.5),
             Matrix4::identity() * 5e-5,
-            2,
         );
+        map.update(kept, 2, |_| updated);
         assert_eq!((map.confirmed_count(), map.tentative_count()), (1, 2));
         map.age_tentative(&[], near, 2);
         // Two misses in view: gone. Out of view: kept, however long.

@@ -1,7 +1,9 @@
 //! The motion between consecutive scans from matched corners.
 //!
 //! 1. A prior: the odometry increment when the robot has odometry, else the last motion
-//!    at constant velocity, with a generous covariance.
+//!    at constant velocity (scaled to the scan interval), with a generous covariance. The
+//!    last motion is the filter's posterior increment, which the map has corrected, not
+//!    the last fit: a wrong fit must not repeat through a stretch without corners.
 //! 2. Candidate matches: every pair of corners (current, previous) whose 4-D Mahalanobis
 //!    distance under the prior passes a chi-square gate. The opening angle does not change
 //!    with motion, so it gates sharply; position and heading gate through the prior.

@@ -52,8 +52,8 @@ impl Prepared {
             observation.heading,
             observation.angle,
         );
-        if !z.iter().all(|v| v.is_finite()) || !(observation.angle > 0.0 && observation.angle < PI)
-        {
+        let angle_ok = observation.angle > 0.0 && observation.angle < PI;
+        if !(angle_ok && z.iter().all(|v| v.is_finite())) {
             return None;
         }
         let c = observation.covariance;

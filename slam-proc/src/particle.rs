@@ -120,22 +120,16 @@ impl Particle {
                 Some(index) => {
                     let pairing = &scratch.pairings[index];
                     scratch.observed.push(pairing.corner);
-                    let Some(corner) = self.map.get(pairing.corner) else {
-                        continue;
-                    };
-                    let (mean, covariance) = kalman::update_with_inverse(
-                        &corner.mean,
-                        &corner.covariance,
-                        &observation.z,
-                        &observation.covariance,
-                        &pairing.d_inverse,
-                    );
-                    self.map.update(
-                        pairing.corner,
-                        mean,
-                        covariance,
-                        config.confirm_observations,
-                    );
+                    self.map
+                        .update(pairing.corner, config.confirm_observations, |corner| {
+                            kalman::update_with_inverse(
+                                &corner.mean,
+                                &corner.covariance,
+                                &observation.z,
+                                &observation.covariance,
+                                &pairing.d_inverse,
+                            )
+                        });
                 }
                 // An observation that passed some corner's individual gate but fits no
                 // joint hypothesis is ambiguous: it starts no corner, or the map would
@@ -156,10 +150,13 @@ impl Particle {
             }
         }
 
-        let (range, half_fov) = (config.view_range, 0.5 * config.view_fov);
+        // Within the field of view: |bearing| <= fov / 2, i.e. x >= r cos(fov / 2), which
+        // spares an arctangent per tentative corner and particle.
+        let (range, cos_half_fov) = (config.view_range, (0.5 * config.view_fov).cos());
         let in_view = |corner: &CornerState| {
             let (x, y) = frame.to_local(corner.mean.x, corner.mean.y);
-            x * x + y * y <= range * range && y.atan2(x).abs() <= half_fov
+            let r2 = x * x + y * y;
+            r2 <= range * range && x >= r2.sqrt() * cos_half_fov
         };
         self.map
             .age_tentative(&scratch.observed, in_view, config.tentative_max_misses);

@@ -12,7 +12,7 @@ use crate::pose::Pose2;
 /// `None` when the points do not fix a rotation (fewer than two distinct points).
 pub(crate) fn kabsch(points: &[(Vector2<f64>, Vector2<f64>, f64)]) -> Option<Pose2> {
     let total: f64 = points.iter().map(|p| p.2).sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return None;
     }
     let source_mean = points.iter().map(|(s, _, w)| s * *w).sum::<Vector2<f64>>() / total;

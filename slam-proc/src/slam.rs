@@ -291,7 +291,18 @@ mod tests {
             particles: 50,
             ..SlamConfig::default()
         };
-        let mut slam = FastSlam::new(config, 3).unwrap();
+        // A big map (5000 corners on a grid far from the robot) plus what the scans add.
+        let prior: Vec<MapCorner> = (0..5000)
+            .map(|i| MapCorner {
+                x: 100.0 + f64::from(i % 100),
+                y: f64::from(i / 100),
+                heading: 0.0,
+                angle: 1.5,
+                covariance: Matrix4::identity() * 1e-4,
+                observations: 5,
+            })
+            .collect();
+        let mut slam = FastSlam::with_prior_map(config, 3, &prior).unwrap();
         for k in 0..3 {
             slam.process(k * 25_000_000, &scan(), None);
         }
@@ -301,7 +312,8 @@ mod tests {
         }
         slam.weigh_and_resample();
         assert_eq!(slam.particles.len(), 50);
-        // 50 pointer copies of one map, not 50 maps.
+        assert_eq!(slam.particles[0].map.confirmed_count(), 5000 + 4);
+        // 50 pointer copies of one map, not 50 maps of 5000 corners.
         assert_eq!(slam.particles[0].map.corner_tree_holders(), 50);
         assert!(
             slam.particles
@@ -313,7 +325,7 @@ mod tests {
         let mut changed = slam.particles[0].map.clone();
         let id = 0;
         let corner = *changed.get(id).unwrap();
-        changed.update(id, corner.mean.add_scalar(0.5), corner.covariance, 2);
+        changed.update(id, 2, |c| (c.mean.add_scalar(0.5), c.covariance));
         slam.particles[0].map = changed;
         assert_eq!(slam.particles[1].map.confirmed(2), before);
         assert!(

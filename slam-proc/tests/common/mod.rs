@@ -31,9 +31,11 @@ pub struct SensorModel {
     pub sigma_xy_base: f64,
     pub sigma_xy_per_metre: f64,
     pub sigma_angle: f64,
-    /// A corner is seen only from inside its wedge (both walls visible): the direction
-    /// from the sensor to the tip within half the opening angle of the heading.
+    /// A corner is seen only from about inside its wedge (both walls visible): the
+    /// direction from the sensor to the tip within half the opening angle of the heading,
+    /// plus `wedge_margin` (walls seen at grazing incidence still give a corner).
     pub wedge_visibility: bool,
+    pub wedge_margin: f64,
 }
 
 impl Default for SensorModel {
@@ -47,6 +49,7 @@ impl Default for SensorModel {
             sigma_xy_per_metre: 0.001,
             sigma_angle: 1f64.to_radians(),
             wedge_visibility: true,
+            wedge_margin: 20f64.to_radians(),
         }
     }
 }
@@ -101,7 +104,9 @@ fn rounded_square(s: f64, side: f64, r: f64) -> (Vector2<f64>, f64) {
     (position, wrap_angle(direction))
 }
 
-/// Random corners beside a path: `count` of them at 2-10 m from it, at least 1.5 m apart.
+/// Random corners beside a path: `count` of them at 2-10 m from it, at least 1.5 m apart,
+/// each facing the path to within 40 degrees (its walls open towards where the robot
+/// drives, or it would never be seen: see `wedge_visibility`).
 fn corners_along(
     rng: &mut impl Rng,
     count: usize,
@@ -117,10 +122,11 @@ fn corners_along(
         if corners.iter().any(|c| (c.x - q.x).hypot(c.y - q.y) < 1.5) {
             continue;
         }
+        let towards = (q.y - p.y).atan2(q.x - p.x);
         corners.push(TrueCorner {
             x: q.x,
             y: q.y,
-            heading: wrap_angle(rng.random::<f64>() * TAU),
+            heading: wrap_angle(towards + (80.0 * rng.random::<f64>() - 40.0).to_radians()),
             angle: (50.0 + 80.0 * rng.random::<f64>()).to_radians(),
         });
     }
@@ -163,7 +169,9 @@ pub fn observe(
             continue;
         }
         let towards_tip = p.y.atan2(p.x) + pose.yaw;
-        if sensor.wedge_visibility && wrap_angle(towards_tip - c.heading).abs() > c.angle / 2.0 {
+        if sensor.wedge_visibility
+            && wrap_angle(towards_tip - c.heading).abs() > c.angle / 2.0 + sensor.wedge_margin
+        {
             continue;
         }
         if rng.random::<f64>() < sensor.miss_probability {
