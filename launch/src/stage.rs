@@ -43,6 +43,7 @@ pub struct Stage {
     pub name: String,
     child: Child,
     stderr_tail: Arc<Mutex<VecDeque<String>>>,
+    stderr_reader: Option<std::thread::JoinHandle<()>>,
     exit: Option<ExitStatus>,
 }
 
@@ -91,9 +92,10 @@ impl Stage {
             });
         }
         let stderr_tail = Arc::new(Mutex::new(VecDeque::with_capacity(STDERR_TAIL)));
+        let mut stderr_reader = None;
         if let Some(stderr) = child.stderr.take() {
             let tail = Arc::clone(&stderr_tail);
-            std::thread::spawn(move || {
+            stderr_reader = Some(std::thread::spawn(move || {
                 for line in BufReader::new(stderr).lines().map_while(Result::ok) {
                     let _ = writeln!(log, "{line}");
                     if let Ok(mut tail) = tail.lock() {
@@ -103,12 +105,13 @@ impl Stage {
                         tail.push_back(line);
                     }
                 }
-            });
+            }));
         }
         Ok(Self {
             name: name.to_owned(),
             child,
             stderr_tail,
+            stderr_reader,
             exit: None,
         })
     }
@@ -121,8 +124,14 @@ impl Stage {
         self.exit
     }
 
-    /// The last lines the child wrote to stderr.
-    pub fn stderr_tail(&self) -> Vec<String> {
+    /// The last lines the child wrote to stderr; once it has ended, all of them up to its end.
+    pub fn stderr_tail(&mut self) -> Vec<String> {
+        if self.poll_exit().is_some()
+            && let Some(reader) = self.stderr_reader.take()
+        {
+            // The pipe closes with the child, so this returns as soon as the last line is in.
+            let _ = reader.join();
+        }
         self.stderr_tail
             .lock()
             .map(|tail| tail.iter().cloned().collect())
