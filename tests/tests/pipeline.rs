@@ -81,7 +81,11 @@ fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> serde_
 #[test]
 fn office_loop_is_mapped_within_target() {
     // Target 0.10 m (README); the margin keeps a busy CI machine from flaking.
-    run_world("office", 1200, 100, 0.15);
+    let metrics = run_world("office", 1200, 100, 0.15);
+    // The filter must beat the scan-matching motion integrated alone.
+    let dead_reckoning = number(&metrics, "dead_reckoning_ate_rmse_m");
+    assert!(number(&metrics, "ate_rmse_m") < dead_reckoning, "{metrics}");
+    assert!(number(&metrics, "map_corner_rmse_m") < 0.08, "{metrics}");
 }
 
 #[test]
