@@ -9,17 +9,17 @@ use ipc_types::{Domain, shutdown};
 use launch::config::{RunConfig, SourceKind};
 use launch::supervisor::{self, Display, Outcome, StagePlan};
 
-/// Runs lidar-sim -> feature-proc -> slam-proc -> map-sink as separate processes over
-/// iceoryx2 shared memory in a domain of their own, and writes trajectory, map, picture and
-/// metrics into the output directory.
+/// Runs a scan source (lidar-sim, lidar-replay or lidar-hokuyo) -> feature-proc -> slam-proc
+/// -> map-sink as separate processes over iceoryx2 shared memory in a domain of their own,
+/// and writes trajectory, map, picture and metrics into the output directory.
 ///
-/// Every setting can also come from a TOML file (--config) with the sections [sim],
-/// [features] and [slam]; options given here override the file. Keys a section does not
-/// know are refused by the process that reads it.
+/// Every setting can also come from a TOML file (--config) with the key `source` and the
+/// sections [sim], [replay], [hokuyo], [features] and [slam]; options given here override
+/// the file. Keys a section does not know are refused by the process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
-    /// TOML file with [sim], [features] and [slam] sections.
+    /// TOML file with `source` and [sim], [replay], [hokuyo], [features], [slam] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -56,7 +56,7 @@ struct Args {
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
     #[arg(long)]
     odometry: bool,
-    /// Output directory (default: runs/<world>).
+    /// Output directory (default: runs/<world or log name>).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// iceoryx2 domain of this run (default: a fresh one).
