@@ -249,3 +249,51 @@ fn a_bad_world_file_is_refused_by_name() {
     assert!(stderr.contains("waypoint"), "names the problem: {stderr}");
     assert!(shm_leftovers(&domain).is_empty());
 }
+
+#[test]
+fn a_killed_stage_is_named_and_stops_the_run() {
+    let domain = domain("sigkill");
+    let out = scratch("sigkill");
+    let mut child = Command::new(bin("slam-launch"))
+        .args(["--quiet", "--domain", &domain, "--out"])
+        .arg(&out)
+        .args(["--world", "office", "--frames", "2000", "--rate", "40"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("slam-launch");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while std::fs::read_to_string(out.join("trajectory.tum"))
+        .map(|t| t.lines().count())
+        .unwrap_or(0)
+        < 20
+    {
+        assert!(Instant::now() < deadline, "no poses after 60 s");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let pgrep = Command::new("pgrep")
+        .args(["-f", &format!("slam-proc --domain {domain} ")])
+        .output()
+        .expect("pgrep");
+    let pid: i32 = String::from_utf8_lossy(&pgrep.stdout)
+        .lines()
+        .next()
+        .and_then(|l| l.trim().parse().ok())
+        .expect("slam-proc's pid");
+    // SAFETY: kill(2) on a process of this test's own pipeline.
+    unsafe {
+        libc::kill(pid, libc::SIGKILL);
+    }
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("slam-proc died (killed by signal 9)"),
+        "{stderr}"
+    );
+    assert!(
+        shm_leftovers(&domain).is_empty(),
+        "{:?}",
+        shm_leftovers(&domain)
+    );
+}
