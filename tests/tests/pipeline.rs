@@ -254,7 +254,7 @@ fn a_bad_world_file_is_refused_by_name() {
 fn a_killed_stage_is_named_and_stops_the_run() {
     let domain = domain("sigkill");
     let out = scratch("sigkill");
-    let mut child = Command::new(bin("slam-launch"))
+    let child = Command::new(bin("slam-launch"))
         .args(["--quiet", "--domain", &domain, "--out"])
         .arg(&out)
         .args(["--world", "office", "--frames", "2000", "--rate", "40"])
