@@ -4,6 +4,16 @@ use std::time::{Duration, Instant};
 
 use ipc_types::prelude::*;
 
+/// Removes the domain's files from /dev/shm when the test ends; declared before the nodes,
+/// so it drops after them.
+struct Cleanup(Domain);
+
+impl Drop for Cleanup {
+    fn drop(&mut self) {
+        let _ = self.0.remove_leftovers();
+    }
+}
+
 fn unique_domain(tag: &str) -> Domain {
     let nanos = now_ns() % 1_000_000_000;
     Domain::new(&format!("t-{tag}-{}-{nanos}", std::process::id())).unwrap()
@@ -29,6 +39,7 @@ fn drain_until_end(inlet: &Inlet<LaserScan>) -> Vec<u64> {
 #[test]
 fn lossless_stream_delivers_every_message_in_order() {
     let domain = unique_domain("lossless");
+    let _cleanup = Cleanup(domain.clone());
     let publisher_domain = domain.clone();
     let sender = std::thread::spawn(move || {
         let node = publisher_domain.node("sender").unwrap();
@@ -61,6 +72,7 @@ fn lossless_stream_delivers_every_message_in_order() {
 #[test]
 fn latest_delivery_drops_the_oldest_and_never_blocks() {
     let domain = unique_domain("latest");
+    let _cleanup = Cleanup(domain.clone());
     let node = domain.node("both").unwrap();
     let outlet = Outlet::create(&domain, &node, topic::SCAN, Delivery::Latest, 0).unwrap();
     let inlet = Inlet::open(&node, topic::SCAN).unwrap();
@@ -86,6 +98,7 @@ fn latest_delivery_drops_the_oldest_and_never_blocks() {
 fn two_domains_never_cross() {
     let a = unique_domain("a");
     let b = unique_domain("b");
+    let _cleanup = (Cleanup(a.clone()), Cleanup(b.clone()));
     let node_a = a.node("pub").unwrap();
     let node_b = b.node("pub").unwrap();
     let out_a = Outlet::create(&a, &node_a, topic::SCAN, Delivery::Latest, 0).unwrap();
@@ -104,6 +117,7 @@ fn two_domains_never_cross() {
 #[test]
 fn history_reaches_a_late_subscriber() {
     let domain = unique_domain("history");
+    let _cleanup = Cleanup(domain.clone());
     let node = domain.node("n").unwrap();
     let outlet =
         Outlet::create(&domain, &node, topic::WORLD_CORNERS, Delivery::Lossless, 1).unwrap();
