@@ -7,7 +7,8 @@
 //! time are those of the cluster's middle, the best single guess for the step whose range the
 //! sensor reports (the shortest of the group). The window is cut to whole clusters.
 
-use std::f64::consts::{PI, TAU};
+use slam_geom::wrap_angle;
+use std::f64::consts::TAU;
 
 use crate::scip::{DataKind, MAX_CLUSTER, Ranging, SensorParams};
 
@@ -156,14 +157,10 @@ impl ScanGeometry {
     }
 }
 
-/// `angle` in [-pi, pi).
-fn wrap_angle(angle: f64) -> f64 {
-    (angle + PI).rem_euclid(TAU) - PI
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     const STEP: f64 = TAU / 1440.0;
 

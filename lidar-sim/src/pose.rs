@@ -1,18 +1,11 @@
 //! Planar poses and angle wrapping (docs/CONVENTIONS.md: a pose is `world_from_robot`).
 
-use std::f64::consts::{PI, TAU};
-
 use serde::{Deserialize, Serialize};
 
 /// A point or vector in the plane, metres.
 pub type Point2 = nalgebra::Vector2<f64>;
 
-/// Wraps an angle into `[-pi, pi)`.
-pub fn wrap_angle(a: f64) -> f64 {
-    let w = (a + PI).rem_euclid(TAU) - PI;
-    // `rem_euclid` rounds a tiny negative remainder up to exactly TAU, i.e. to +pi.
-    if w >= PI { w - TAU } else { w }
-}
+pub use slam_geom::wrap_angle;
 
 /// The transform `world_from_robot`: `p_world = R(yaw) * p_robot + (x, y)`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -62,6 +55,7 @@ impl Pose2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn wraps_into_half_open_interval() {

@@ -1,7 +1,5 @@
 //! The planar pose the recorder works with, independent of the IPC message types.
 
-use std::f64::consts::PI;
-
 /// A planar pose `world_from_robot` (docs/CONVENTIONS.md): metres and radians.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Pose2 {
@@ -26,13 +24,4 @@ impl Pose2 {
     }
 }
 
-/// Wraps an angle to `[-pi, pi)`.
-pub fn wrap_angle(a: f64) -> f64 {
-    let wrapped = (a + PI).rem_euclid(2.0 * PI) - PI;
-    // rem_euclid can round up to exactly 2*pi for inputs just below a multiple of it.
-    if wrapped >= PI {
-        wrapped - 2.0 * PI
-    } else {
-        wrapped
-    }
-}
+pub use slam_geom::wrap_angle;
