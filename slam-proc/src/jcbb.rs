@@ -175,6 +175,10 @@ pub(crate) struct Association {
     pub log_likelihood: f64,
     /// Whether the node budget ran out (the result is then the best found so far).
     pub truncated: bool,
+    /// `A = sum G^T D^-1 G` over the pairings: what they tell about the pose.
+    pub pose_information: Matrix3<f64>,
+    /// `b = sum G^T D^-1 nu`: the pose correction `-(P^-1 + A)^-1 b` fits them best.
+    pub pose_gradient: Vector3<f64>,
 }
 
 /// The search, with buffers kept between calls.
@@ -251,6 +255,8 @@ impl Jcbb {
                 nis: 0.0,
                 log_likelihood: 0.0,
                 truncated,
+                pose_information: Matrix3::zeros(),
+                pose_gradient: Vector3::zeros(),
             };
         };
         // ln det C = sum ln det D_i + ln det P + ln det(P^-1 + A) (matrix determinant lemma).
@@ -262,6 +268,8 @@ impl Jcbb {
             nis: self.best_nis,
             log_likelihood: -0.5 * (self.best_nis + log_det + dims * TAU.ln()),
             truncated,
+            pose_information: sum.a,
+            pose_gradient: sum.b,
         }
     }
 
@@ -446,6 +454,14 @@ mod tests {
                 .copy_from(&(o.covariance + k.covariance));
             g.view_mut((4 * i, 0), (4, 3)).copy_from(&o.pose_jacobian);
         }
+        // What the pairings say about the pose: G^T D^-1 G and G^T D^-1 nu.
+        let d_inverse = c.clone().try_inverse().unwrap();
+        let information = g.transpose() * &d_inverse * &g;
+        let gradient = g.transpose() * &d_inverse * &nu;
+        assert!(
+            (result.pose_information - &information).abs().max() < 1e-6 * information.abs().max()
+        );
+        assert!((result.pose_gradient - &gradient).abs().max() < 1e-6 * gradient.abs().max());
         c += &g * p * g.transpose();
         let chol = nalgebra::Cholesky::new(c).unwrap();
         let nis = nu.dot(&chol.solve(&nu));

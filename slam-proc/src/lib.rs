@@ -6,10 +6,11 @@
 //!    matches gated by a Mahalanobis test under a constant-velocity or odometry prior, then
 //!    a weighted Kabsch fit refined with headings and the prior);
 //! 2. moves every particle by that motion composed in its own frame, with noise that grows
-//!    with the step;
+//!    with the step (or, on odometry alone, the odometry's own uncertainty);
 //! 3. associates the corners with each particle's map by Joint Compatibility Branch and
 //!    Bound, the shared pose uncertainty included, over the map corners near each
-//!    observation (a spatial hash grid);
+//!    observation (a spatial hash grid), then draws the particle's pose from its
+//!    prediction corrected by the associated corners (the FastSLAM 2.0 proposal);
 //! 4. updates matched corners with a 4-D Kalman filter, starts tentative corners for the
 //!    unexplained ones and drops tentative corners that are not seen again, and weights the
 //!    particles in log space by the joint likelihood of the scan;

@@ -147,6 +147,37 @@ pub(crate) fn spd_solve3(m: &Matrix3<f64>, b: &Vector3<f64>) -> Option<Vector3<f
     Some(x)
 }
 
+/// A draw from the Gaussian with information matrix `m` (symmetric positive definite) and
+/// mean `-m^-1 b`, given three standard normal numbers `n`: the mean plus
+/// `L^-T D^-1/2 n` for `m = L D L^T`, whose covariance is `L^-T D^-1 L^-1 = m^-1`. One
+/// factorisation for both, and no inverse formed.
+pub(crate) fn sample_information_form3(
+    m: &Matrix3<f64>,
+    b: &Vector3<f64>,
+    n: &Vector3<f64>,
+) -> Option<Vector3<f64>> {
+    let (l, d, r) = ldl::<3>(|i, j| m[(i, j)])?;
+    // m x = -b: forward with L, scale by D^-1, then back with L^T; the noise
+    // D^-1/2 n joins before the back substitution, which is the same L^T.
+    let mut y = [0.0; 3];
+    for i in 0..3 {
+        let mut s = -b[i];
+        for k in 0..i {
+            s -= l[i][k] * y[k];
+        }
+        y[i] = s;
+    }
+    let mut x = Vector3::zeros();
+    for i in (0..3).rev() {
+        let mut s = y[i] * r[i] + n[i] / d[i].sqrt();
+        for k in i + 1..3 {
+            s -= l[k][i] * x[k];
+        }
+        x[i] = s;
+    }
+    Some(x)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -174,5 +205,27 @@ mod tests {
                 < 1e-12
         );
         assert!(spd_solve3(&(m * f64::NAN), &b).is_none());
+    }
+
+    #[test]
+    fn information_form_draws_have_the_right_mean_and_covariance() {
+        let m = Matrix3::new(2.0, 0.5, 0.1, 0.5, 1.0, 0.2, 0.1, 0.2, 3.0);
+        let b = Vector3::new(1.0, -2.0, 0.5);
+        let covariance = m.try_inverse().unwrap();
+        let mean = -covariance * b;
+        let draw = |n: Vector3<f64>| sample_information_form3(&m, &b, &n).unwrap();
+        assert!((draw(Vector3::zeros()) - mean).abs().max() < 1e-12);
+        // The draw is affine in n: mean + T n. Then T T^T, the sum over the unit vectors
+        // of (draw - mean)(draw - mean)^T, must be the covariance m^-1.
+        let mut t_t = Matrix3::zeros();
+        for i in 0..3 {
+            let column = draw(Vector3::ith(i, 1.0)) - mean;
+            t_t += column * column.transpose();
+        }
+        assert!(
+            (t_t - covariance).abs().max() < 1e-12,
+            "{t_t} vs {covariance}"
+        );
+        assert!(sample_information_form3(&(-m), &b, &Vector3::zeros()).is_none());
     }
 }

@@ -157,6 +157,20 @@ impl CornerMap {
         }
     }
 
+    /// Removes a corner, confirmed or tentative.
+    pub fn remove(&mut self, id: u32, confirm_at: u32) {
+        let Some(state) = self.get(id).copied() else {
+            return;
+        };
+        *self.corners.get_mut(id as usize) = None;
+        self.grid.remove(id, state.mean.x, state.mean.y);
+        if state.observations >= confirm_at {
+            self.confirmed -= 1;
+        } else {
+            Arc::make_mut(&mut self.tentative).retain(|t| t.id != id);
+        }
+    }
+
     /// Number of confirmed corners.
     pub fn confirmed_count(&self) -> usize {
         self.confirmed
@@ -231,5 +245,13 @@ mod tests {
         let confirmed = map.confirmed(2);
         assert_eq!(confirmed.len(), 1);
         assert_eq!((confirmed[0].x, confirmed[0].observations), (1.01, 2));
+
+        // Removing works for both kinds, and is gone from the grid.
+        map.remove(kept, 2);
+        map.remove(unseen, 2);
+        assert_eq!((map.confirmed_count(), map.tentative_count()), (0, 0));
+        assert!(map.get(kept).is_none());
+        map.near(1.0, 0.0, 1.0, &mut out);
+        assert!(out.is_empty());
     }
 }

@@ -26,10 +26,21 @@ use crate::rigid_fit::{Prior, kabsch, refine};
 pub(crate) struct Motion {
     pub delta: Pose2,
     pub covariance: Matrix3<f64>,
-    /// Whether corners fixed it; otherwise it is the prior alone.
-    pub fitted: bool,
+    /// What fixed it.
+    pub source: MotionSource,
     /// Matches the fit used.
     pub inliers: usize,
+}
+
+/// Where a motion estimate comes from, which decides how far the particles spread.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MotionSource {
+    /// Matched corners (fused with the prior): the fit's residual error.
+    Corners,
+    /// Odometry alone, with the covariance it reports.
+    Odometry,
+    /// Constant velocity alone: a guess.
+    ConstantVelocity,
 }
 
 /// A candidate match: current corner `current` may be previous corner `previous`.
@@ -80,15 +91,20 @@ impl MotionEstimator {
             .last_stamp
             .and_then(|last| stamp_ns.checked_sub(last))
             .filter(|&d| d > 0);
-        let prior = match (odometry, &self.last_odometry) {
-            (Some(now), Some(before)) => odometry_prior(before, now, config),
-            _ => self.constant_velocity_prior(interval, config),
+        let (prior, prior_source) = match (odometry, &self.last_odometry) {
+            (Some(now), Some(before)) => {
+                (odometry_prior(before, now, config), MotionSource::Odometry)
+            }
+            _ => (
+                self.constant_velocity_prior(interval, config),
+                MotionSource::ConstantVelocity,
+            ),
         };
         let motion = match &self.previous {
             None => Motion {
                 delta: Pose2::IDENTITY,
                 covariance: Matrix3::zeros(),
-                fitted: true,
+                source: MotionSource::Corners,
                 inliers: 0,
             },
             Some(previous) => self
@@ -96,7 +112,7 @@ impl MotionEstimator {
                 .unwrap_or(Motion {
                     delta: prior.delta,
                     covariance: prior.covariance,
-                    fitted: false,
+                    source: prior_source,
                     inliers: 0,
                 }),
         };
@@ -194,7 +210,7 @@ impl MotionEstimator {
         within_limits(&estimate, config).then_some(Motion {
             delta: estimate,
             covariance,
-            fitted: true,
+            source: MotionSource::Corners,
             inliers: matched.len(),
         })
     }
@@ -401,7 +417,7 @@ mod tests {
             current[0].z.w,
         );
         let motion = estimator.estimate(25_000_000, &current, None, &config);
-        assert!(motion.fitted);
+        assert_eq!(motion.source, MotionSource::Corners);
         assert_eq!(motion.inliers, 4);
         assert!(
             (motion.delta.x - truth.x).abs() < 1e-3,
@@ -423,7 +439,7 @@ mod tests {
         estimator.estimate(10, &current, None, &config);
         // Same interval, a single corner: the last step again.
         let motion = estimator.estimate(20, &current[..1], None, &config);
-        assert!(!motion.fitted);
+        assert_eq!(motion.source, MotionSource::ConstantVelocity);
         assert!((motion.delta.x - 0.1).abs() < 1e-3 && (motion.delta.yaw - 0.05).abs() < 1e-3);
         // Twice the interval: twice the step.
         let motion = estimator.estimate(40, &[], None, &config);
@@ -444,7 +460,7 @@ mod tests {
         // Odometry says 0.15 m +- 0.1 m; the corners say 0.1 m +- 1 cm and win.
         let current = seen_from(&truth, &previous);
         let motion = estimator.estimate(10, &current, Some(&odom(5.15, 0.02, 1e-2)), &config);
-        assert!(motion.fitted);
+        assert_eq!(motion.source, MotionSource::Corners);
         assert!(
             (motion.delta.x - truth.x).abs() < 5e-3,
             "{:?}",
@@ -452,7 +468,7 @@ mod tests {
         );
         // Without corners the odometry increment is the motion.
         let motion = estimator.estimate(20, &[], Some(&odom(5.35, 0.02, 1e-2 + 1e-4)), &config);
-        assert!(!motion.fitted);
+        assert_eq!(motion.source, MotionSource::Odometry);
         let expected = Pose2::new(5.15, 1.0, 0.02).between(&Pose2::new(5.35, 1.0, 0.02));
         assert!(
             (motion.delta.x - expected.x).abs() < 1e-9

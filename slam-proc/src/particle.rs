@@ -3,12 +3,17 @@
 
 use std::ops::Range;
 
+use nalgebra::{Vector3, Vector4};
+use rand::Rng;
+use rand_distr::StandardNormal;
+
 use crate::angle::wrap_angle;
 use crate::chi2::Gates;
 use crate::config::SlamConfig;
 use crate::corner_model::{Frame, WorldObservation};
-use crate::jcbb::{Jcbb, Pairing, PoseUncertainty};
+use crate::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
 use crate::kalman;
+use crate::linalg::sample_information_form3;
 use crate::map::{CornerMap, CornerState};
 use crate::observation::Prepared;
 use crate::pose::Pose2;
@@ -31,6 +36,9 @@ pub(crate) struct ScanContext<'a> {
     pub pose: PoseUncertainty,
     pub gates: &'a Gates,
     pub config: &'a SlamConfig,
+    /// Whether the update draws each particle's pose (the observation proposal) rather
+    /// than keep the one the prediction drew.
+    pub draw_pose: bool,
 }
 
 /// Buffers of one worker, reused across particles so the update does not allocate once
@@ -41,6 +49,10 @@ pub(crate) struct Scratch {
     pairings: Vec<Pairing>,
     lists: Vec<Range<usize>>,
     ids: Vec<u32>,
+    /// The map corners within the search radius of each observation: `near_lists[i]`
+    /// ranges over `near`.
+    near: Vec<u32>,
+    near_lists: Vec<Range<usize>>,
     observed: Vec<u32>,
     jcbb: Jcbb,
 }
@@ -55,23 +67,33 @@ impl Particle {
         }
     }
 
-    /// Associates the scan's corners with this particle's map (JCBB), updates the matched
-    /// corners, starts tentative ones for the unexplained, ages the tentative ones, and
-    /// returns the log-likelihood of the scan for the weight.
-    pub fn update(&mut self, context: &ScanContext<'_>, scratch: &mut Scratch) -> f64 {
+    /// Associates the scan's corners with this particle's map (JCBB) from its predicted
+    /// pose, draws the pose from the prediction corrected by the associated corners (with
+    /// the observation proposal), updates the matched corners, starts tentative ones for the
+    /// unexplained, ages the tentative ones, and returns the log-likelihood of the scan
+    /// for the weight.
+    pub fn update(
+        &mut self,
+        context: &ScanContext<'_>,
+        scratch: &mut Scratch,
+        rng: &mut impl Rng,
+    ) -> f64 {
         let config = context.config;
         let gate = context.gates.individual();
         scratch.world.clear();
-        let frame = Frame::new(&self.pose);
+        let mut frame = Frame::new(&self.pose);
         scratch
             .world
             .extend(context.observations.iter().map(|o| frame.to_world(o)));
 
         scratch.pairings.clear();
         scratch.lists.clear();
+        scratch.near.clear();
+        scratch.near_lists.clear();
         let radius_squared = config.search_radius * config.search_radius;
         for observation in &scratch.world {
             let start = scratch.pairings.len();
+            let near_start = scratch.near.len();
             scratch.ids.clear();
             self.map.near(
                 observation.z.x,
@@ -90,6 +112,7 @@ impl Particle {
                 if dx * dx + dy * dy > radius_squared {
                     continue;
                 }
+                scratch.near.push(id);
                 scratch
                     .pairings
                     .extend(Pairing::new(observation, id, corner, &context.pose, gate));
@@ -101,6 +124,7 @@ impl Particle {
                     .then(a.corner.cmp(&b.corner))
             });
             scratch.lists.push(start..scratch.pairings.len());
+            scratch.near_lists.push(near_start..scratch.near.len());
         }
 
         let association = scratch.jcbb.solve(
@@ -110,9 +134,24 @@ impl Particle {
             context.gates.joint(),
             config.jcbb_max_nodes,
         );
+        // The weight is the likelihood of the scan under the predicted pose, its
+        // uncertainty included: the same whether or not the pose is then corrected.
         let unexplained = scratch.world.len() - association.pairings;
         let log_likelihood =
             association.log_likelihood + unexplained as f64 * config.new_corner_log_likelihood;
+
+        if context.draw_pose
+            && association.pairings > 0
+            && let Some(corrected) = self.corrected_pose(context, &association, rng)
+        {
+            let predicted = self.pose;
+            self.pose = corrected;
+            self.increment = self.increment.compose(&predicted.between(&corrected));
+            frame = Frame::new(&self.pose);
+            for (world, observation) in scratch.world.iter_mut().zip(context.observations) {
+                *world = frame.to_world(observation);
+            }
+        }
 
         scratch.observed.clear();
         for (i, observation) in scratch.world.iter().enumerate() {
@@ -120,6 +159,9 @@ impl Particle {
                 Some(index) => {
                     let pairing = &scratch.pairings[index];
                     scratch.observed.push(pairing.corner);
+                    // The gain comes from `(P + R)^-1` at the predicted pose; after a pose
+                    // correction `R` has turned by a fraction of a degree. The Joseph form
+                    // gives the right covariance for any gain, so it stays consistent.
                     self.map
                         .update(pairing.corner, config.confirm_observations, |corner| {
                             kalman::update_with_inverse(
@@ -130,6 +172,8 @@ impl Particle {
                                 &pairing.d_inverse,
                             )
                         });
+                    let near = &scratch.near[scratch.near_lists[i].clone()];
+                    self.drop_duplicate_of(pairing.corner, near, config);
                 }
                 // An observation that passed some corner's individual gate but fits no
                 // joint hypothesis is ambiguous: it starts no corner, or the map would
@@ -163,6 +207,30 @@ impl Particle {
         log_likelihood
     }
 
+    /// A draw from the pose posterior given the associated corners: the Gaussian with
+    /// information `P^-1 + A` and mean `predicted - (P^-1 + A)^-1 b` (one Gauss-Newton step
+    /// of the linearised observations from the predicted pose). `None` when the
+    /// information is not positive definite, which leaves the prediction in place.
+    fn corrected_pose(
+        &self,
+        context: &ScanContext<'_>,
+        association: &Association,
+        rng: &mut impl Rng,
+    ) -> Option<Pose2> {
+        let information = context.pose.information + association.pose_information;
+        let normal = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
+        let step = sample_information_form3(&information, &association.pose_gradient, &normal)?;
+        let pose = Pose2::new(
+            self.pose.x + step.x,
+            self.pose.y + step.y,
+            wrap_angle(self.pose.yaw + step.z),
+        );
+        [pose.x, pose.y, pose.yaw]
+            .iter()
+            .all(|v| v.is_finite())
+            .then_some(pose)
+    }
+
     /// Whether the map has a corner within the duplicate radius with a similar heading.
     fn has_similar_corner(
         &self,
@@ -170,13 +238,173 @@ impl Particle {
         config: &SlamConfig,
         ids: &mut Vec<u32>,
     ) -> bool {
-        let (x, y) = (observation.z.x, observation.z.y);
         ids.clear();
-        self.map.near(x, y, config.duplicate_radius, ids);
-        let radius_squared = config.duplicate_radius * config.duplicate_radius;
-        ids.iter().filter_map(|&id| self.map.get(id)).any(|corner| {
-            (corner.mean.x - x).powi(2) + (corner.mean.y - y).powi(2) <= radius_squared
-                && wrap_angle(corner.mean.z - observation.z.z).abs() <= config.duplicate_heading
-        })
+        self.map.near(
+            observation.z.x,
+            observation.z.y,
+            config.duplicate_radius,
+            ids,
+        );
+        ids.iter()
+            .filter_map(|&id| self.map.get(id))
+            .any(|corner| similar(&corner.mean, &observation.z, config))
+    }
+
+    /// Keeps the map free of duplicates after corner `id` moved: a similar corner among
+    /// `near` (the corners near the observation that moved it, which covers the duplicate
+    /// radius around it) is one place mapped twice, e.g. a corner whose extracted heading
+    /// depends on the viewpoint, or one remapped before a loop closed. The one seen fewer
+    /// times goes (the younger among equals).
+    fn drop_duplicate_of(&mut self, id: u32, near: &[u32], config: &SlamConfig) {
+        let Some(corner) = self.map.get(id).copied() else {
+            return;
+        };
+        for &other in near {
+            let Some(neighbour) = self.map.get(other).copied() else {
+                continue;
+            };
+            if other == id || !similar(&corner.mean, &neighbour.mean, config) {
+                continue;
+            }
+            let neighbour_weaker = neighbour.observations < corner.observations
+                || (neighbour.observations == corner.observations && other > id);
+            let weaker = if neighbour_weaker { other } else { id };
+            self.map.remove(weaker, config.confirm_observations);
+            if weaker == id {
+                return;
+            }
+        }
+    }
+}
+
+/// Whether two corners `(x, y, heading, angle)` are one for the map: within the duplicate
+/// radius, headings within the duplicate angle.
+fn similar(a: &Vector4<f64>, b: &Vector4<f64>, config: &SlamConfig) -> bool {
+    let radius = config.duplicate_radius;
+    (a.x - b.x).powi(2) + (a.y - b.y).powi(2) <= radius * radius
+        && wrap_angle(a.z - b.z).abs() <= config.duplicate_heading
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix4, Vector2};
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// The step the prediction made.
+    const STEP: Pose2 = Pose2::new(0.1, 0.01, 0.02);
+
+    /// Four well-known corners around the origin, and what a robot at `pose` sees of them.
+    fn scene(pose: &Pose2) -> (CornerMap, Vec<Prepared>) {
+        let corners = [
+            (3.0, 1.0, 0.5),
+            (-2.0, 4.0, 2.0),
+            (1.0, -3.0, -1.0),
+            (5.0, -2.0, 2.8),
+        ];
+        let mut map = CornerMap::new(3.0);
+        let inverse = pose.inverse();
+        let mut observations = Vec::new();
+        for (x, y, heading) in corners {
+            map.insert(
+                CornerState {
+                    mean: Vector4::new(x, y, heading, 1.5),
+                    covariance: Matrix4::identity() * 1e-6,
+                    observations: 10,
+                },
+                2,
+            );
+            let local = inverse.transform(Vector2::new(x, y));
+            observations.push(Prepared {
+                z: Vector4::new(local.x, local.y, wrap_angle(heading - pose.yaw), 1.5),
+                covariance: Matrix4::identity() * 1e-6,
+            });
+        }
+        (map, observations)
+    }
+
+    fn update(draw_pose: bool, predicted: Pose2, truth: &Pose2) -> Particle {
+        let (map, observations) = scene(truth);
+        update_in(map, &observations, draw_pose, predicted)
+    }
+
+    fn update_in(
+        map: CornerMap,
+        observations: &[Prepared],
+        draw_pose: bool,
+        predicted: Pose2,
+    ) -> Particle {
+        let config = SlamConfig::default();
+        let mut gates = Gates::new(config.association_probability);
+        gates.ensure(observations.len());
+        let context = ScanContext {
+            observations,
+            // The prediction is uncertain by 5 cm and 0.02 rad.
+            pose: PoseUncertainty::from_variances(2.5e-3, 2.5e-3, 4e-4),
+            gates: &gates,
+            config: &config,
+            draw_pose,
+        };
+        let mut particle = Particle {
+            pose: predicted,
+            increment: STEP,
+            ..Particle::new(map)
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        particle.update(&context, &mut Scratch::default(), &mut rng);
+        particle
+    }
+
+    #[test]
+    fn the_observation_proposal_pulls_the_pose_onto_the_map() {
+        let truth = Pose2::new(0.5, 0.2, 0.3);
+        let predicted = Pose2::new(0.55, 0.17, 0.31);
+        // Without it the particle keeps its prediction (and its error).
+        let kept = update(false, predicted, &truth);
+        assert_eq!(kept.pose, predicted);
+        // With it the particle lands on the pose its well-known map implies, within the
+        // posterior's spread (about 1 mm: four corners known to 1 mm).
+        let drawn = update(true, predicted, &truth);
+        let error = (drawn.pose.x - truth.x).hypot(drawn.pose.y - truth.y);
+        assert!(error < 5e-3, "{:?}", drawn.pose);
+        assert!(wrap_angle(drawn.pose.yaw - truth.yaw).abs() < 2e-3);
+        // The increment follows the correction: the previous pose composed with it is the
+        // drawn pose.
+        let previous = predicted.compose(&STEP.inverse());
+        let reached = previous.compose(&drawn.increment);
+        assert!((reached.x - drawn.pose.x).abs() < 1e-12);
+        assert!((reached.y - drawn.pose.y).abs() < 1e-12);
+        assert!(wrap_angle(reached.yaw - drawn.pose.yaw).abs() < 1e-12);
+        // The corners were updated from the corrected pose: they stay where they were.
+        let corner = drawn.map.get(0).map(|c| c.mean).unwrap_or_default();
+        assert!(
+            (corner.x - 3.0).abs() < 2e-3 && (corner.y - 1.0).abs() < 2e-3,
+            "{corner}"
+        );
+        let moved = kept.map.get(0).map(|c| c.mean).unwrap_or_default();
+        assert!((moved.x - 3.0).abs() > (corner.x - 3.0).abs());
+    }
+
+    #[test]
+    fn a_corner_mapped_twice_keeps_the_better_copy() {
+        let truth = Pose2::new(0.5, 0.2, 0.3);
+        let (mut map, observations) = scene(&truth);
+        // Corner 0 again, 0.25 m off and 0.2 rad turned, seen only three times: the same
+        // place mapped twice (as a viewpoint-dependent extraction would).
+        let copy = map.insert(
+            CornerState {
+                mean: Vector4::new(3.2, 1.15, 0.7, 1.5),
+                covariance: Matrix4::identity() * 1e-6,
+                observations: 3,
+            },
+            2,
+        );
+        assert_eq!(map.confirmed_count(), 5);
+        let particle = update_in(map, &observations, false, truth);
+        // Observing corner 0 moved it; its weaker copy went.
+        assert!(particle.map.get(copy).is_none());
+        assert!(particle.map.get(0).is_some());
+        assert_eq!(particle.map.confirmed_count(), 4);
     }
 }

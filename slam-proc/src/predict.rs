@@ -6,6 +6,7 @@ use rand::Rng;
 use rand_distr::StandardNormal;
 
 use crate::config::SlamConfig;
+use crate::motion::{Motion, MotionSource};
 use crate::pose::Pose2;
 
 /// Standard deviations of one step's noise, in the particle's frame before the step.
@@ -16,23 +17,37 @@ pub(crate) struct MotionNoise {
 }
 
 impl MotionNoise {
-    /// The noise of a step `delta`; `fitted` is false when no corner fit backs the step.
-    pub fn for_step(delta: &Pose2, fitted: bool, config: &SlamConfig) -> Self {
-        let (t, r) = (delta.translation_norm(), delta.yaw.abs());
-        let scale = if fitted {
-            1.0
-        } else {
-            config.fallback_noise_scale
+    /// The noise of a step: the course model (a floor plus terms proportional to the
+    /// translation and rotation) for a corner fit; for odometry alone, the odometry's own
+    /// reported uncertainty (floored by the motion estimate), since the model's per-step
+    /// floor would random-walk the particles far faster than good odometry drifts; for
+    /// constant velocity, which only guesses, the model times `fallback_noise_scale`.
+    pub fn for_step(motion: &Motion, config: &SlamConfig) -> Self {
+        let (t, r) = (motion.delta.translation_norm(), motion.delta.yaw.abs());
+        let model = Self {
+            sigma_xy: config.noise_xy_base
+                + config.noise_xy_per_metre * t
+                + config.noise_xy_per_radian * r,
+            sigma_yaw: config.noise_yaw_base
+                + config.noise_yaw_per_radian * r
+                + config.noise_yaw_per_metre * t,
         };
-        Self {
-            sigma_xy: scale
-                * (config.noise_xy_base
-                    + config.noise_xy_per_metre * t
-                    + config.noise_xy_per_radian * r),
-            sigma_yaw: scale
-                * (config.noise_yaw_base
-                    + config.noise_yaw_per_radian * r
-                    + config.noise_yaw_per_metre * t),
+        match motion.source {
+            MotionSource::Corners => model,
+            MotionSource::Odometry => {
+                let c = &motion.covariance;
+                // The noise is isotropic in translation: the larger axis covers both.
+                let reported_xy = c[(0, 0)].max(c[(1, 1)]).max(0.0).sqrt();
+                let reported_yaw = c[(2, 2)].max(0.0).sqrt();
+                Self {
+                    sigma_xy: reported_xy,
+                    sigma_yaw: reported_yaw,
+                }
+            }
+            MotionSource::ConstantVelocity => Self {
+                sigma_xy: config.fallback_noise_scale * model.sigma_xy,
+                sigma_yaw: config.fallback_noise_scale * model.sigma_yaw,
+            },
         }
     }
 
@@ -73,13 +88,25 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     #[test]
-    fn noise_grows_with_the_step_and_without_a_fit() {
+    fn noise_grows_with_the_step_and_follows_the_source() {
         let config = SlamConfig::default();
-        let small = MotionNoise::for_step(&Pose2::new(0.01, 0.0, 0.0), true, &config);
-        let large = MotionNoise::for_step(&Pose2::new(0.3, 0.0, 0.2), true, &config);
-        let guess = MotionNoise::for_step(&Pose2::new(0.3, 0.0, 0.2), false, &config);
+        let motion = |x: f64, yaw: f64, source: MotionSource, variance: f64| Motion {
+            delta: Pose2::new(x, 0.0, yaw),
+            covariance: Matrix3::identity() * variance,
+            source,
+            inliers: 0,
+        };
+        let noise = |m: Motion| MotionNoise::for_step(&m, &config);
+        let small = noise(motion(0.01, 0.0, MotionSource::Corners, 0.0));
+        let large = noise(motion(0.3, 0.2, MotionSource::Corners, 0.0));
         assert!(small.sigma_xy < large.sigma_xy && small.sigma_yaw < large.sigma_yaw);
+        let guess = noise(motion(0.3, 0.2, MotionSource::ConstantVelocity, 0.0));
         assert!((guess.sigma_xy - config.fallback_noise_scale * large.sigma_xy).abs() < 1e-15);
+        // Odometry spreads the particles as widely as it says it errs (the motion estimate
+        // has already floored that), however tight.
+        let odometry = noise(motion(0.3, 0.2, MotionSource::Odometry, 1e-6));
+        assert!((odometry.sigma_xy - 1e-3).abs() < 1e-15);
+        assert!((odometry.sigma_yaw - 1e-3).abs() < 1e-15);
     }
 
     #[test]

@@ -13,7 +13,11 @@ const WORDS_PER_PARTICLE: u128 = 1 << 32;
 enum Purpose {
     Particle = 0,
     Resample = 1,
+    Proposal = 2,
 }
+
+/// Purposes per scan.
+const PURPOSES: u64 = 3;
 
 /// The keyed generator, built once from the seed and repositioned for each use.
 #[derive(Debug, Clone)]
@@ -30,8 +34,8 @@ impl Streams {
 
     fn at(&self, scan: u64, purpose: Purpose, offset: u128) -> ChaCha8Rng {
         let mut rng = self.base.clone();
-        // Two purposes per scan: the scan index fills the high bits of the stream id.
-        rng.set_stream(scan.wrapping_mul(2).wrapping_add(purpose as u64));
+        // One stream id per scan and purpose.
+        rng.set_stream(scan.wrapping_mul(PURPOSES).wrapping_add(purpose as u64));
         rng.set_word_pos(offset);
         rng
     }
@@ -41,6 +45,15 @@ impl Streams {
         self.at(
             scan,
             Purpose::Particle,
+            particle as u128 * WORDS_PER_PARTICLE,
+        )
+    }
+
+    /// The generator of particle `particle`'s pose correction in scan `scan`.
+    pub fn proposal(&self, scan: u64, particle: usize) -> ChaCha8Rng {
+        self.at(
+            scan,
+            Purpose::Proposal,
             particle as u128 * WORDS_PER_PARTICLE,
         )
     }
@@ -64,6 +77,7 @@ mod tests {
         assert_ne!(a, streams.particle(3, 6).random::<u64>());
         assert_ne!(a, streams.particle(4, 5).random::<u64>());
         assert_ne!(a, streams.resample(3).random::<u64>());
+        assert_ne!(a, streams.proposal(3, 5).random::<u64>());
         assert_ne!(a, Streams::new(8).particle(3, 5).random::<u64>());
     }
 }

@@ -139,7 +139,7 @@ impl FastSlam {
         let noise = if self.scans == 0 {
             MotionNoise::NONE
         } else {
-            MotionNoise::for_step(&motion.delta, motion.fitted, config)
+            MotionNoise::for_step(&motion, config)
         };
         if self.scans > 0 {
             let (streams, scan, delta) = (&self.streams, self.scans, motion.delta);
@@ -165,12 +165,17 @@ impl FastSlam {
             ),
             gates: &self.gates,
             config,
+            // The first pose is the map frame: nothing to draw.
+            draw_pose: config.observation_proposal && self.scans > 0,
         };
-        self.particles
-            .par_iter_mut()
-            .for_each_init(Scratch::default, |scratch, particle| {
-                particle.log_weight += particle.update(&context, scratch);
-            });
+        let (streams, scan) = (&self.streams, self.scans);
+        self.particles.par_iter_mut().enumerate().for_each_init(
+            Scratch::default,
+            |scratch, (i, particle)| {
+                let mut rng = streams.proposal(scan, i);
+                particle.log_weight += particle.update(&context, scratch, &mut rng);
+            },
+        );
         let update_done = Instant::now();
 
         let (effective_particles, best, mean, covariance) = self.weigh_and_resample();

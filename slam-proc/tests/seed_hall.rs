@@ -4,40 +4,20 @@
 
 use std::time::Instant;
 
-use feature_proc::{Extractor, FeatureConfig, seed_hall};
+mod common;
+
+use common::recorded::seed_hall_corners;
+use feature_proc::FeatureConfig;
 use slam_proc::{FastSlam, MapCorner, Observation, Pose2, SlamConfig, wrap_angle};
 
 fn corners() -> Vec<Vec<Observation>> {
-    let path = seed_hall::default_path();
-    let scans = seed_hall::load(&path).unwrap_or_else(|e| {
-        panic!(
-            "the seed-hall recording is required at {} ({e})",
-            path.display()
-        )
-    });
-    assert_eq!(scans.len(), 400);
     // The course code keeps 15 m for SLAM: far corners are sparse and noisy.
-    let mut extractor = Extractor::new(FeatureConfig {
+    let corners = seed_hall_corners(FeatureConfig {
         max_range: 15.0,
         ..FeatureConfig::default()
     });
-    scans
-        .iter()
-        .map(|ranges| {
-            let features = extractor.extract(&seed_hall::scan_input(ranges)).unwrap();
-            features
-                .corners
-                .iter()
-                .map(|c| Observation {
-                    x: c.x,
-                    y: c.y,
-                    heading: c.heading,
-                    angle: c.angle,
-                    covariance: c.covariance,
-                })
-                .collect()
-        })
-        .collect()
+    assert_eq!(corners.len(), 400);
+    corners
 }
 
 struct Outcome {

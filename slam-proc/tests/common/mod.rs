@@ -3,6 +3,8 @@
 
 #![allow(dead_code)] // each test binary uses a different part
 
+pub mod recorded;
+
 use std::f64::consts::{PI, TAU};
 
 use nalgebra::{Matrix4, Vector2, Vector4};
