@@ -4,7 +4,7 @@
 //! Its covariance is `G_z S G_z^T` with `G_z = diag(R, 1, 1)`; the pose's own uncertainty
 //! enters through `G_x`, the Jacobian with respect to `(x, y, yaw)`.
 
-use nalgebra::{Matrix4, Matrix4x3, Vector4};
+use nalgebra::{Matrix4, Matrix4x3, Vector2, Vector4};
 
 use crate::angle::wrap_angle;
 use crate::observation::Prepared;
@@ -17,8 +17,23 @@ pub(crate) struct WorldObservation {
     pub z: Vector4<f64>,
     /// Covariance from the sensor noise alone, `G_z S G_z^T`.
     pub covariance: Matrix4<f64>,
-    /// `d w / d (x, y, yaw)` of the pose.
-    pub pose_jacobian: Matrix4x3<f64>,
+    /// `d (x, y) / d yaw`: how turning the pose moves the corner. The rest of the pose
+    /// Jacobian is constant (see [`WorldObservation::pose_jacobian`]).
+    pub lever: Vector2<f64>,
+}
+
+impl WorldObservation {
+    /// `d w / d (x, y, yaw)` of the pose: `[[1, 0, lx], [0, 1, ly], [0, 0, 1], [0, 0, 0]]`
+    /// (position and heading move with the pose, the opening angle does not).
+    pub fn pose_jacobian(&self) -> Matrix4x3<f64> {
+        let mut g = Matrix4x3::zeros();
+        g[(0, 0)] = 1.0;
+        g[(1, 1)] = 1.0;
+        g[(0, 2)] = self.lever.x;
+        g[(1, 2)] = self.lever.y;
+        g[(2, 2)] = 1.0;
+        g
+    }
 }
 
 /// Takes `observation` from the sensor frame of `pose` to the world.
@@ -77,16 +92,10 @@ impl Frame {
             covariance[(i, 0)] = c * a - s * b;
             covariance[(i, 1)] = s * a + c * b;
         }
-        let mut pose_jacobian = Matrix4x3::zeros();
-        pose_jacobian[(0, 0)] = 1.0;
-        pose_jacobian[(1, 1)] = 1.0;
-        pose_jacobian[(0, 2)] = -s * x - c * y;
-        pose_jacobian[(1, 2)] = c * x - s * y;
-        pose_jacobian[(2, 2)] = 1.0;
         WorldObservation {
             z,
             covariance,
-            pose_jacobian,
+            lever: Vector2::new(-s * x - c * y, c * x - s * y),
         }
     }
 }
@@ -123,7 +132,7 @@ mod tests {
             }
             let numeric = innovation(&to_world(&moved, &observation).z, &w.z) / h;
             for row in 0..4 {
-                assert!((numeric[row] - w.pose_jacobian[(row, k)]).abs() < 1e-5);
+                assert!((numeric[row] - w.pose_jacobian()[(row, k)]).abs() < 1e-5);
             }
         }
         // The covariance is G_z S G_z^T; heading gets the yaw.

@@ -75,18 +75,18 @@ impl Pairing {
     ) -> Option<Self> {
         let nu = innovation(&observation.z, &corner.mean);
         let d = corner.covariance + observation.covariance;
-        let g = &observation.pose_jacobian;
+        let (gx, gy) = (observation.lever.x, observation.lever.y);
         // One component bounds the 4-D distance from below (its Schur complement is
         // smaller): most wrong corners are rejected on one coordinate before any 4x4
-        // algebra. The angle does not depend on the pose; the others do through `G P G^T`.
-        let variance = |row: usize| {
-            let gi = g.row(row);
-            d[(row, row)] + (gi * pose.covariance * gi.transpose())[(0, 0)]
-        };
+        // algebra. The angle does not depend on the pose; the others do through `G P G^T`,
+        // whose diagonal is `P_xx + 2 gx P_x,yaw + gx^2 P_yaw` (and likewise for y).
+        let p = &pose.covariance;
+        let along =
+            |g: f64, axis: usize| p[(axis, axis)] + g * (2.0 * p[(axis, 2)] + g * p[(2, 2)]);
         if nu.w * nu.w > gate * d[(3, 3)]
-            || nu.z * nu.z > gate * variance(2)
-            || nu.x * nu.x > gate * variance(0)
-            || nu.y * nu.y > gate * variance(1)
+            || nu.z * nu.z > gate * (d[(2, 2)] + p[(2, 2)])
+            || nu.x * nu.x > gate * (d[(0, 0)] + along(gx, 0))
+            || nu.y * nu.y > gate * (d[(1, 1)] + along(gy, 1))
         {
             return None;
         }
@@ -94,7 +94,6 @@ impl Pairing {
         // G = [[1, 0, gx], [0, 1, gy], [0, 0, 1], [0, 0, 0]] (the observation model: x, y
         // and heading move with the pose, the lever arm turns x and y): G^T D^-1 G and
         // G^T D^-1 nu reduce to a few products instead of two dense 4x3 multiplications.
-        let (gx, gy) = (g[(0, 2)], g[(1, 2)]);
         let w = d_inverse * nu;
         let c2 = d_inverse.column(0) * gx + d_inverse.column(1) * gy + d_inverse.column(2);
         let s = nu.dot(&w);
@@ -452,7 +451,7 @@ mod tests {
             nu.rows_mut(4 * i, 4).copy_from(&innovation(&o.z, &k.mean));
             c.view_mut((4 * i, 4 * i), (4, 4))
                 .copy_from(&(o.covariance + k.covariance));
-            g.view_mut((4 * i, 0), (4, 3)).copy_from(&o.pose_jacobian);
+            g.view_mut((4 * i, 0), (4, 3)).copy_from(&o.pose_jacobian());
         }
         // What the pairings say about the pose: G^T D^-1 G and G^T D^-1 nu.
         let d_inverse = c.clone().try_inverse().unwrap();
