@@ -26,7 +26,7 @@ fn pass(scans: &[Vec<Observation>], particles: usize) -> Duration {
     let start = Instant::now();
     for (k, scan) in scans.iter().enumerate() {
         // No timestamps in the recording: a nominal 40 Hz.
-        std::hint::black_box(slam.process(k as u64 * 25_000_000, scan, None));
+        std::hint::black_box(slam.process(k as u64 * 25_000_000, scan, &[], None));
     }
     start.elapsed()
 }

@@ -84,7 +84,7 @@ fn process(c: &mut Criterion) {
             let mut k = 0usize;
             let mut step = |slam: &mut FastSlam| {
                 let scan = &scenario.scans[k % scenario.scans.len()];
-                let estimate = slam.process(k as u64 * 25_000_000, scan, None);
+                let estimate = slam.process(k as u64 * 25_000_000, scan, &[], None);
                 k += 1;
                 estimate
             };

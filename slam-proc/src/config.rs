@@ -26,6 +26,12 @@ pub struct SlamConfig {
     pub motion_prior_sigma_xy: f64,
     /// Standard deviation of the constant-velocity prior's rotation, radians.
     pub motion_prior_sigma_yaw: f64,
+    /// Standard deviation of the prior's translation when wall lines are matched between
+    /// consecutive scans, metres (at most the prior's own). Lines match on two numbers, not
+    /// four like corners, and parallel walls alias: they need a tighter prior.
+    pub line_prior_sigma_xy: f64,
+    /// Standard deviation of the prior's rotation for line matching, radians.
+    pub line_prior_sigma_yaw: f64,
     /// Gate for candidate matches between consecutive scans under the motion prior.
     pub motion_gate_probability: f64,
     /// Gate for inliers of a motion hypothesis (no prior uncertainty left).
@@ -108,6 +114,8 @@ impl Default for SlamConfig {
             motion_max_rotation: 0.5,
             motion_prior_sigma_xy: 0.25,
             motion_prior_sigma_yaw: 0.25,
+            line_prior_sigma_xy: 0.05,
+            line_prior_sigma_yaw: 0.05,
             motion_gate_probability: 0.999,
             motion_inlier_probability: 0.99,
             motion_candidates: 4,
@@ -176,6 +184,8 @@ impl SlamConfig {
             ("motion_max_rotation", self.motion_max_rotation),
             ("motion_prior_sigma_xy", self.motion_prior_sigma_xy),
             ("motion_prior_sigma_yaw", self.motion_prior_sigma_yaw),
+            ("line_prior_sigma_xy", self.line_prior_sigma_xy),
+            ("line_prior_sigma_yaw", self.line_prior_sigma_yaw),
             ("odometry_min_sigma_xy", self.odometry_min_sigma_xy),
             ("odometry_min_sigma_yaw", self.odometry_min_sigma_yaw),
             ("noise_xy_base", self.noise_xy_base),

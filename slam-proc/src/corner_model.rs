@@ -4,7 +4,9 @@
 //! Its covariance is `G_z S G_z^T` with `G_z = diag(R, 1, 1)`; the pose's own uncertainty
 //! enters through `G_x`, the Jacobian with respect to `(x, y, yaw)`.
 
-use nalgebra::{Matrix4, Matrix4x3, Vector2, Vector4};
+#[cfg(test)]
+use nalgebra::Matrix4x3;
+use nalgebra::{Matrix4, Vector2, Vector4};
 
 use crate::angle::wrap_angle;
 use crate::observation::Prepared;
@@ -22,6 +24,7 @@ pub(crate) struct WorldObservation {
     pub lever: Vector2<f64>,
 }
 
+#[cfg(test)]
 impl WorldObservation {
     /// `d w / d (x, y, yaw)` of the pose: `[[1, 0, lx], [0, 1, ly], [0, 0, 1], [0, 0, 0]]`
     /// (position and heading move with the pose, the opening angle does not).

@@ -28,7 +28,7 @@
 //! let mut slam = FastSlam::new(SlamConfig::default(), 1)?;
 //! let covariance = Matrix4::identity() * 1e-4;
 //! let corner = Observation { x: 3.0, y: 1.0, heading: 0.5, angle: 1.6, covariance };
-//! let estimate = slam.process(0, &[corner], None);
+//! let estimate = slam.process(0, &[corner], &[], None);
 //! assert_eq!((estimate.mean.x, estimate.mean.y), (0.0, 0.0));
 //! assert!(slam.best_map().is_empty()); // seen once: tentative, not yet published
 //! # Ok::<(), slam_proc::ConfigError>(())
@@ -43,6 +43,7 @@ mod grid;
 mod jcbb;
 mod kalman;
 mod linalg;
+mod line_motion;
 mod map;
 mod motion;
 mod observation;
@@ -59,6 +60,6 @@ pub use angle::wrap_angle;
 pub use config::{ConfigError, SlamConfig};
 pub use estimate::{Estimate, StageTiming};
 pub use map::MapCorner;
-pub use observation::{Observation, OdometryInput};
+pub use observation::{LineObservation, Observation, OdometryInput};
 pub use pose::Pose2;
 pub use slam::FastSlam;

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
-use slam_proc::{FastSlam, Observation, OdometryInput, SlamConfig};
+use slam_proc::{FastSlam, LineObservation, Observation, OdometryInput, SlamConfig};
 
 /// Subscribes to features (and odometry when anyone publishes it), publishes a pose
 /// estimate for every scan and the best particle's map every few scans and at the end.
@@ -81,6 +81,7 @@ fn run() -> Result<()> {
 
     let mut odometry_backlog: VecDeque<Odometry> = VecDeque::with_capacity(ODOMETRY_BACKLOG);
     let mut observations = Vec::new();
+    let mut lines = Vec::new();
     let mut processed = 0u64;
     let mut last_header = Header::new(0, 0, "map");
     let mut last_odometry_probe = Instant::now();
@@ -123,13 +124,15 @@ fn run() -> Result<()> {
             }
             observations.clear();
             observations.extend(sample.corners().iter().map(to_observation));
+            lines.clear();
+            lines.extend(sample.lines().iter().map(to_line));
             let stamp = sample.header.stamp_ns;
             let odometry_input = odometry_backlog
                 .iter()
                 .rev()
                 .find(|o| o.header.stamp_ns <= stamp)
                 .map(to_odometry);
-            let estimate = slam.process(stamp, &observations, odometry_input.as_ref());
+            let estimate = slam.process(stamp, &observations, &lines, odometry_input.as_ref());
             let header = sample.header;
             poses.publish(|pose| {
                 pose.header = header;
@@ -214,6 +217,14 @@ fn to_observation(corner: &Corner) -> Observation {
         heading: corner.heading,
         angle: corner.angle,
         covariance: nalgebra::Matrix4::from_row_slice(&corner.covariance),
+    }
+}
+
+fn to_line(line: &Line) -> LineObservation {
+    LineObservation {
+        rho: line.rho,
+        theta: line.theta,
+        covariance: nalgebra::Matrix2::from_row_slice(&line.covariance),
     }
 }
 

@@ -1,4 +1,4 @@
-//! The motion between consecutive scans from matched corners.
+//! The motion between consecutive scans from matched corners (or, short of them, lines).
 //!
 //! 1. A prior: the odometry increment when the robot has odometry, else the last motion
 //!    at constant velocity (scaled to the scan interval), with a generous covariance. The
@@ -10,14 +10,17 @@
 //! 3. RANSAC over every pair of candidates: each minimal hypothesis is fitted, its inliers
 //!    counted one-to-one, and the best is refitted on its inliers (weighted Kabsch, then
 //!    Gauss-Newton with headings and the prior, so the prior is fused with the fit).
-//! 4. Fewer than two consistent matches, or a fit beyond the per-step limits: the prior.
+//! 4. Fewer than two consistent matches, or a fit beyond the per-step limits: the wall
+//!    lines matched under the prior, fused with it ([`crate::line_motion`]); without a
+//!    line either, the prior.
 
 use nalgebra::{Cholesky, Matrix3, Matrix4, Matrix4x3, Vector2, Vector3, Vector4};
 
 use crate::angle::wrap_angle;
 use crate::chi2::quantile_even;
 use crate::config::SlamConfig;
-use crate::observation::{OdometryInput, Prepared};
+use crate::line_motion;
+use crate::observation::{LineObservation, OdometryInput, Prepared};
 use crate::pose::Pose2;
 use crate::rigid_fit::{Prior, kabsch, refine};
 
@@ -37,6 +40,9 @@ pub(crate) struct Motion {
 pub(crate) enum MotionSource {
     /// Matched corners (fused with the prior): the fit's residual error.
     Corners,
+    /// Matched wall lines and the prior: heading and offsets from the walls, the
+    /// translation along them from the prior.
+    Lines,
     /// Odometry alone, with the covariance it reports.
     Odometry,
     /// Constant velocity alone: a guess.
@@ -57,33 +63,40 @@ struct Candidate {
 #[derive(Debug, Clone)]
 pub(crate) struct MotionEstimator {
     previous: Option<Vec<Prepared>>,
+    previous_lines: Vec<LineObservation>,
     last_delta: Pose2,
     last_stamp: Option<u64>,
     last_interval: Option<u64>,
     last_odometry: Option<OdometryInput>,
     gate: f64,
     inlier_gate: f64,
+    /// Gate for line matches (2 dof) under the prior.
+    line_gate: f64,
 }
 
 impl MotionEstimator {
     pub fn new(config: &SlamConfig) -> Self {
         Self {
             previous: None,
+            previous_lines: Vec::new(),
             last_delta: Pose2::IDENTITY,
             last_stamp: None,
             last_interval: None,
             last_odometry: None,
             gate: quantile_even(config.motion_gate_probability, 4),
+            line_gate: quantile_even(config.motion_gate_probability, 2),
             inlier_gate: quantile_even(config.motion_inlier_probability, 4),
         }
     }
 
     /// The motion since the previous call. The first call returns the identity: the first
-    /// pose is the map frame.
+    /// pose is the map frame. Corners fix it when enough match; otherwise wall lines and
+    /// the prior, or the prior alone.
     pub fn estimate(
         &mut self,
         stamp_ns: u64,
         observations: &[Prepared],
+        lines: &[LineObservation],
         odometry: Option<&OdometryInput>,
         config: &SlamConfig,
     ) -> Motion {
@@ -109,6 +122,7 @@ impl MotionEstimator {
             },
             Some(previous) => self
                 .fit(previous, observations, &prior, config)
+                .or_else(|| self.fit_lines(lines, &prior, config))
                 .unwrap_or(Motion {
                     delta: prior.delta,
                     covariance: prior.covariance,
@@ -117,6 +131,8 @@ impl MotionEstimator {
                 }),
         };
         self.previous = Some(observations.to_vec());
+        self.previous_lines.clear();
+        self.previous_lines.extend_from_slice(lines);
         self.last_delta = motion.delta;
         self.last_stamp = Some(stamp_ns);
         self.last_interval = interval;
@@ -144,6 +160,32 @@ impl MotionEstimator {
             delta: Pose2::new(d.x * scale, d.y * scale, wrap_angle(d.yaw * scale)),
             covariance: Matrix3::from_diagonal(&Vector3::new(xy * xy, xy * xy, yaw * yaw)),
         }
+    }
+
+    /// The motion from the wall lines of this scan and the previous one, with the prior.
+    fn fit_lines(
+        &self,
+        lines: &[LineObservation],
+        prior: &Prior,
+        config: &SlamConfig,
+    ) -> Option<Motion> {
+        // Lines match on two numbers, not four: they need a tighter prior than corners.
+        let (xy, yaw) = (config.line_prior_sigma_xy, config.line_prior_sigma_yaw);
+        let tight = Prior {
+            delta: prior.delta,
+            covariance: prior.covariance.zip_map(
+                &Matrix3::from_diagonal(&Vector3::new(xy * xy, xy * xy, yaw * yaw)),
+                |a, b| if a > b { b } else { a },
+            ),
+        };
+        let (delta, covariance, matched) =
+            line_motion::fit(&self.previous_lines, lines, &tight, self.line_gate)?;
+        within_limits(&delta, config).then_some(Motion {
+            delta,
+            covariance,
+            source: MotionSource::Lines,
+            inliers: matched,
+        })
     }
 
     fn fit(
@@ -406,7 +448,7 @@ mod tests {
         let config = SlamConfig::default();
         let mut estimator = MotionEstimator::new(&config);
         let previous = scene();
-        estimator.estimate(0, &previous, None, &config);
+        estimator.estimate(0, &previous, &[], None, &config);
         let truth = Pose2::new(0.12, 0.03, 0.15);
         let mut current = seen_from(&truth, &previous);
         // An outlier: a corner whose descriptor matches corner 0 but sits 0.4 m off.
@@ -416,7 +458,7 @@ mod tests {
             current[0].z.z,
             current[0].z.w,
         );
-        let motion = estimator.estimate(25_000_000, &current, None, &config);
+        let motion = estimator.estimate(25_000_000, &current, &[], None, &config);
         assert_eq!(motion.source, MotionSource::Corners);
         assert_eq!(motion.inliers, 4);
         assert!(
@@ -433,16 +475,16 @@ mod tests {
         let config = SlamConfig::default();
         let mut estimator = MotionEstimator::new(&config);
         let previous = scene();
-        estimator.estimate(0, &previous, None, &config);
+        estimator.estimate(0, &previous, &[], None, &config);
         let step = Pose2::new(0.1, 0.0, 0.05);
         let current = seen_from(&step, &previous);
-        estimator.estimate(10, &current, None, &config);
+        estimator.estimate(10, &current, &[], None, &config);
         // Same interval, a single corner: the last step again.
-        let motion = estimator.estimate(20, &current[..1], None, &config);
+        let motion = estimator.estimate(20, &current[..1], &[], None, &config);
         assert_eq!(motion.source, MotionSource::ConstantVelocity);
         assert!((motion.delta.x - 0.1).abs() < 1e-3 && (motion.delta.yaw - 0.05).abs() < 1e-3);
         // Twice the interval: twice the step.
-        let motion = estimator.estimate(40, &[], None, &config);
+        let motion = estimator.estimate(40, &[], &[], None, &config);
         assert!((motion.delta.x - 0.2).abs() < 2e-3);
     }
 
@@ -455,11 +497,11 @@ mod tests {
             pose: Pose2::new(x, 1.0, yaw),
             covariance: Matrix3::identity() * var,
         };
-        estimator.estimate(0, &previous, Some(&odom(5.0, 0.0, 0.0)), &config);
+        estimator.estimate(0, &previous, &[], Some(&odom(5.0, 0.0, 0.0)), &config);
         let truth = Pose2::new(0.1, 0.0, 0.02);
         // Odometry says 0.15 m +- 0.1 m; the corners say 0.1 m +- 1 cm and win.
         let current = seen_from(&truth, &previous);
-        let motion = estimator.estimate(10, &current, Some(&odom(5.15, 0.02, 1e-2)), &config);
+        let motion = estimator.estimate(10, &current, &[], Some(&odom(5.15, 0.02, 1e-2)), &config);
         assert_eq!(motion.source, MotionSource::Corners);
         assert!(
             (motion.delta.x - truth.x).abs() < 5e-3,
@@ -467,7 +509,8 @@ mod tests {
             motion.delta
         );
         // Without corners the odometry increment is the motion.
-        let motion = estimator.estimate(20, &[], Some(&odom(5.35, 0.02, 1e-2 + 1e-4)), &config);
+        let motion =
+            estimator.estimate(20, &[], &[], Some(&odom(5.35, 0.02, 1e-2 + 1e-4)), &config);
         assert_eq!(motion.source, MotionSource::Odometry);
         let expected = Pose2::new(5.15, 1.0, 0.02).between(&Pose2::new(5.35, 1.0, 0.02));
         assert!(

@@ -1,9 +1,9 @@
-//! What the filter is given each scan: corner features in the sensor frame and, when the
-//! robot has it, an odometry pose.
+//! What the filter is given each scan: corner and line features in the sensor frame and,
+//! when the robot has it, an odometry pose.
 
 use std::f64::consts::PI;
 
-use nalgebra::{Cholesky, Matrix3, Matrix4, Vector4};
+use nalgebra::{Cholesky, Matrix2, Matrix3, Matrix4, Vector4};
 
 use crate::pose::Pose2;
 
@@ -19,6 +19,29 @@ pub struct Observation {
     pub angle: f64,
     /// Covariance of `(x, y, heading, angle)`, symmetric positive definite.
     pub covariance: Matrix4<f64>,
+}
+
+/// A wall line in the sensor frame, in normal form `x cos(theta) + y sin(theta) = rho`.
+/// Lines only steady the motion estimate where too few corners are in view (a corridor);
+/// the map holds corners.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineObservation {
+    pub rho: f64,
+    pub theta: f64,
+    /// Covariance of `(rho, theta)`, symmetric positive definite.
+    pub covariance: Matrix2<f64>,
+}
+
+impl LineObservation {
+    /// Whether the filter can use it: finite, with a positive definite covariance.
+    pub(crate) fn is_usable(&self) -> bool {
+        let c = &self.covariance;
+        self.rho.is_finite()
+            && self.theta.is_finite()
+            && c.iter().all(|v| v.is_finite())
+            && c[(0, 0)] > 0.0
+            && c[(0, 0)] * c[(1, 1)] - c[(0, 1)] * c[(1, 0)] > 0.0
+    }
 }
 
 /// An odometry reading: `odom_from_robot` in the odometry's own (drifting) frame, with the

@@ -34,6 +34,17 @@ impl MotionNoise {
         };
         match motion.source {
             MotionSource::Corners => model,
+            // Walls fix a line step's heading better than the model's floor says (a
+            // corridor is mostly such steps, and the floor would random-walk the heading
+            // between its corners); the advance along them is the prior's, as uncertain as
+            // a fitted step's.
+            MotionSource::Lines => Self {
+                sigma_xy: model.sigma_xy,
+                sigma_yaw: motion.covariance[(2, 2)]
+                    .max(0.0)
+                    .sqrt()
+                    .min(model.sigma_yaw),
+            },
             MotionSource::Odometry => {
                 let c = &motion.covariance;
                 // The noise is isotropic in translation: the larger axis covers both.

@@ -54,10 +54,21 @@ pub(crate) fn refine(
     prior: &Prior,
 ) -> Option<(Pose2, Matrix3<f64>)> {
     let prior_information = Cholesky::new(prior.covariance)?.inverse();
+    gauss_newton(start, |estimate| {
+        Some(normal_equations(estimate, pairs, prior, &prior_information))
+    })
+}
+
+/// Gauss-Newton over a 2-D transform from `start`, given the normal equations `(J^T W J,
+/// J^T W r)` at an estimate. Returns the estimate and its covariance `(J^T W J)^-1`.
+/// It converges in two or three steps from a good start; six at most.
+pub(crate) fn gauss_newton(
+    start: Pose2,
+    normal_equations: impl Fn(&Pose2) -> Option<(Matrix3<f64>, Vector3<f64>)>,
+) -> Option<(Pose2, Matrix3<f64>)> {
     let mut estimate = start;
-    // Gauss-Newton converges in two or three steps from a minimal-sample start.
     for _ in 0..6 {
-        let (information, gradient) = normal_equations(&estimate, pairs, prior, &prior_information);
+        let (information, gradient) = normal_equations(&estimate)?;
         let step = -Cholesky::new(information)?.solve(&gradient);
         estimate = Pose2::new(
             estimate.x + step.x,
@@ -68,7 +79,7 @@ pub(crate) fn refine(
             break;
         }
     }
-    let (information, _) = normal_equations(&estimate, pairs, prior, &prior_information);
+    let (information, _) = normal_equations(&estimate)?;
     Some((estimate, Cholesky::new(information)?.inverse()))
 }
 

@@ -11,7 +11,7 @@ use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
 use crate::jcbb::PoseUncertainty;
 use crate::map::{CornerMap, CornerState, MapCorner};
 use crate::motion::MotionEstimator;
-use crate::observation::{Observation, OdometryInput, Prepared};
+use crate::observation::{LineObservation, Observation, OdometryInput, Prepared};
 use crate::particle::{Particle, ScanContext, Scratch};
 use crate::pose::Pose2;
 use crate::predict::{self, MotionNoise};
@@ -39,6 +39,8 @@ pub struct FastSlam {
     log_weights: Vec<f64>,
     weights: Vec<f64>,
     parents: Vec<usize>,
+    /// This scan's usable lines.
+    lines: Vec<LineObservation>,
 }
 
 impl FastSlam {
@@ -83,6 +85,7 @@ impl FastSlam {
             log_weights: Vec::new(),
             weights: Vec::new(),
             parents: Vec::new(),
+            lines: Vec::new(),
             config,
         })
     }
@@ -109,14 +112,16 @@ impl FastSlam {
             .unwrap_or_default()
     }
 
-    /// Updates the filter with one scan: its acquisition time, its corners in the sensor
-    /// frame and, when the robot has odometry, the odometry pose at the scan. Corners that
-    /// are not usable (non-finite, an angle outside `(0, pi)`, a covariance that is not
-    /// positive definite) are ignored.
+    /// Updates the filter with one scan: its acquisition time, its corners and wall lines
+    /// in the sensor frame (lines only steady the motion estimate where too few corners
+    /// match; pass none if the extractor gives none) and, when the robot has odometry, the
+    /// odometry pose at the scan. Features that are not usable (non-finite, an angle
+    /// outside `(0, pi)`, a covariance that is not positive definite) are ignored.
     pub fn process(
         &mut self,
         stamp_ns: u64,
         observations: &[Observation],
+        lines: &[LineObservation],
         odometry: Option<&OdometryInput>,
     ) -> Estimate {
         let start = Instant::now();
@@ -131,7 +136,12 @@ impl FastSlam {
                 )
             })
             .collect();
-        let motion = self.motion.estimate(stamp_ns, &prepared, odometry, config);
+        self.lines.clear();
+        self.lines
+            .extend(lines.iter().filter(|l| l.is_usable()).copied());
+        let motion = self
+            .motion
+            .estimate(stamp_ns, &prepared, &self.lines, odometry, config);
         self.dead_reckoning = self.dead_reckoning.compose(&motion.delta);
         let motion_done = Instant::now();
 
@@ -309,7 +319,7 @@ mod tests {
             .collect();
         let mut slam = FastSlam::with_prior_map(config, 3, &prior).unwrap();
         for k in 0..3 {
-            slam.process(k * 25_000_000, &scan(), None);
+            slam.process(k * 25_000_000, &scan(), &[], None);
         }
         // Make one particle carry all the weight: everyone becomes its copy.
         for (i, p) in slam.particles.iter_mut().enumerate() {

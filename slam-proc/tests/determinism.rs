@@ -25,7 +25,7 @@ fn run(
         let estimates = stamps
             .iter()
             .zip(scans)
-            .map(|(t, s)| slam.process(*t, s, None))
+            .map(|(t, s)| slam.process(*t, s, &[], None))
             .collect();
         (estimates, slam.best_map())
     })
@@ -64,7 +64,7 @@ fn one_and_two_threads_give_identical_results() {
     let last = data.stamps[..n]
         .iter()
         .zip(&data.scans[..n])
-        .map(|(t, s)| other.process(*t, s, None))
+        .map(|(t, s)| other.process(*t, s, &[], None))
         .last();
     assert_ne!(
         last.map(|e| bits(&e.mean)),
@@ -94,7 +94,7 @@ fn angles_stay_in_range_while_spinning() {
         };
         pose = pose.compose(&step);
         let scan = common::observe(&mut rng, &sensor, &pose, corners);
-        let estimate = slam.process(k * 25_000_000, &scan, None);
+        let estimate = slam.process(k * 25_000_000, &scan, &[], None);
         for p in [estimate.best, estimate.mean, estimate.dead_reckoning] {
             assert!(in_range(p.yaw), "yaw {} at scan {k}", p.yaw);
         }

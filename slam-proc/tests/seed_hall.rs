@@ -37,7 +37,7 @@ fn run(scans: &[Vec<Observation>], particles: usize) -> Outcome {
     let trajectory = scans
         .iter()
         .enumerate()
-        .map(|(k, s)| slam.process(k as u64 * 25_000_000, s, None).mean)
+        .map(|(k, s)| slam.process(k as u64 * 25_000_000, s, &[], None).mean)
         .collect();
     let seconds_per_scan = start.elapsed().as_secs_f64() / scans.len() as f64;
     Outcome {

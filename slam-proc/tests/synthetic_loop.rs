@@ -28,7 +28,7 @@ fn run_filter(run: &Run, odometry: Option<&[OdometryInput]>, seed: u64) -> Outco
     let (mut best, mut mean, mut dead_reckoning) = (Vec::new(), Vec::new(), Vec::new());
     let start = std::time::Instant::now();
     for (k, (stamp, scan)) in run.stamps.iter().zip(&run.scans).enumerate() {
-        let estimate = slam.process(*stamp, scan, odometry.map(|o| &o[k]));
+        let estimate = slam.process(*stamp, scan, &[], odometry.map(|o| &o[k]));
         best.push(estimate.best);
         mean.push(estimate.mean);
         dead_reckoning.push(estimate.dead_reckoning);
