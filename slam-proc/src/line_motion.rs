@@ -10,8 +10,6 @@
 //! residual, so two parallel walls give the heading and the lateral offset and the prior
 //! the rest.
 
-use std::f64::consts::PI;
-
 use nalgebra::{Cholesky, Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 
 use crate::angle::wrap_angle;
@@ -41,31 +39,20 @@ fn moved(line: &LineObservation, t: &Pose2) -> Moved {
 }
 
 /// A matched pair's residual `moved - target`, its pose Jacobian and its covariance
-/// (both lines' noise), in whichever normal form of the moved line, `(rho, theta)` or
-/// `(-rho, theta + pi)`, faces the target: a line through the sensor flips between them.
+/// (both lines' noise). A line's normal points from the sensor to the wall, i.e. against
+/// the face the sensor sees, and keeps its direction when moved (the robot does not cross
+/// a wall between scans): the two faces of a thin wall, a few centimetres apart but with
+/// opposite normals, never match each other.
 fn residual(
     current: &LineObservation,
     target: &LineObservation,
     t: &Pose2,
 ) -> (Vector2<f64>, Matrix2x3<f64>, Matrix2<f64>) {
     let m = moved(current, t);
-    let same = Vector2::new(m.line.x - target.rho, wrap_angle(m.line.y - target.theta));
-    let flipped = Vector2::new(
-        -m.line.x - target.rho,
-        wrap_angle(m.line.y + PI - target.theta),
-    );
-    let (r, sign) = if flipped.y.abs() < same.y.abs() {
-        (flipped, -1.0)
-    } else {
-        (same, 1.0)
-    };
-    let mut pose_jacobian = m.pose_jacobian;
-    let mut line_jacobian = m.line_jacobian;
-    pose_jacobian.row_mut(0).scale_mut(sign);
-    line_jacobian.row_mut(0).scale_mut(sign);
+    let r = Vector2::new(m.line.x - target.rho, wrap_angle(m.line.y - target.theta));
     let covariance =
-        line_jacobian * current.covariance * line_jacobian.transpose() + target.covariance;
-    (r, pose_jacobian, covariance)
+        m.line_jacobian * current.covariance * m.line_jacobian.transpose() + target.covariance;
+    (r, m.pose_jacobian, covariance)
 }
 
 /// Mahalanobis distance of a residual, `None` when its covariance is not positive definite.
@@ -73,10 +60,18 @@ fn distance(r: &Vector2<f64>, covariance: &Matrix2<f64>) -> Option<f64> {
     Some(r.dot(&Cholesky::new(*covariance)?.solve(r)))
 }
 
+/// Whether two lines of one scan are one wall (pieces of it split by a doorway or a
+/// gap in the points): their normal forms agree within `gate`.
+fn same_wall(a: &LineObservation, b: &LineObservation, gate: f64) -> bool {
+    let r = Vector2::new(a.rho - b.rho, wrap_angle(a.theta - b.theta));
+    distance(&r, &(a.covariance + b.covariance)).is_some_and(|d| d <= gate)
+}
+
 /// One-to-one matches `(current, previous)` whose residual under `prior`, its uncertainty
-/// included, passes `gate` (chi-square, 2 dof); the closest first. A line with two
-/// candidates is left out: parallel walls a step apart (the sides of niches and doors
-/// along a corridor) alias, and one wrong match moves the robot along the corridor.
+/// included, passes `gate` (chi-square, 2 dof); the closest first. A line whose candidates
+/// are different walls is left out: parallel walls a step apart (the sides of niches and
+/// doors along a corridor) alias, and one wrong match moves the robot. Candidates that are
+/// pieces of one wall are one candidate.
 fn associate(
     previous: &[LineObservation],
     current: &[LineObservation],
@@ -84,21 +79,29 @@ fn associate(
     gate: f64,
 ) -> Vec<(usize, usize)> {
     let mut candidates = Vec::new();
+    let mut found = Vec::new();
     for (i, c) in current.iter().enumerate() {
-        let mut found = None;
-        let mut count = 0;
+        found.clear();
         for (j, p) in previous.iter().enumerate() {
             let (r, g, covariance) = residual(c, p, &prior.delta);
             let with_prior = covariance + g * prior.covariance * g.transpose();
             if let Some(d) = distance(&r, &with_prior)
                 && d <= gate
             {
-                found = Some((d, i, j));
-                count += 1;
+                found.push((d, i, j));
             }
         }
-        if let (Some(candidate), 1) = (found, count) {
-            candidates.push(candidate);
+        let Some(&best) = found
+            .iter()
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)))
+        else {
+            continue;
+        };
+        if found
+            .iter()
+            .all(|&(_, _, j)| same_wall(&previous[j], &previous[best.2], gate))
+        {
+            candidates.push(best);
         }
     }
     candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
@@ -111,70 +114,127 @@ fn associate(
     matches
 }
 
-/// The maximum a posteriori motion from matched lines and the prior, by Gauss-Newton from
-/// the prior, with its covariance.
-fn solve(
+/// The normal equations `(J^T W J, J^T W r)` of a Gaussian prior on the transform at `t`.
+pub(crate) fn prior_terms(
+    prior: &Prior,
+    information: &Matrix3<f64>,
+    t: &Pose2,
+) -> (Matrix3<f64>, Vector3<f64>) {
+    let offset = Vector3::new(
+        t.x - prior.delta.x,
+        t.y - prior.delta.y,
+        wrap_angle(t.yaw - prior.delta.yaw),
+    );
+    (*information, information * offset)
+}
+
+/// Adds the matched lines' residuals at `t` to normal equations; `None` when a pair's
+/// covariance is not positive definite.
+fn add_line_terms(
     previous: &[LineObservation],
     current: &[LineObservation],
     matches: &[(usize, usize)],
-    prior: &Prior,
-) -> Option<(Pose2, Matrix3<f64>)> {
-    let prior_information = Cholesky::new(prior.covariance)?.inverse();
-    let normal_equations = |t: &Pose2| -> Option<(Matrix3<f64>, Vector3<f64>)> {
-        let offset = Vector3::new(
-            t.x - prior.delta.x,
-            t.y - prior.delta.y,
-            wrap_angle(t.yaw - prior.delta.yaw),
-        );
-        let mut information = prior_information;
-        let mut gradient = prior_information * offset;
-        for &(i, j) in matches {
-            let (r, g, covariance) = residual(&current[i], &previous[j], t);
-            let weight = Cholesky::new(covariance)?.inverse();
-            information += g.transpose() * weight * g;
-            gradient += g.transpose() * weight * r;
-        }
-        Some((information, gradient))
-    };
-    gauss_newton(prior.delta, normal_equations)
+    t: &Pose2,
+    information: &mut Matrix3<f64>,
+    gradient: &mut Vector3<f64>,
+) -> Option<()> {
+    for &(i, j) in matches {
+        let (r, g, covariance) = residual(&current[i], &previous[j], t);
+        let weight = Cholesky::new(covariance)?.inverse();
+        *information += g.transpose() * weight * g;
+        *gradient += g.transpose() * weight * r;
+    }
+    Some(())
 }
 
-/// The motion `previous_from_current` from the scans' lines and the prior, with its
-/// covariance and the number of lines that fixed it; `None` without a matched line.
-/// Matches are made under the prior, then made again under the first estimate (a wrong
-/// match the prior let through no longer fits) and the motion solved once more.
+/// Matches the lines under `around` (a transform and how far it may be off), then finds by
+/// Gauss-Newton the transform that best fits them together with the residuals whose normal
+/// equations `others` gives (the prior; matched corners). A match that does not fit the
+/// result on its own is dropped and the transform solved again. Returns the transform, its
+/// covariance and the lines that fixed it; `None` without a matched line, or when the
+/// result leaves `around` by more than `departure_gate` (a chi-square threshold on the
+/// 3-dof departure under `around`'s covariance): nearly parallel lines that disagree pull
+/// hard along directions they barely see.
+pub(crate) fn refine(
+    previous: &[LineObservation],
+    current: &[LineObservation],
+    around: &Prior,
+    gate: f64,
+    departure_gate: f64,
+    others: impl Fn(&Pose2) -> Option<(Matrix3<f64>, Vector3<f64>)>,
+) -> Option<(Pose2, Matrix3<f64>, usize)> {
+    let (estimate, covariance, lines) = refine_unchecked(previous, current, around, gate, others)?;
+    let departure = Vector3::new(
+        estimate.x - around.delta.x,
+        estimate.y - around.delta.y,
+        wrap_angle(estimate.yaw - around.delta.yaw),
+    );
+    let d = departure.dot(&Cholesky::new(around.covariance)?.solve(&departure));
+    (d <= departure_gate).then_some((estimate, covariance, lines))
+}
+
+fn refine_unchecked(
+    previous: &[LineObservation],
+    current: &[LineObservation],
+    around: &Prior,
+    gate: f64,
+    others: impl Fn(&Pose2) -> Option<(Matrix3<f64>, Vector3<f64>)>,
+) -> Option<(Pose2, Matrix3<f64>, usize)> {
+    let solve = |matches: &[(usize, usize)]| {
+        gauss_newton(around.delta, |t| {
+            let (mut information, mut gradient) = others(t)?;
+            add_line_terms(
+                previous,
+                current,
+                matches,
+                t,
+                &mut information,
+                &mut gradient,
+            )?;
+            Some((information, gradient))
+        })
+    };
+    let matches = associate(previous, current, around, gate);
+    if matches.is_empty() {
+        return None;
+    }
+    let (estimate, covariance) = solve(&matches)?;
+    let kept: Vec<_> = matches
+        .iter()
+        .copied()
+        .filter(|&(i, j)| {
+            let (r, _, covariance) = residual(&current[i], &previous[j], &estimate);
+            distance(&r, &covariance).is_some_and(|d| d <= gate)
+        })
+        .collect();
+    if kept.len() == matches.len() {
+        return Some((estimate, covariance, kept.len()));
+    }
+    if kept.is_empty() {
+        return None;
+    }
+    let (estimate, covariance) = solve(&kept)?;
+    Some((estimate, covariance, kept.len()))
+}
+
+/// The motion `previous_from_current` from the scans' lines and the prior alone.
 pub(crate) fn fit(
     previous: &[LineObservation],
     current: &[LineObservation],
     prior: &Prior,
     gate: f64,
+    departure_gate: f64,
 ) -> Option<(Pose2, Matrix3<f64>, usize)> {
-    let matches = associate(previous, current, prior, gate);
-    if matches.is_empty() {
-        return None;
-    }
-    let (first, _) = solve(previous, current, &matches, prior)?;
-    let settled = Prior {
-        delta: first,
-        covariance: prior.covariance,
-    };
-    let matches: Vec<_> = associate(previous, current, &settled, gate)
-        .into_iter()
-        .filter(|&(i, j)| {
-            let (r, _, covariance) = residual(&current[i], &previous[j], &first);
-            distance(&r, &covariance).is_some_and(|d| d <= gate)
-        })
-        .collect();
-    if matches.is_empty() {
-        return None;
-    }
-    let (estimate, covariance) = solve(previous, current, &matches, prior)?;
-    Some((estimate, covariance, matches.len()))
+    let information = Cholesky::new(prior.covariance)?.inverse();
+    refine(previous, current, prior, gate, departure_gate, |t| {
+        Some(prior_terms(prior, &information, t))
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     /// `line` (in the previous frame) as seen from `previous_from_current`.
     fn seen_from(t: &Pose2, rho: f64, theta: f64) -> LineObservation {
@@ -242,7 +302,7 @@ mod tests {
             .map(|l| seen_from(&truth, l.rho, l.theta))
             .collect();
         let belief = prior(Pose2::new(0.12, 0.0, 0.0), 0.25, 0.25);
-        let (estimate, covariance, lines) = fit(&previous, &current, &belief, 13.8).unwrap();
+        let (estimate, covariance, lines) = fit(&previous, &current, &belief, 13.8, 16.3).unwrap();
         assert_eq!(lines, 3);
         assert!((estimate.yaw - truth.yaw).abs() < 1e-4, "{estimate:?}");
         assert!((estimate.y - truth.y).abs() < 1e-3, "{estimate:?}");
@@ -252,7 +312,7 @@ mod tests {
 
         // Without the end wall, the advance along the corridor is the prior's.
         let (estimate, covariance, lines) =
-            fit(&previous[..2], &current[..2], &belief, 13.8).unwrap();
+            fit(&previous[..2], &current[..2], &belief, 13.8, 16.3).unwrap();
         assert_eq!(lines, 2);
         assert!((estimate.yaw - truth.yaw).abs() < 1e-4);
         assert!((estimate.y - truth.y).abs() < 5e-3, "{estimate:?}");
@@ -261,30 +321,51 @@ mod tests {
     }
 
     #[test]
-    fn a_line_through_the_sensor_matches_across_its_flip() {
-        // A wall through the sensor's origin: a small motion flips the sign of rho.
+    fn the_faces_of_a_thin_wall_do_not_match() {
+        // The previous scan saw the near face of a 10 cm wall 2 m ahead; after a step
+        // through a doorway beside it the current scan sees its far face: the same line
+        // but for 10 cm and the normal, which now points the other way.
         let previous = vec![LineObservation {
-            rho: 0.005,
-            theta: 0.3,
-            covariance: Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
+            rho: 2.0,
+            theta: 0.0,
+            covariance: Matrix2::new(1e-4, 0.0, 0.0, 1e-4),
         }];
-        let truth = Pose2::new(0.02, 0.0, 0.01);
-        let seen = seen_from(&truth, 0.005, 0.3);
-        // The extractor reports rho >= 0.
-        let current = vec![if seen.rho < 0.0 {
-            LineObservation {
-                rho: -seen.rho,
-                theta: wrap_angle(seen.theta + PI),
-                ..seen
-            }
-        } else {
-            seen
+        let far_face = seen_from(&Pose2::new(2.2, 0.0, 0.0), 2.1, 0.0);
+        assert!(far_face.rho < 0.0);
+        let current = vec![LineObservation {
+            rho: -far_face.rho,
+            theta: wrap_angle(far_face.theta + PI),
+            ..far_face
         }];
-        assert!(current[0].rho >= 0.0);
-        let belief = prior(Pose2::IDENTITY, 0.05, 0.05);
-        let (estimate, _, lines) = fit(&previous, &current, &belief, 13.8).unwrap();
+        // A prior that would allow it, were faces not told apart.
+        let belief = prior(Pose2::new(2.2, 0.0, 0.0), 0.2, 0.05);
+        assert!(fit(&previous, &current, &belief, 13.8, 16.3).is_none());
+        // The near face seen again does match.
+        let near_face = seen_from(&Pose2::new(0.1, 0.0, 0.0), 2.0, 0.0);
+        let belief = prior(Pose2::new(0.12, 0.0, 0.0), 0.05, 0.05);
+        let (estimate, _, lines) = fit(&previous, &[near_face], &belief, 13.8, 16.3).unwrap();
         assert_eq!(lines, 1);
-        assert!((estimate.yaw - truth.yaw).abs() < 1e-4, "{estimate:?}");
+        assert!((estimate.x - 0.1).abs() < 5e-3, "{estimate:?}");
+    }
+
+    #[test]
+    fn pieces_of_one_wall_match_and_parallel_walls_do_not() {
+        let line = |rho: f64, theta: f64| LineObservation {
+            rho,
+            theta,
+            covariance: Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
+        };
+        let truth = Pose2::new(0.1, 0.01, 0.0);
+        let current = vec![seen_from(&truth, 1.0, PI / 2.0)];
+        let belief = prior(Pose2::new(0.1, 0.0, 0.0), 0.05, 0.05);
+        // A wall split by a doorway into two collinear pieces: one wall.
+        let pieces = vec![line(1.0, PI / 2.0), line(1.0005, PI / 2.0 + 2e-4)];
+        let (estimate, _, lines) = fit(&pieces, &current, &belief, 13.8, 16.3).unwrap();
+        assert_eq!(lines, 1);
+        assert!((estimate.y - truth.y).abs() < 1e-3, "{estimate:?}");
+        // Two parallel walls 12 cm apart, both within the prior's reach: ambiguous.
+        let parallel = vec![line(1.0, PI / 2.0), line(1.12, PI / 2.0)];
+        assert!(fit(&parallel, &current, &belief, 13.8, 16.3).is_none());
     }
 
     #[test]
@@ -297,6 +378,6 @@ mod tests {
             .map(|l| seen_from(&truth, l.rho, l.theta))
             .collect();
         let belief = prior(Pose2::IDENTITY, 0.05, 0.05);
-        assert!(fit(&previous, &current, &belief, 13.8).is_none());
+        assert!(fit(&previous, &current, &belief, 13.8, 16.3).is_none());
     }
 }

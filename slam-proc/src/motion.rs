@@ -22,7 +22,7 @@ use crate::config::SlamConfig;
 use crate::line_motion;
 use crate::observation::{LineObservation, OdometryInput, Prepared};
 use crate::pose::Pose2;
-use crate::rigid_fit::{Prior, kabsch, refine};
+use crate::rigid_fit::{Prior, kabsch, normal_equations, refine};
 
 /// The motion from the previous scan to this one (`previous_from_current`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -121,7 +121,7 @@ impl MotionEstimator {
                 inliers: 0,
             },
             Some(previous) => self
-                .fit(previous, observations, &prior, config)
+                .fit(previous, observations, lines, &prior, config)
                 .or_else(|| self.fit_lines(lines, &prior, config))
                 .unwrap_or(Motion {
                     delta: prior.delta,
@@ -162,6 +162,32 @@ impl MotionEstimator {
         }
     }
 
+    /// A corner fit refined with the wall lines that match under it: two corners close
+    /// together (the sides of a niche) fix the heading poorly, and long walls well.
+    fn with_lines(
+        &self,
+        estimate: Pose2,
+        pairs: &[(&Prepared, &Prepared)],
+        lines: &[LineObservation],
+        prior: &Prior,
+        config: &SlamConfig,
+    ) -> Option<(Pose2, Matrix3<f64>)> {
+        if lines.is_empty() || self.previous_lines.is_empty() {
+            return None;
+        }
+        let prior_information = Cholesky::new(prior.covariance)?.inverse();
+        let around = line_prior(estimate, &prior.covariance, config);
+        let (refined, covariance, _) = line_motion::refine(
+            &self.previous_lines,
+            lines,
+            &around,
+            self.line_gate,
+            self.gate,
+            |t| Some(normal_equations(t, pairs, prior, &prior_information)),
+        )?;
+        Some((refined, covariance))
+    }
+
     /// The motion from the wall lines of this scan and the previous one, with the prior.
     fn fit_lines(
         &self,
@@ -169,17 +195,14 @@ impl MotionEstimator {
         prior: &Prior,
         config: &SlamConfig,
     ) -> Option<Motion> {
-        // Lines match on two numbers, not four: they need a tighter prior than corners.
-        let (xy, yaw) = (config.line_prior_sigma_xy, config.line_prior_sigma_yaw);
-        let tight = Prior {
-            delta: prior.delta,
-            covariance: prior.covariance.zip_map(
-                &Matrix3::from_diagonal(&Vector3::new(xy * xy, xy * xy, yaw * yaw)),
-                |a, b| if a > b { b } else { a },
-            ),
-        };
-        let (delta, covariance, matched) =
-            line_motion::fit(&self.previous_lines, lines, &tight, self.line_gate)?;
+        let tight = line_prior(prior.delta, &prior.covariance, config);
+        let (delta, covariance, matched) = line_motion::fit(
+            &self.previous_lines,
+            lines,
+            &tight,
+            self.line_gate,
+            self.gate,
+        )?;
         within_limits(&delta, config).then_some(Motion {
             delta,
             covariance,
@@ -192,6 +215,7 @@ impl MotionEstimator {
         &self,
         previous: &[Prepared],
         current: &[Prepared],
+        lines: &[LineObservation],
         prior: &Prior,
         config: &SlamConfig,
     ) -> Option<Motion> {
@@ -248,6 +272,11 @@ impl MotionEstimator {
                 .map(|c| (&previous[c.previous], &current[c.current]))
                 .collect();
             (estimate, covariance) = refine(start, &pairs, prior)?;
+            if let Some((refined, refined_covariance)) =
+                self.with_lines(estimate, &pairs, lines, prior, config)
+            {
+                (estimate, covariance) = (refined, refined_covariance);
+            }
         }
         within_limits(&estimate, config).then_some(Motion {
             delta: estimate,
@@ -378,6 +407,21 @@ fn residual(observed: &Vector4<f64>, predicted: &Vector4<f64>) -> Vector4<f64> {
 
 fn mahalanobis(nu: &Vector4<f64>, covariance: &Matrix4<f64>) -> Option<f64> {
     Cholesky::new(*covariance).map(|ch| nu.dot(&ch.solve(nu)))
+}
+
+/// A belief centred on `delta` for matching lines: `covariance`, but no wider than the
+/// line prior. Lines match on two numbers, not four like corners, and parallel walls alias:
+/// they need a tighter prior than corners.
+fn line_prior(delta: Pose2, covariance: &Matrix3<f64>, config: &SlamConfig) -> Prior {
+    let (xy, yaw) = (config.line_prior_sigma_xy, config.line_prior_sigma_yaw);
+    let widest = Vector3::new(xy * xy, xy * xy, yaw * yaw);
+    Prior {
+        delta,
+        covariance: Matrix3::from_fn(|i, j| {
+            let c = covariance[(i, j)];
+            if i == j { c.min(widest[i]) } else { c }
+        }),
+    }
 }
 
 fn within_limits(delta: &Pose2, config: &SlamConfig) -> bool {

@@ -23,7 +23,11 @@ pub(crate) struct Particle {
     pub pose: Pose2,
     /// Log of the (unnormalised) importance weight since the last resampling.
     pub log_weight: f64,
-    /// The increment of the last prediction, noise included, in the particle's frame.
+    /// The particle's last step, in its frame before the step, as the constant-velocity
+    /// prior will repeat it: the prediction's increment (noise included) plus the part of
+    /// the observation correction within three standard deviations of the step's noise.
+    /// A larger correction is the map undoing accumulated drift (a loop closing), not
+    /// motion, and repeated as a velocity it would throw the next steps off.
     pub increment: Pose2,
     pub map: CornerMap,
 }
@@ -146,7 +150,17 @@ impl Particle {
         {
             let predicted = self.pose;
             self.pose = corrected;
-            self.increment = self.increment.compose(&predicted.between(&corrected));
+            let correction = predicted.between(&corrected);
+            let p = &context.pose.covariance;
+            let bound = |v: f64, variance: f64| {
+                let limit = 3.0 * variance.sqrt();
+                v.clamp(-limit, limit)
+            };
+            self.increment = self.increment.compose(&Pose2::new(
+                bound(correction.x, p[(0, 0)]),
+                bound(correction.y, p[(1, 1)]),
+                bound(correction.yaw, p[(2, 2)]),
+            ));
             frame = Frame::new(&self.pose);
             for (world, observation) in scratch.world.iter_mut().zip(context.observations) {
                 *world = frame.to_world(observation);
@@ -324,9 +338,12 @@ mod tests {
         (map, observations)
     }
 
+    /// The prediction is uncertain by 5 cm and 0.02 rad.
+    const PREDICTION: (f64, f64) = (0.05, 0.02);
+
     fn update(draw_pose: bool, predicted: Pose2, truth: &Pose2) -> Particle {
         let (map, observations) = scene(truth);
-        update_in(map, &observations, draw_pose, predicted)
+        update_in(map, &observations, draw_pose, predicted, PREDICTION)
     }
 
     fn update_in(
@@ -334,14 +351,18 @@ mod tests {
         observations: &[Prepared],
         draw_pose: bool,
         predicted: Pose2,
+        (sigma_xy, sigma_yaw): (f64, f64),
     ) -> Particle {
         let config = SlamConfig::default();
         let mut gates = Gates::new(config.association_probability);
         gates.ensure(observations.len());
         let context = ScanContext {
             observations,
-            // The prediction is uncertain by 5 cm and 0.02 rad.
-            pose: PoseUncertainty::from_variances(2.5e-3, 2.5e-3, 4e-4),
+            pose: PoseUncertainty::from_variances(
+                sigma_xy * sigma_xy,
+                sigma_xy * sigma_xy,
+                sigma_yaw * sigma_yaw,
+            ),
             gates: &gates,
             config: &config,
             draw_pose,
@@ -387,6 +408,23 @@ mod tests {
     }
 
     #[test]
+    fn a_correction_beyond_the_step_noise_is_not_taken_for_motion() {
+        // The prediction is 3.8 sigma off (1 cm noise): the pose is corrected all the way,
+        // but only three sigma of it count as the step's motion.
+        let truth = Pose2::new(0.5, 0.2, 0.3);
+        let (map, observations) = scene(&truth);
+        let predicted = Pose2::new(truth.x + 0.038, truth.y, truth.yaw);
+        let drawn = update_in(map, &observations, true, predicted, (0.01, 0.002));
+        assert!((drawn.pose.x - truth.x).abs() < 3e-3, "{:?}", drawn.pose);
+        let previous = predicted.compose(&STEP.inverse());
+        let reached = previous.compose(&drawn.increment);
+        assert!(
+            (reached.x - (predicted.x - 0.03)).abs() < 3e-3,
+            "{reached:?}"
+        );
+    }
+
+    #[test]
     fn a_corner_mapped_twice_keeps_the_better_copy() {
         let truth = Pose2::new(0.5, 0.2, 0.3);
         let (mut map, observations) = scene(&truth);
@@ -401,7 +439,7 @@ mod tests {
             2,
         );
         assert_eq!(map.confirmed_count(), 5);
-        let particle = update_in(map, &observations, false, truth);
+        let particle = update_in(map, &observations, false, truth, PREDICTION);
         // Observing corner 0 moved it; its weaker copy went.
         assert!(particle.map.get(copy).is_none());
         assert!(particle.map.get(0).is_some());

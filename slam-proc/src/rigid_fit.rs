@@ -84,7 +84,7 @@ pub(crate) fn gauss_newton(
 }
 
 /// `J^T W J` and `J^T W r` of every residual at `estimate`, parameters `(tx, ty, yaw)`.
-fn normal_equations(
+pub(crate) fn normal_equations(
     estimate: &Pose2,
     pairs: &[(&Prepared, &Prepared)],
     prior: &Prior,
