@@ -137,7 +137,9 @@ fn run() -> Result<()> {
             recorder.record_pose(
                 sample.header.seq,
                 sample.header.stamp_ns,
-                pose(sample.best),
+                // The weighted mean is the filter's estimate of each pose; the best
+                // particle (whose map is published) flickers as the weights change.
+                pose(sample.mean),
                 Some(pose(sample.dead_reckoning)),
                 latency,
             )?;

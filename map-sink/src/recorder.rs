@@ -21,7 +21,8 @@ use crate::scan_points::scan_points;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum::TumWriter;
 
-/// The estimated trajectory, appended as it grows.
+/// The estimated trajectory (the particles' weighted mean pose per scan), appended as it
+/// grows.
 pub const TRAJECTORY_FILE: &str = "trajectory.tum";
 /// The simulator's true trajectory, appended as it grows (only when truth is recorded).
 pub const GROUND_TRUTH_FILE: &str = "ground_truth.tum";

@@ -45,7 +45,8 @@ pub struct SlamConfig {
     /// Smallest standard deviation of an odometry increment's rotation, radians.
     pub odometry_min_sigma_yaw: f64,
 
-    /// Particle translation noise per step: `sigma = base + per_metre * |t| + per_radian * |dyaw|`.
+    /// Particle translation noise per step, at most (the model): `sigma = base + per_metre
+    /// * |t| + per_radian * |dyaw|`.
     pub noise_xy_base: f64,
     pub noise_xy_per_metre: f64,
     pub noise_xy_per_radian: f64,
@@ -61,6 +62,13 @@ pub struct SlamConfig {
     /// than on the noise-free one: that keeps more diversity, and measured better (sparse
     /// synthetic loop with odometry: ATE 0.05 m against 0.23 m).
     pub observation_proposal: bool,
+    /// A corner-fitted step spreads the particles by this multiple of the fit's own
+    /// standard deviations (within the model above): the fit knows how well it did.
+    pub noise_fit_scale: f64,
+    /// Smallest translation noise of a fitted step, metres: particles must stay diverse.
+    pub noise_xy_floor: f64,
+    /// Smallest rotation noise of a fitted step, radians.
+    pub noise_yaw_floor: f64,
     /// Noise multiplier for a step at constant velocity (no corner fit, no odometry): the
     /// motion is a guess, so the particles must spread wider. A step on odometry alone
     /// spreads by the odometry's reported uncertainty, at least as wide as a fitted step.
@@ -127,6 +135,9 @@ impl Default for SlamConfig {
             noise_yaw_base: 0.004,
             noise_yaw_per_radian: 0.05,
             noise_yaw_per_metre: 0.01,
+            noise_fit_scale: 2.0,
+            noise_xy_floor: 0.002,
+            noise_yaw_floor: 0.0005,
             fallback_noise_scale: 3.0,
             observation_proposal: true,
             observation_extra_sigma_xy: 0.01,
@@ -190,6 +201,9 @@ impl SlamConfig {
             ("odometry_min_sigma_yaw", self.odometry_min_sigma_yaw),
             ("noise_xy_base", self.noise_xy_base),
             ("noise_yaw_base", self.noise_yaw_base),
+            ("noise_fit_scale", self.noise_fit_scale),
+            ("noise_xy_floor", self.noise_xy_floor),
+            ("noise_yaw_floor", self.noise_yaw_floor),
             ("search_radius", self.search_radius),
             ("grid_cell_size", self.grid_cell_size),
             ("view_range", self.view_range),

@@ -80,9 +80,12 @@ fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> serde_
 
 #[test]
 fn office_loop_is_mapped_within_target() {
-    // Target 0.10 m (README); the margin keeps a busy CI machine from flaking.
-    let metrics = run_world("office", 1200, 100, 0.15);
-    // The filter must beat the scan-matching motion integrated alone.
+    // The whole loop (109 m, about 4 s in lockstep): closing it is what the filter is
+    // for. Target 0.10 m (README); the margin keeps a busy CI machine from flaking.
+    let metrics = run_world("office", 0, 100, 0.15);
+    // The filter must beat the scan-matching motion integrated alone. (On an open stretch
+    // it need not: the motion estimate drifts by millimetres there, and the particles'
+    // noise costs about as much as the map gives back.)
     let dead_reckoning = number(&metrics, "dead_reckoning_ate_rmse_m");
     assert!(number(&metrics, "ate_rmse_m") < dead_reckoning, "{metrics}");
     assert!(number(&metrics, "map_corner_rmse_m") < 0.08, "{metrics}");
