@@ -3,6 +3,9 @@
 use std::f64::consts::{PI, TAU};
 
 /// Wraps an angle to `[-pi, pi)`; a non-finite angle stays non-finite.
+// Inlined across crates: the filters call it in their innermost loops, and the common
+// case is two comparisons.
+#[inline]
 pub fn wrap_angle(angle: f64) -> f64 {
     // Most angles are sums of two wrapped ones: one step of 2 pi brings them back without
     // the division that the general case needs.

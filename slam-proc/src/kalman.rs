@@ -10,7 +10,7 @@ use crate::angle::wrap_angle;
 use crate::corner_model::innovation;
 #[cfg(test)]
 use crate::linalg::spd_inverse4;
-use crate::linalg::{mul4, mul4_symmetric_transpose};
+use crate::linalg::{joseph_sum, mul4};
 
 /// The smallest opening angle kept off 0 and pi: an update never turns a corner into a
 /// straight wall or a spike.
@@ -49,8 +49,12 @@ pub(crate) fn update_with_inverse(
     let i_minus_k = Matrix4::identity() - gain;
     // Both terms are computed as symmetric products (upper triangle mirrored), which is
     // the symmetrisation.
-    let joseph = mul4_symmetric_transpose(&mul4(&i_minus_k, covariance), &i_minus_k)
-        + mul4_symmetric_transpose(&mul4(&gain, noise), &gain);
+    let joseph = joseph_sum(
+        &mul4(&i_minus_k, covariance),
+        &i_minus_k,
+        &mul4(&gain, noise),
+        &gain,
+    );
     (updated, joseph)
 }
 

@@ -270,18 +270,18 @@ impl Particle {
     /// depends on the viewpoint, or one remapped before a loop closed. The one seen fewer
     /// times goes (the younger among equals).
     fn drop_duplicate_of(&mut self, id: u32, near: &[u32], config: &SlamConfig) {
-        let Some(corner) = self.map.get(id).copied() else {
+        let Some((mean, observations)) = self.map.get(id).map(|c| (c.mean, c.observations)) else {
             return;
         };
         for &other in near {
-            let Some(neighbour) = self.map.get(other).copied() else {
+            let Some(neighbour) = self.map.get(other) else {
                 continue;
             };
-            if other == id || !similar(&corner.mean, &neighbour.mean, config) {
+            if other == id || !similar(&mean, &neighbour.mean, config) {
                 continue;
             }
-            let neighbour_weaker = neighbour.observations < corner.observations
-                || (neighbour.observations == corner.observations && other > id);
+            let neighbour_weaker = neighbour.observations < observations
+                || (neighbour.observations == observations && other > id);
             let weaker = if neighbour_weaker { other } else { id };
             self.map.remove(weaker, config.confirm_observations);
             if weaker == id {
