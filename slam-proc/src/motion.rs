@@ -41,8 +41,8 @@ pub(crate) enum MotionSource {
     /// Matched corners (fused with the prior): the fit's residual error.
     Corners,
     /// Matched wall lines and the prior: heading and offsets from the walls, the
-    /// translation along them from the prior.
-    Lines,
+    /// translation along them from the prior, which is odometry or constant velocity.
+    Lines { on_odometry: bool },
     /// Odometry alone, with the covariance it reports.
     Odometry,
     /// Constant velocity alone: a guess.
@@ -122,7 +122,7 @@ impl MotionEstimator {
             },
             Some(previous) => self
                 .fit(previous, observations, lines, &prior, config)
-                .or_else(|| self.fit_lines(lines, &prior, config))
+                .or_else(|| self.fit_lines(lines, &prior, prior_source, config))
                 .unwrap_or(Motion {
                     delta: prior.delta,
                     covariance: prior.covariance,
@@ -193,6 +193,7 @@ impl MotionEstimator {
         &self,
         lines: &[LineObservation],
         prior: &Prior,
+        prior_source: MotionSource,
         config: &SlamConfig,
     ) -> Option<Motion> {
         let tight = line_prior(prior.delta, &prior.covariance, config);
@@ -206,7 +207,9 @@ impl MotionEstimator {
         within_limits(&delta, config).then_some(Motion {
             delta,
             covariance,
-            source: MotionSource::Lines,
+            source: MotionSource::Lines {
+                on_odometry: prior_source == MotionSource::Odometry,
+            },
             inliers: matched,
         })
     }

@@ -45,14 +45,19 @@ impl MotionNoise {
                     sigma_yaw: fitted(yaw, config.noise_yaw_floor, model.sigma_yaw, config),
                 }
             }
-            // Walls fix a line step's heading as well as the fit says (scaling it and
-            // flooring it like a corner fit's measured worse on the office loop: 0.013-0.073
-            // m against 0.008-0.018 m over six seeds); the advance along them is the
-            // prior's, as uncertain as the model says.
-            MotionSource::Lines => {
-                let (_, yaw) = fit_sigmas(&motion.covariance);
+            // Walls fix a line step's heading as well as the fit says (scaled and floored
+            // like a corner fit's, it measured worse on the office loop: 0.013-0.073 m
+            // against 0.008-0.018 m over six seeds). The advance along them is the
+            // prior's: as good as the fit says on odometry, a guess at constant velocity
+            // (the fit's tighter figure measured worse there too: 0.014-0.039 m).
+            MotionSource::Lines { on_odometry } => {
+                let (xy, yaw) = fit_sigmas(&motion.covariance);
                 Self {
-                    sigma_xy: model.sigma_xy,
+                    sigma_xy: if on_odometry {
+                        fitted(xy, config.noise_xy_floor, model.sigma_xy, config)
+                    } else {
+                        model.sigma_xy
+                    },
                     sigma_yaw: yaw.min(model.sigma_yaw),
                 }
             }
@@ -140,10 +145,23 @@ mod tests {
         let perfect = noise(motion(0.3, 0.2, MotionSource::Corners, 0.0));
         assert_eq!(perfect.sigma_xy, config.noise_xy_floor);
         assert_eq!(perfect.sigma_yaw, config.noise_yaw_floor);
-        // Lines: heading from the fit as it is, translation from the model.
-        let walls = noise(motion(0.3, 0.2, MotionSource::Lines, 1e-6));
+        // Lines: heading from the fit as it is; translation from the model at constant
+        // velocity, from the fit (odometry along the walls) on odometry.
+        let walls = noise(motion(
+            0.3,
+            0.2,
+            MotionSource::Lines { on_odometry: false },
+            1e-6,
+        ));
         assert_eq!(walls.sigma_xy, large.sigma_xy);
         assert!((walls.sigma_yaw - 1e-3).abs() < 1e-15);
+        let walls = noise(motion(
+            0.3,
+            0.2,
+            MotionSource::Lines { on_odometry: true },
+            1e-6,
+        ));
+        assert_eq!(walls.sigma_xy, good.sigma_xy);
         let guess = noise(motion(0.3, 0.2, MotionSource::ConstantVelocity, 0.0));
         assert!((guess.sigma_xy - config.fallback_noise_scale * large.sigma_xy).abs() < 1e-15);
         // Odometry spreads the particles as widely as it says it errs (the motion estimate
