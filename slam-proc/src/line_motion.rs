@@ -1,5 +1,6 @@
-//! The motion between consecutive scans from their wall lines, for scans where too few
-//! corners match for a rigid fit (a corridor between corners).
+//! The motion between consecutive scans from their wall lines: alone where too few
+//! corners match for a rigid fit (a corridor between corners), and with the corners where
+//! they do (two corners close together fix the heading poorly, long walls well).
 //!
 //! A line `x cos(theta) + y sin(theta) = rho` of the current scan, seen from the previous
 //! scan's frame through `previous_from_current = (tx, ty, yaw)`, is
@@ -115,7 +116,7 @@ fn associate(
 }
 
 /// The normal equations `(J^T W J, J^T W r)` of a Gaussian prior on the transform at `t`.
-pub(crate) fn prior_terms(
+fn prior_terms(
     prior: &Prior,
     information: &Matrix3<f64>,
     t: &Pose2,
@@ -173,6 +174,7 @@ pub(crate) fn refine(
     (d <= departure_gate).then_some((estimate, covariance, lines))
 }
 
+/// [`refine`] without the departure check.
 fn refine_unchecked(
     previous: &[LineObservation],
     current: &[LineObservation],

@@ -9,7 +9,9 @@
 //!    with motion, so it gates sharply; position and heading gate through the prior.
 //! 3. RANSAC over every pair of candidates: each minimal hypothesis is fitted, its inliers
 //!    counted one-to-one, and the best is refitted on its inliers (weighted Kabsch, then
-//!    Gauss-Newton with headings and the prior, so the prior is fused with the fit).
+//!    Gauss-Newton with headings and the prior, so the prior is fused with the fit, and
+//!    with the wall lines that match under the fit: corners close together fix the
+//!    heading poorly, long walls well).
 //! 4. Fewer than two consistent matches, or a fit beyond the per-step limits: the wall
 //!    lines matched under the prior, fused with it ([`crate::line_motion`]); without a
 //!    line either, the prior.
@@ -488,6 +490,71 @@ mod tests {
             corner(7.0, 3.0, 3.0, 1.4),
             corner(2.0, -5.0, -2.5, 1.0),
         ]
+    }
+
+    /// `(rho, theta)` lines (previous frame) as seen from `delta`.
+    fn lines_seen_from(delta: &Pose2, lines: &[(f64, f64)]) -> Vec<LineObservation> {
+        lines
+            .iter()
+            .map(|&(rho, theta)| {
+                let (s, c) = theta.sin_cos();
+                LineObservation {
+                    rho: rho - delta.x * c - delta.y * s,
+                    theta: wrap_angle(theta - delta.yaw),
+                    covariance: nalgebra::Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn walls_carry_the_motion_where_corners_do_not() {
+        let config = SlamConfig::default();
+        let mut estimator = MotionEstimator::new(&config);
+        // A corridor: two walls 1.2 m either side, one corner in view.
+        let walls = [
+            (1.2, std::f64::consts::FRAC_PI_2),
+            (1.2, -std::f64::consts::FRAC_PI_2),
+        ];
+        let previous_corner = [corner(4.0, 1.2, -2.4, 1.57)];
+        let identity = Pose2::IDENTITY;
+        estimator.estimate(
+            0,
+            &previous_corner,
+            &lines_seen_from(&identity, &walls),
+            None,
+            &config,
+        );
+        // A straight step at constant velocity, then one that drifts 2 cm across and turns
+        // 0.02 rad, which constant velocity cannot know and the walls see.
+        let step = Pose2::new(0.1, 0.0, 0.0);
+        let current = seen_from(&step, &previous_corner);
+        estimator.estimate(25, &current, &lines_seen_from(&step, &walls), None, &config);
+        // The filter tells the estimator the step it made (the walls alone cannot say how
+        // far along them it went).
+        estimator.set_last_motion(step);
+        let drift = Pose2::new(0.1, 0.02, 0.02);
+        let after = step.compose(&drift);
+        let motion = estimator.estimate(
+            50,
+            &seen_from(&after, &previous_corner),
+            &lines_seen_from(&after, &walls),
+            None,
+            &config,
+        );
+        assert_eq!(motion.source, MotionSource::Lines { on_odometry: false });
+        assert!(
+            (motion.delta.yaw - drift.yaw).abs() < 1e-3,
+            "{:?}",
+            motion.delta
+        );
+        assert!(
+            (motion.delta.y - drift.y).abs() < 5e-3,
+            "{:?}",
+            motion.delta
+        );
+        // Along the walls, constant velocity.
+        assert!((motion.delta.x - 0.1).abs() < 5e-3, "{:?}", motion.delta);
     }
 
     #[test]

@@ -150,6 +150,8 @@ impl Particle {
         {
             let predicted = self.pose;
             self.pose = corrected;
+            // The step the next constant-velocity prior repeats takes the correction only
+            // up to three sigma of the step's noise (see `increment`).
             let correction = predicted.between(&corrected);
             let p = &context.pose.covariance;
             let bound = |v: f64, variance: f64| {

@@ -6,18 +6,18 @@ use std::time::Instant;
 
 mod common;
 
-use common::recorded::seed_hall_corners;
+use common::recorded::{ScanFeatures, seed_hall_features};
 use feature_proc::FeatureConfig;
-use slam_proc::{FastSlam, MapCorner, Observation, Pose2, SlamConfig, wrap_angle};
+use slam_proc::{FastSlam, MapCorner, Pose2, SlamConfig, wrap_angle};
 
-fn corners() -> Vec<Vec<Observation>> {
+fn features() -> Vec<ScanFeatures> {
     // The course code keeps 15 m for SLAM: far corners are sparse and noisy.
-    let corners = seed_hall_corners(FeatureConfig {
+    let scans = seed_hall_features(FeatureConfig {
         max_range: 15.0,
         ..FeatureConfig::default()
     });
-    assert_eq!(corners.len(), 400);
-    corners
+    assert_eq!(scans.len(), 400);
+    scans
 }
 
 struct Outcome {
@@ -26,7 +26,7 @@ struct Outcome {
     seconds_per_scan: f64,
 }
 
-fn run(scans: &[Vec<Observation>], particles: usize) -> Outcome {
+fn run(scans: &[ScanFeatures], particles: usize) -> Outcome {
     let config = SlamConfig {
         particles,
         ..SlamConfig::default()
@@ -37,7 +37,10 @@ fn run(scans: &[Vec<Observation>], particles: usize) -> Outcome {
     let trajectory = scans
         .iter()
         .enumerate()
-        .map(|(k, s)| slam.process(k as u64 * 25_000_000, s, &[], None).mean)
+        .map(|(k, s)| {
+            slam.process(k as u64 * 25_000_000, &s.corners, &s.lines, None)
+                .mean
+        })
         .collect();
     let seconds_per_scan = start.elapsed().as_secs_f64() / scans.len() as f64;
     Outcome {
@@ -63,8 +66,8 @@ fn duplicates(map: &[MapCorner]) -> Vec<(usize, usize, f64)> {
 
 #[test]
 fn all_scans_run_without_duplicate_corners() {
-    let scans = corners();
-    let per_scan = scans.iter().map(Vec::len).sum::<usize>() as f64 / scans.len() as f64;
+    let scans = features();
+    let per_scan = scans.iter().map(|s| s.corners.len()).sum::<usize>() as f64 / scans.len() as f64;
     for particles in [50, 100] {
         let outcome = run(&scans, particles);
         let steps: Vec<f64> = outcome
