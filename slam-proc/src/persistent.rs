@@ -7,8 +7,8 @@
 
 use std::sync::Arc;
 
-/// Index bits per level. Eight-way nodes keep the copy on a shared write small (a leaf of
-/// eight corners is about 1.4 kB) at the price of one more level per factor of eight.
+/// Index bits per level. Sixteen-way nodes keep the copy on a shared write small (a leaf
+/// of sixteen corners is about 2.7 kB) and the tree shallow (three levels to 4096 slots).
 const BITS: u32 = 4;
 const WIDTH: usize = 1 << BITS;
 const MASK: usize = WIDTH - 1;
