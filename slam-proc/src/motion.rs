@@ -277,6 +277,8 @@ impl MotionEstimator {
                 .map(|c| (&previous[c.previous], &current[c.current]))
                 .collect();
             (estimate, covariance) = refine(start, &pairs, prior)?;
+            // In both rounds: the second round's inliers are then chosen under the
+            // estimate the walls have steadied.
             if let Some((refined, refined_covariance)) =
                 self.with_lines(estimate, &pairs, lines, prior, config)
             {
