@@ -22,8 +22,8 @@ pub struct Observation {
 }
 
 /// A wall line in the sensor frame, in normal form `x cos(theta) + y sin(theta) = rho`.
-/// Lines only steady the motion estimate where too few corners are in view (a corridor);
-/// the map holds corners.
+/// Lines steady the motion estimate (they refine every corner fit and carry it where too
+/// few corners match, as in a corridor); the map holds corners.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineObservation {
     pub rho: f64,

@@ -113,10 +113,10 @@ impl FastSlam {
     }
 
     /// Updates the filter with one scan: its acquisition time, its corners and wall lines
-    /// in the sensor frame (lines only steady the motion estimate where too few corners
-    /// match; pass none if the extractor gives none) and, when the robot has odometry, the
-    /// odometry pose at the scan. Features that are not usable (non-finite, an angle
-    /// outside `(0, pi)`, a covariance that is not positive definite) are ignored.
+    /// in the sensor frame (lines only steady the motion estimate; pass none if the
+    /// extractor gives none) and, when the robot has odometry, the odometry pose at the
+    /// scan. Features that are not usable (non-finite, an angle outside `(0, pi)`, a
+    /// covariance that is not positive definite) are ignored.
     pub fn process(
         &mut self,
         stamp_ns: u64,
