@@ -66,6 +66,7 @@ pub(crate) struct Pairing {
 impl Pairing {
     /// The pairing of `observation` with `corner`, or `None` when it fails the individual
     /// gate (4 dof).
+    #[inline]
     pub fn new(
         observation: &WorldObservation,
         id: u32,

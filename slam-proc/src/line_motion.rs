@@ -50,10 +50,25 @@ fn residual(
     t: &Pose2,
 ) -> (Vector2<f64>, Matrix2x3<f64>, Matrix2<f64>) {
     let m = moved(current, t);
-    let r = Vector2::new(m.line.x - target.rho, wrap_angle(m.line.y - target.theta));
-    let covariance =
-        m.line_jacobian * current.covariance * m.line_jacobian.transpose() + target.covariance;
+    let (r, covariance) = m.residual(current, target);
     (r, m.pose_jacobian, covariance)
+}
+
+impl Moved {
+    /// `moved - target` and its covariance, for the line `current` this was moved from.
+    fn residual(
+        &self,
+        current: &LineObservation,
+        target: &LineObservation,
+    ) -> (Vector2<f64>, Matrix2<f64>) {
+        let r = Vector2::new(
+            self.line.x - target.rho,
+            wrap_angle(self.line.y - target.theta),
+        );
+        let covariance = self.line_jacobian * current.covariance * self.line_jacobian.transpose()
+            + target.covariance;
+        (r, covariance)
+    }
 }
 
 /// Mahalanobis distance of a residual, `None` when its covariance is not positive definite.
@@ -81,10 +96,21 @@ fn associate(
 ) -> Vec<(usize, usize)> {
     let mut candidates = Vec::new();
     let mut found = Vec::new();
+    // The prior's spread in the moved line's angle is its yaw variance: a pair whose
+    // angles differ by more than the gate allows on that and both lines' angle variances
+    // fails the 2-dof test too (a marginal of it), before any 2x2 algebra.
+    let yaw_variance = prior.covariance[(2, 2)];
     for (i, c) in current.iter().enumerate() {
         found.clear();
+        let m = moved(c, &prior.delta);
+        let g = &m.pose_jacobian;
         for (j, p) in previous.iter().enumerate() {
-            let (r, g, covariance) = residual(c, p, &prior.delta);
+            let angle = wrap_angle(m.line.y - p.theta);
+            let angle_variance = c.covariance[(1, 1)] + p.covariance[(1, 1)] + yaw_variance;
+            if angle * angle > gate * angle_variance {
+                continue;
+            }
+            let (r, covariance) = m.residual(c, p);
             let with_prior = covariance + g * prior.covariance * g.transpose();
             if let Some(d) = distance(&r, &with_prior)
                 && d <= gate

@@ -117,9 +117,9 @@ impl Particle {
                     continue;
                 }
                 scratch.near.push(id);
-                scratch
-                    .pairings
-                    .extend(Pairing::new(observation, id, corner, &context.pose, gate));
+                if let Some(pairing) = Pairing::new(observation, id, corner, &context.pose, gate) {
+                    scratch.pairings.push(pairing);
+                }
             }
             // Ties broken by id: the grid's order must not decide anything.
             scratch.pairings[start..].sort_by(|a, b| {
@@ -151,8 +151,10 @@ impl Particle {
             let predicted = self.pose;
             self.pose = corrected;
             // The step the next constant-velocity prior repeats takes the correction only
-            // up to three sigma of the step's noise (see `increment`).
-            let correction = predicted.between(&corrected);
+            // up to three sigma of the step's noise (see `increment`). The correction in
+            // the predicted frame: `frame` is still the predicted pose's.
+            let (x, y) = frame.to_local(corrected.x, corrected.y);
+            let correction = Pose2::new(x, y, wrap_angle(corrected.yaw - predicted.yaw));
             let p = &context.pose.covariance;
             let bound = |v: f64, variance: f64| {
                 let limit = 3.0 * variance.sqrt();
@@ -163,9 +165,12 @@ impl Particle {
                 bound(correction.y, p[(1, 1)]),
                 bound(correction.yaw, p[(2, 2)]),
             ));
+            // The observations move with the pose; their covariances stay as turned by the
+            // predicted pose (a fraction of a degree away), where the association computed
+            // the gains the map update uses: gain and noise then belong together.
             frame = Frame::new(&self.pose);
             for (world, observation) in scratch.world.iter_mut().zip(context.observations) {
-                *world = frame.to_world(observation);
+                world.z = frame.mean_to_world(observation);
             }
         }
 
@@ -175,9 +180,8 @@ impl Particle {
                 Some(index) => {
                     let pairing = &scratch.pairings[index];
                     scratch.observed.push(pairing.corner);
-                    // The gain comes from `(P + R)^-1` at the predicted pose; after a pose
-                    // correction `R` has turned by a fraction of a degree. The Joseph form
-                    // gives the right covariance for any gain, so it stays consistent.
+                    // The gain comes from `(P + R)^-1` with `R` as turned by the predicted
+                    // pose, which is the `R` the update uses (see above).
                     self.map
                         .update(pairing.corner, config.confirm_observations, |corner| {
                             kalman::update_with_inverse(

@@ -69,14 +69,17 @@ pub(crate) fn gauss_newton(
     let mut estimate = start;
     for _ in 0..6 {
         let (information, gradient) = normal_equations(&estimate)?;
-        let step = -Cholesky::new(information)?.solve(&gradient);
+        let factor = Cholesky::new(information)?;
+        let step = -factor.solve(&gradient);
         estimate = Pose2::new(
             estimate.x + step.x,
             estimate.y + step.y,
             wrap_angle(estimate.yaw + step.z),
         );
         if step.x.abs() < 1e-9 && step.y.abs() < 1e-9 && step.z.abs() < 1e-10 {
-            break;
+            // A step this small leaves the Jacobians as they were: the information just
+            // used is the one at the estimate.
+            return Some((estimate, factor.inverse()));
         }
     }
     let (information, _) = normal_equations(&estimate)?;

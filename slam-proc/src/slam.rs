@@ -41,7 +41,13 @@ pub struct FastSlam {
     parents: Vec<usize>,
     /// This scan's usable lines.
     lines: Vec<LineObservation>,
+    /// One set of update buffers per chunk of `PARTICLES_PER_TASK` particles.
+    scratch: Vec<Scratch>,
 }
+
+/// Particles per parallel task of the update: enough that a task outweighs its
+/// scheduling, few enough that two cores share 100 particles evenly.
+const PARTICLES_PER_TASK: usize = 8;
 
 impl FastSlam {
     /// A filter with every particle at the origin and an empty map.
@@ -86,6 +92,7 @@ impl FastSlam {
             weights: Vec::new(),
             parents: Vec::new(),
             lines: Vec::new(),
+            scratch: Vec::new(),
             config,
         })
     }
@@ -179,13 +186,20 @@ impl FastSlam {
             draw_pose: config.observation_proposal && self.scans > 0,
         };
         let (streams, scan) = (&self.streams, self.scans);
-        self.particles.par_iter_mut().enumerate().for_each_init(
-            Scratch::default,
-            |scratch, (i, particle)| {
-                let mut rng = streams.proposal(scan, i);
-                particle.log_weight += particle.update(&context, scratch, &mut rng);
-            },
-        );
+        // Fixed chunks, each with its own scratch kept across scans: the buffers grow once,
+        // not at every split of the work.
+        let chunks = self.particles.len().div_ceil(PARTICLES_PER_TASK);
+        self.scratch.resize_with(chunks, Scratch::default);
+        self.particles
+            .par_chunks_mut(PARTICLES_PER_TASK)
+            .zip(self.scratch.par_iter_mut())
+            .enumerate()
+            .for_each(|(chunk, (particles, scratch))| {
+                for (k, particle) in particles.iter_mut().enumerate() {
+                    let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
+                    particle.log_weight += particle.update(&context, scratch, &mut rng);
+                }
+            });
         let update_done = Instant::now();
 
         let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
