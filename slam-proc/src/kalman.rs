@@ -36,9 +36,10 @@ pub(crate) fn update(
 /// The update with `(P + R)^-1` already known (association computed it).
 ///
 /// Compiled twice, and the AVX2 build chosen at run time where the CPU has it: three
-/// 4x4 products a column at a time are what 256-bit registers are for (a seventh of the
-/// filter's instructions on seed-hall). Rust does not fuse multiplications and additions
-/// unasked, so both builds give the same bits.
+/// 4x4 products a column at a time are what 256-bit registers are for (on seed-hall the
+/// update was a fifth of the filter's instructions, its AVX2 build needs a third of
+/// them). Rust does not fuse multiplications and additions unasked, so both builds give
+/// the same bits.
 #[multiversion::multiversion(targets("x86_64+avx2"))]
 pub(crate) fn update_with_inverse(
     mean: &Vector4<f64>,
