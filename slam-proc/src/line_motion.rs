@@ -96,18 +96,22 @@ fn associate(
 ) -> Vec<(usize, usize)> {
     let mut candidates = Vec::new();
     let mut found = Vec::new();
-    // The prior's spread in the moved line's angle is its yaw variance: a pair whose
-    // angles differ by more than the gate allows on that and both lines' angle variances
-    // fails the 2-dof test too (a marginal of it), before any 2x2 algebra.
-    let yaw_variance = prior.covariance[(2, 2)];
+    // Each residual component alone bounds the 2-dof distance from below (a marginal has
+    // the smaller variance): a pair whose angles, or offsets, differ by more than the gate
+    // allows on that component is rejected before any 2x2 algebra. The moved line's
+    // variances, prior included, are the same for every previous line.
     for (i, c) in current.iter().enumerate() {
         found.clear();
         let m = moved(c, &prior.delta);
         let g = &m.pose_jacobian;
+        let moved_covariance = m.line_jacobian * c.covariance * m.line_jacobian.transpose()
+            + g * prior.covariance * g.transpose();
         for (j, p) in previous.iter().enumerate() {
             let angle = wrap_angle(m.line.y - p.theta);
-            let angle_variance = c.covariance[(1, 1)] + p.covariance[(1, 1)] + yaw_variance;
-            if angle * angle > gate * angle_variance {
+            let offset = m.line.x - p.rho;
+            if angle * angle > gate * (moved_covariance[(1, 1)] + p.covariance[(1, 1)])
+                || offset * offset > gate * (moved_covariance[(0, 0)] + p.covariance[(0, 0)])
+            {
                 continue;
             }
             let (r, covariance) = m.residual(c, p);

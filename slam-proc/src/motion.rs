@@ -254,12 +254,23 @@ impl MotionEstimator {
         let (_, _, mut estimate) = best?;
         let mut covariance = Matrix3::zeros();
         // Refit on the inliers; the refined transform may gain or lose a match, so refit
-        // once more on the inliers it has.
+        // once more on the inliers it has. The fit depends on nothing but the inliers:
+        // when they stay the same, the second round would repeat the first.
+        let mut fitted: Vec<(usize, usize)> = Vec::new();
         for _ in 0..2 {
             self.inliers(&estimate, previous, current, &candidates, &mut matched);
             if matched.len() < 2 {
                 return None;
             }
+            if matched
+                .iter()
+                .map(|c| (c.current, c.previous))
+                .eq(fitted.iter().copied())
+            {
+                break;
+            }
+            fitted.clear();
+            fitted.extend(matched.iter().map(|c| (c.current, c.previous)));
             let points: Vec<_> = matched
                 .iter()
                 .map(|c| {

@@ -43,6 +43,8 @@ pub(crate) struct ScanContext<'a> {
     /// Whether the update draws each particle's pose (the observation proposal) rather
     /// than keep the one the prediction drew.
     pub draw_pose: bool,
+    /// `cos(view_fov / 2)`, for the field-of-view test of tentative corners.
+    pub cos_half_fov: f64,
 }
 
 /// Buffers of one worker, reused across particles so the update does not allocate once
@@ -216,7 +218,7 @@ impl Particle {
 
         // Within the field of view: |bearing| <= fov / 2, i.e. x >= r cos(fov / 2), which
         // spares an arctangent per tentative corner and particle.
-        let (range, cos_half_fov) = (config.view_range, (0.5 * config.view_fov).cos());
+        let (range, cos_half_fov) = (config.view_range, context.cos_half_fov);
         let in_view = |corner: &CornerState| {
             let (x, y) = frame.to_local(corner.mean.x, corner.mean.y);
             let r2 = x * x + y * y;
@@ -372,6 +374,7 @@ mod tests {
             gates: &gates,
             config: &config,
             draw_pose,
+            cos_half_fov: (0.5 * config.view_fov).cos(),
         };
         let mut particle = Particle {
             pose: predicted,

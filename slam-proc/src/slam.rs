@@ -184,6 +184,7 @@ impl FastSlam {
             config,
             // The first pose is the map frame: nothing to draw.
             draw_pose: config.observation_proposal && self.scans > 0,
+            cos_half_fov: (0.5 * config.view_fov).cos(),
         };
         let (streams, scan) = (&self.streams, self.scans);
         // Fixed chunks, each with its own scratch kept across scans: the buffers grow once,
