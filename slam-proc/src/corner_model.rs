@@ -72,23 +72,16 @@ impl Frame {
         )
     }
 
-    /// The mean of `observation` taken from this frame to the world.
-    pub fn mean_to_world(self, observation: &Prepared) -> Vector4<f64> {
+    /// Takes `observation` from this frame to the world.
+    pub fn to_world(self, observation: &Prepared) -> WorldObservation {
         let (pose, s, c) = (&self.pose, self.sin, self.cos);
         let (x, y) = (observation.z.x, observation.z.y);
-        Vector4::new(
+        let z = Vector4::new(
             pose.x + c * x - s * y,
             pose.y + s * x + c * y,
             wrap_angle(observation.z.z + pose.yaw),
             observation.z.w,
-        )
-    }
-
-    /// Takes `observation` from this frame to the world.
-    pub fn to_world(self, observation: &Prepared) -> WorldObservation {
-        let (s, c) = (self.sin, self.cos);
-        let (x, y) = (observation.z.x, observation.z.y);
-        let z = self.mean_to_world(observation);
+        );
         // G_z S G_z^T with G_z = diag(R, 1, 1): rotate the first two rows, then the first two
         // columns.
         let mut covariance = observation.covariance;

@@ -167,12 +167,9 @@ impl Particle {
                 bound(correction.y, p[(1, 1)]),
                 bound(correction.yaw, p[(2, 2)]),
             ));
-            // The observations move with the pose; their covariances stay as turned by the
-            // predicted pose (a fraction of a degree away), where the association computed
-            // the gains the map update uses: gain and noise then belong together.
             frame = Frame::new(&self.pose);
             for (world, observation) in scratch.world.iter_mut().zip(context.observations) {
-                world.z = frame.mean_to_world(observation);
+                *world = frame.to_world(observation);
             }
         }
 
@@ -182,8 +179,9 @@ impl Particle {
                 Some(index) => {
                     let pairing = &scratch.pairings[index];
                     scratch.observed.push(pairing.corner);
-                    // The gain comes from `(P + R)^-1` with `R` as turned by the predicted
-                    // pose, which is the `R` the update uses (see above).
+                    // The gain comes from `(P + R)^-1` at the predicted pose; after a pose
+                    // correction `R` has turned by a fraction of a degree. The Joseph form
+                    // gives the right covariance for any gain, so it stays consistent.
                     self.map
                         .update(pairing.corner, config.confirm_observations, |corner| {
                             kalman::update_with_inverse(
