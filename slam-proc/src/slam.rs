@@ -158,16 +158,16 @@ impl FastSlam {
         } else {
             MotionNoise::for_step(&motion, config)
         };
+        // On this thread: a particle's prediction is a few normal draws (about 0.1 us),
+        // and handing a parallel pass to the thread pool and back costs tens of
+        // microseconds (seed-hall, 100 particles: 7-14 us here, 23-190 us as a pass).
         if self.scans > 0 {
-            let (streams, scan, delta) = (&self.streams, self.scans, motion.delta);
-            self.particles
-                .par_iter_mut()
-                .enumerate()
-                .for_each(|(i, particle)| {
-                    let mut rng = streams.particle(scan, i);
-                    particle.increment = predict::sample(&delta, &noise, &mut rng);
-                    particle.pose = particle.pose.compose(&particle.increment);
-                });
+            let (scan, delta) = (self.scans, motion.delta);
+            for (i, particle) in self.particles.iter_mut().enumerate() {
+                let mut rng = self.streams.particle(scan, i);
+                particle.increment = predict::sample(&delta, &noise, &mut rng);
+                particle.pose = particle.pose.compose(&particle.increment);
+            }
         }
         let predict_done = Instant::now();
 
