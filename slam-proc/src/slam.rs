@@ -191,16 +191,27 @@ impl FastSlam {
         // not at every split of the work.
         let chunks = self.particles.len().div_ceil(PARTICLES_PER_TASK);
         self.scratch.resize_with(chunks, Scratch::default);
-        self.particles
-            .par_chunks_mut(PARTICLES_PER_TASK)
-            .zip(self.scratch.par_iter_mut())
-            .enumerate()
-            .for_each(|(chunk, (particles, scratch))| {
-                for (k, particle) in particles.iter_mut().enumerate() {
-                    let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
-                    particle.log_weight += particle.update(&context, scratch, &mut rng);
-                }
-            });
+        let update_chunk = |chunk: usize, (particles, scratch): (&mut [Particle], &mut Scratch)| {
+            for (k, particle) in particles.iter_mut().enumerate() {
+                let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
+                particle.log_weight += particle.update(&context, scratch, &mut rng);
+            }
+        };
+        if rayon::current_num_threads() > 1 {
+            self.particles
+                .par_chunks_mut(PARTICLES_PER_TASK)
+                .zip(self.scratch.par_iter_mut())
+                .enumerate()
+                .for_each(|(chunk, work)| update_chunk(chunk, work));
+        } else {
+            // One worker runs the chunks in order anyway: on this thread, without the
+            // hand-off to the pool and back.
+            self.particles
+                .chunks_mut(PARTICLES_PER_TASK)
+                .zip(self.scratch.iter_mut())
+                .enumerate()
+                .for_each(|(chunk, work)| update_chunk(chunk, work));
+        }
         let update_done = Instant::now();
 
         let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
