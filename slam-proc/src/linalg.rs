@@ -66,26 +66,30 @@ pub(crate) fn mul4(a: &Matrix4<f64>, b: &Matrix4<f64>) -> Matrix4<f64> {
 }
 
 /// `a b^T + c d^T` for 4x4 matrices whose sum is known to be symmetric (the two terms
-/// of the Joseph form): only the upper triangle is computed, ten entries of eight
-/// products each, and mirrored, which makes the result exactly symmetric.
-#[inline]
+/// of the Joseph form), made exactly symmetric by mirroring its upper triangle.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 pub(crate) fn joseph_sum(
     a: &Matrix4<f64>,
     b: &Matrix4<f64>,
     c: &Matrix4<f64>,
     d: &Matrix4<f64>,
 ) -> Matrix4<f64> {
-    // Column-major storage: x[k][i] is row i of column k.
+    // Column-major storage: x[k][i] is row i of column k. Column j of the sum is the
+    // columns of `a` and `c` combined with row j of `b` and `d`: whole-column
+    // operations, which vectorise, where entry by entry would not.
     let (a, b, c, d) = (&a.data.0, &b.data.0, &c.data.0, &d.data.0);
     let mut m = [[0.0; 4]; 4];
     for j in 0..4 {
-        for i in 0..=j {
-            let mut s = 0.0;
-            for k in 0..4 {
-                s += a[k][i] * b[k][j] + c[k][i] * d[k][j];
+        for k in 0..4 {
+            let (bjk, djk) = (b[k][j], d[k][j]);
+            for i in 0..4 {
+                m[j][i] += a[k][i] * bjk + c[k][i] * djk;
             }
-            m[j][i] = s;
-            m[i][j] = s;
+        }
+    }
+    for j in 0..4 {
+        for i in j + 1..4 {
+            m[j][i] = m[i][j];
         }
     }
     Matrix4::from_data(ArrayStorage(m))
