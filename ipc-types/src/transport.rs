@@ -274,6 +274,12 @@ pub fn wait_for_topic<T: Message>(
     wait_for_service(node, topic).map(drop)
 }
 
+/// How long [`Inlet::try_open`] waits for the publisher of a topic that exists without one:
+/// its creator makes the publisher right after the service.
+const PUBLISHER_WAIT: Duration = Duration::from_secs(2);
+
+/// Opens `topic` once it exists and has a publisher, waiting for both. Logs every few
+/// seconds while it waits; stops on a signal.
 fn wait_for_service<T: Message>(
     node: &Node<ipc::Service>,
     topic: Topic<T>,
@@ -288,7 +294,10 @@ fn wait_for_service<T: Message>(
             .publish_subscribe::<T>()
             .open()
         {
-            Ok(service) => return Ok(service),
+            Ok(service) => {
+                wait_for_publisher(&service, name, None)?;
+                return Ok(service);
+            }
             Err(PublishSubscribeOpenError::DoesNotExist) => {}
             Err(e) => {
                 return Err(OpenError::Service {
@@ -306,6 +315,35 @@ fn wait_for_service<T: Message>(
         }
         std::thread::sleep(Duration::from_millis(10));
     }
+}
+
+/// Waits until `service` has a publisher (at most `timeout`, when given). A subscriber
+/// made before the publisher is connected to it only by its next receive, and until then
+/// a lossless publisher that finds the one-message queue full drops the message for it
+/// instead of waiting (iceoryx2 does not block on a receiver that is not there yet): a
+/// stage that subscribes and then waits for its own subscribers before it receives would
+/// lose its second message. Made after the publisher, a subscriber is connected at once.
+fn wait_for_publisher<T: Message>(
+    service: &PubSubFactory<ipc::Service, T, ()>,
+    name: &str,
+    timeout: Option<Duration>,
+) -> Result<(), OpenError> {
+    let start = Instant::now();
+    let mut next_log = Duration::from_secs(5);
+    while service.dynamic_config().number_of_publishers() == 0 {
+        if shutdown::requested() {
+            return Err(OpenError::Stopped(name.to_owned()));
+        }
+        if timeout.is_some_and(|t| start.elapsed() >= t) {
+            return Ok(());
+        }
+        if start.elapsed() >= next_log {
+            eprintln!("waiting for a publisher on '{name}'");
+            next_log += Duration::from_secs(5);
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    Ok(())
 }
 
 /// Subscribes to one message type on one topic.
@@ -334,13 +372,17 @@ impl<T: Message> Inlet<T> {
     }
 
     /// Subscribes to `topic` if a publisher has created it; `None` when nobody publishes it.
+    /// A topic that exists without a publisher gets a moment for it to appear.
     pub fn try_open(node: &Node<ipc::Service>, topic: Topic<T>) -> Result<Option<Self>, OpenError> {
         match node
             .service_builder(&service_name(topic.name())?)
             .publish_subscribe::<T>()
             .open()
         {
-            Ok(service) => Self::from_service(node, topic, &service).map(Some),
+            Ok(service) => {
+                wait_for_publisher(&service, topic.name(), Some(PUBLISHER_WAIT))?;
+                Self::from_service(node, topic, &service).map(Some)
+            }
             Err(PublishSubscribeOpenError::DoesNotExist) => Ok(None),
             Err(e) => Err(OpenError::Service {
                 service: topic.name().to_owned(),

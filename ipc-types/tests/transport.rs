@@ -19,6 +19,19 @@ fn unique_domain(tag: &str) -> Domain {
     Domain::new(&format!("t-{tag}-{}-{nanos}", std::process::id())).unwrap()
 }
 
+/// Publishes `count` three-beam scans numbered from 0, then the end of stream.
+fn publish_scans(outlet: &Outlet<LaserScan>, count: u64) {
+    for seq in 0..count {
+        outlet
+            .publish(|scan| {
+                scan.header = Header::new(seq, seq * 25_000_000, "laser");
+                scan.set_beams(&[1.0, 2.0, 3.0], &[]).unwrap();
+            })
+            .unwrap();
+    }
+    outlet.publish_end_of_stream(count, 0).unwrap();
+}
+
 /// Receives scans until end of stream; returns their sequence numbers.
 fn drain_until_end(inlet: &Inlet<LaserScan>) -> Vec<u64> {
     let mut seqs = Vec::new();
@@ -50,15 +63,7 @@ fn lossless_stream_delivers_every_message_in_order() {
                 .wait_for_subscribers(1, Some(Duration::from_secs(20)))
                 .unwrap()
         );
-        for seq in 0..500 {
-            outlet
-                .publish(|scan| {
-                    scan.header = Header::new(seq, seq * 25_000_000, "laser");
-                    scan.set_beams(&[1.0, 2.0, 3.0], &[]).unwrap();
-                })
-                .unwrap();
-        }
-        outlet.publish_end_of_stream(500, 0).unwrap();
+        publish_scans(&outlet, 500);
     });
 
     let node = domain.node("receiver").unwrap();
@@ -67,6 +72,39 @@ fn lossless_stream_delivers_every_message_in_order() {
     let seqs = drain_until_end(&inlet);
     sender.join().unwrap();
     assert_eq!(seqs, (0..500).collect::<Vec<_>>());
+}
+
+#[test]
+fn a_subscriber_that_waits_before_receiving_loses_nothing() {
+    // The topic outlives its first publisher (a subscriber holds it), so it exists without
+    // one when the second subscriber opens it: the subscriber must not be made before the
+    // next publisher, or that publisher cannot block on it and drops what does not fit its
+    // one-message queue while it does not receive.
+    let domain = unique_domain("late");
+    let _cleanup = Cleanup(domain.clone());
+    let node = domain.node("main").unwrap();
+    let first = Outlet::create(&domain, &node, topic::SCAN, Delivery::Lossless, 0).unwrap();
+    let holder = Inlet::open(&node, topic::SCAN).unwrap();
+    drop(first);
+
+    let receiver_domain = domain.clone();
+    let receiver = std::thread::spawn(move || {
+        let node = receiver_domain.node("late-receiver").unwrap();
+        let inlet = Inlet::open(&node, topic::SCAN).unwrap();
+        // Busy elsewhere (a stage waiting for its own subscribers) before the first receive.
+        std::thread::sleep(Duration::from_millis(300));
+        drain_until_end(&inlet)
+    });
+    std::thread::sleep(Duration::from_millis(100));
+    let outlet = Outlet::create(&domain, &node, topic::SCAN, Delivery::Lossless, 0).unwrap();
+    drop(holder);
+    assert!(
+        outlet
+            .wait_for_subscribers(1, Some(Duration::from_secs(20)))
+            .unwrap()
+    );
+    publish_scans(&outlet, 3);
+    assert_eq!(receiver.join().unwrap(), vec![0, 1, 2]);
 }
 
 #[test]
