@@ -78,7 +78,7 @@ pub(crate) fn gauss_newton(
         );
         if step.x.abs() < 1e-9 && step.y.abs() < 1e-9 && step.z.abs() < 1e-10 {
             // A step this small leaves the Jacobians as they were: the information just
-            // used is the one at the estimate.
+            // used is the one at the estimate, to rounding.
             return Some((estimate, factor.inverse()));
         }
     }
