@@ -147,21 +147,11 @@ mod tests {
         assert_eq!(perfect.sigma_yaw, config.noise_yaw_floor);
         // Lines: heading from the fit as it is; translation from the model at constant
         // velocity, from the fit (odometry along the walls) on odometry.
-        let walls = noise(motion(
-            0.3,
-            0.2,
-            MotionSource::Lines { on_odometry: false },
-            1e-6,
-        ));
-        assert_eq!(walls.sigma_xy, large.sigma_xy);
-        assert!((walls.sigma_yaw - 1e-3).abs() < 1e-15);
-        let walls = noise(motion(
-            0.3,
-            0.2,
-            MotionSource::Lines { on_odometry: true },
-            1e-6,
-        ));
-        assert_eq!(walls.sigma_xy, good.sigma_xy);
+        let walls =
+            |on_odometry| noise(motion(0.3, 0.2, MotionSource::Lines { on_odometry }, 1e-6));
+        assert_eq!(walls(false).sigma_xy, large.sigma_xy);
+        assert!((walls(false).sigma_yaw - 1e-3).abs() < 1e-15);
+        assert_eq!(walls(true).sigma_xy, good.sigma_xy);
         let guess = noise(motion(0.3, 0.2, MotionSource::ConstantVelocity, 0.0));
         assert!((guess.sigma_xy - config.fallback_noise_scale * large.sigma_xy).abs() < 1e-15);
         // Odometry spreads the particles as widely as it says it errs (the motion estimate
