@@ -2,7 +2,13 @@
 //!
 //! Planar geometry every algorithm crate of the pipeline needs, in one place and free of
 //! the shared-memory transport, so the libraries stay testable on their own.
+//!
+//! * [`wrap_angle`] wraps an angle once, where it is made;
+//! * [`Pose2`] is the planar transform `world_from_robot` (docs/CONVENTIONS.md): composition,
+//!   inverse, the increment between two poses, interpolation.
 
 mod angle;
+mod pose;
 
 pub use angle::wrap_angle;
+pub use pose::Pose2;

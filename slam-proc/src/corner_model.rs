@@ -10,7 +10,7 @@ use nalgebra::{Matrix4, Vector2, Vector4};
 
 use crate::angle::wrap_angle;
 use crate::observation::Prepared;
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// An observation in the world frame of one particle.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::angle::wrap_angle;
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// Time spent in each stage of one update, nanoseconds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

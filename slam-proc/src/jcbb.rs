@@ -332,8 +332,8 @@ mod tests {
     use super::*;
     use crate::corner_model::to_world;
     use crate::observation::Prepared;
-    use crate::pose::Pose2;
     use nalgebra::{Matrix4, Vector4};
+    use slam_geom::Pose2;
 
     fn corner(x: f64, y: f64) -> CornerState {
         CornerState {

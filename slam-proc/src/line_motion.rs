@@ -15,8 +15,8 @@ use nalgebra::{Cholesky, Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 
 use crate::angle::wrap_angle;
 use crate::observation::LineObservation;
-use crate::pose::Pose2;
 use crate::rigid_fit::{Prior, gauss_newton};
+use slam_geom::Pose2;
 
 /// A line of the current scan in the previous scan's frame.
 struct Moved {

@@ -23,8 +23,8 @@ use crate::chi2::quantile_even;
 use crate::config::SlamConfig;
 use crate::line_motion;
 use crate::observation::{LineObservation, OdometryInput, Prepared};
-use crate::pose::Pose2;
 use crate::rigid_fit::{Prior, kabsch, normal_equations, refine};
+use slam_geom::Pose2;
 
 /// The motion from the previous scan to this one (`previous_from_current`).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{Cholesky, Matrix2, Matrix3, Matrix4, Vector4};
 
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// A corner feature in the sensor frame (docs/CONVENTIONS.md): the walls' intersection
 /// `(x, y)`, the `heading` of the bisector towards the tip and the opening `angle`.

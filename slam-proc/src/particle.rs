@@ -16,7 +16,7 @@ use crate::kalman;
 use crate::linalg::sample_information_form3;
 use crate::map::{CornerMap, CornerState};
 use crate::observation::Prepared;
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 #[derive(Debug, Clone)]
 pub(crate) struct Particle {

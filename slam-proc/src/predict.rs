@@ -7,7 +7,7 @@ use rand_distr::StandardNormal;
 
 use crate::config::SlamConfig;
 use crate::motion::{Motion, MotionSource};
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// Standard deviations of one step's noise, in the particle's frame before the step.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -6,7 +6,7 @@ use nalgebra::{Cholesky, Matrix2, Matrix3, Vector2, Vector3};
 
 use crate::angle::wrap_angle;
 use crate::observation::Prepared;
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// Least-squares rigid transform `T` with `target ≈ R source + t`, each point weighted;
 /// `None` when the points do not fix a rotation (fewer than two distinct points).

@@ -13,10 +13,10 @@ use crate::map::{CornerMap, CornerState, MapCorner};
 use crate::motion::MotionEstimator;
 use crate::observation::{LineObservation, Observation, OdometryInput, Prepared};
 use crate::particle::{Particle, ScanContext, Scratch};
-use crate::pose::Pose2;
 use crate::predict::{self, MotionNoise};
 use crate::resample::{effective_sample_size, log_sum_exp, normalise, systematic};
 use crate::rng::Streams;
+use slam_geom::Pose2;
 
 /// FastSLAM over corner maps. Feed it every scan's corners in order with [`FastSlam::process`].
 ///

@@ -58,6 +58,16 @@ impl Pose2 {
         Matrix2::new(c, -s, s, c)
     }
 
+    /// The pose a fraction `t` of the way from `self` to `other`: position along the straight
+    /// line, yaw along the shorter arc. `t` outside `[0, 1]` extrapolates at the same rate.
+    pub fn interpolate(&self, other: &Self, t: f64) -> Self {
+        Self {
+            x: self.x + t * (other.x - self.x),
+            y: self.y + t * (other.y - self.y),
+            yaw: wrap_angle(self.yaw + t * wrap_angle(other.yaw - self.yaw)),
+        }
+    }
+
     /// Distance of the translation from the origin, metres.
     pub fn translation_norm(&self) -> f64 {
         self.x.hypot(self.y)
@@ -85,5 +95,21 @@ mod tests {
         let stepwise = a.transform(b.transform(p));
         assert!((there - stepwise).norm() < 1e-12);
         assert!(a.compose(&b).yaw >= -std::f64::consts::PI);
+    }
+
+    #[test]
+    fn interpolation_takes_the_shorter_arc() {
+        let a = Pose2::new(0.0, 0.0, 3.0);
+        let b = Pose2::new(2.0, -4.0, -3.0);
+        assert!(close(&a.interpolate(&b, 0.0), &a));
+        assert!(close(&a.interpolate(&b, 1.0), &b));
+        // From 3 rad to -3 rad is 0.28 rad through pi, not 6 rad through 0.
+        let half = a.interpolate(&b, 0.5);
+        assert!(close(&half, &Pose2::new(1.0, -2.0, -std::f64::consts::PI)));
+        let beyond = a.interpolate(&b, 2.0);
+        assert!(close(
+            &beyond,
+            &Pose2::new(4.0, -8.0, -3.0 + (2.0 * std::f64::consts::PI - 6.0))
+        ));
     }
 }
