@@ -15,7 +15,8 @@
 //!    `(x, y, heading, angle)` with a covariance propagated from both lines.
 //!
 //! Conventions (frames, corner heading and angle) are those of docs/CONVENTIONS.md; every
-//! threshold is in [`FeatureConfig`]. [`seed_hall`] loads the shared real recording and
+//! threshold is in [`FeatureConfig`]. [`OdometryTrack`] pairs each scan with the odometry at its
+//! stamp, so the features carry it downstream. [`seed_hall`] loads the shared real recording and
 //! [`eval`] scores corners against ground truth, for this crate's tests and others'.
 
 #![forbid(unsafe_code)]
@@ -27,6 +28,7 @@ pub mod eval;
 mod extractor;
 mod features;
 mod line_fit;
+pub mod odometry_join;
 mod scan;
 pub mod seed_hall;
 mod segment;
@@ -36,4 +38,5 @@ pub use angle::wrap_angle;
 pub use config::{ConfigError, FeatureConfig};
 pub use extractor::Extractor;
 pub use features::{Corner, FeatureSet, Line};
+pub use odometry_join::{OdometryReading, OdometryTrack, RefusedReading};
 pub use scan::{MAX_BEAMS, ScanError, ScanInput};

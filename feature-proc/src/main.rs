@@ -1,15 +1,20 @@
-//! `feature-proc`: lines and corners of every scan, from the scan topic to the features topic.
+//! `feature-proc`: lines and corners of every scan, from the scan topic to the features topic,
+//! each scan paired with the odometry at its stamp.
 
+use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use feature_proc::{Extractor, FeatureConfig, ScanInput};
+use feature_proc::{
+    Extractor, FeatureConfig, OdometryReading, OdometryTrack, RefusedReading, ScanInput,
+};
 use ipc_types::prelude::*;
 
-/// Subscribes to scans, publishes their lines and corners.
+/// Subscribes to scans (and odometry, when the source publishes it) and publishes their lines
+/// and corners with the odometry pose at each scan's stamp.
 #[derive(Debug, Parser)]
 #[command(name = "feature-proc", version)]
 struct Args {
@@ -22,7 +27,16 @@ struct Args {
     /// Feature subscribers to wait for before the first lockstep publish.
     #[arg(long, default_value_t = 1)]
     subscribers: usize,
+    /// In real time, how long a scan may wait for the odometry at its stamp before it goes on
+    /// with what has come (lockstep always waits: the pairing must not depend on timing).
+    #[arg(long, default_value_t = 100, value_name = "MS")]
+    odometry_wait_ms: u64,
 }
+
+/// Longest sleep between looks at the inlets (and at the stop flag).
+const IDLE_WAIT: Duration = Duration::from_millis(100);
+/// How often a real-time run without odometry looks for it again.
+const ODOMETRY_PROBE: Duration = Duration::from_secs(1);
 
 fn main() -> ExitCode {
     match run() {
@@ -53,74 +67,252 @@ fn run() -> Result<()> {
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("feature-proc")?;
     let scans = Inlet::open(&node, topic::SCAN)?;
+    // A source creates its odometry topic before its scans, so once the scans exist the
+    // odometry does too, if the run has any.
+    let mut odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
     // The source chose lockstep or real time; the features follow it.
+    let lockstep = scans.delivery() == Delivery::Lossless;
     let features = Outlet::create(&domain, &node, topic::FEATURES, scans.delivery(), 0)?;
     println!("ready");
-    if scans.delivery() == Delivery::Lossless {
+    if lockstep {
         features.wait_for_subscribers(args.subscribers, None)?;
     }
+    let odometry_wait = Duration::from_millis(args.odometry_wait_ms);
 
-    let mut processed = 0u64;
-    let mut skipped = 0u64;
+    let mut track = OdometryTrack::new();
+    let mut pending: VecDeque<PendingScan> = VecDeque::new();
+    let mut end_of_scans: Option<(u64, u64)> = None;
+    let mut counts = Counts::default();
+    let mut last_odometry_probe = Instant::now();
     let mut lines = Vec::new();
     let mut corners = Vec::new();
     loop {
-        if wait_any(&[&scans], Duration::from_millis(100))? == Wake::Shutdown {
+        // A scan held for its odometry in real time must not wait past its bound.
+        let timeout = match pending.front() {
+            Some(scan) if !lockstep => odometry_wait
+                .saturating_sub(scan.arrived.elapsed())
+                .clamp(Duration::from_millis(1), IDLE_WAIT),
+            _ => IDLE_WAIT,
+        };
+        let wake = match &odometry {
+            Some(inlet) => wait_any(&[&scans, inlet], timeout)?,
+            None => wait_any(&[&scans], timeout)?,
+        };
+        if wake == Wake::Shutdown {
             break;
         }
-        while let Some(scan) = scans.receive()? {
+        if odometry.is_none() && !lockstep && last_odometry_probe.elapsed() > ODOMETRY_PROBE {
+            // A live robot's odometry may start after its lidar.
+            odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
+            last_odometry_probe = Instant::now();
+        }
+        // Scans first, odometry second: everything the source published before the last
+        // scan taken here is then in the track too.
+        while end_of_scans.is_none()
+            && let Some(scan) = scans.receive()?
+        {
             if scan.header.is_end_of_stream() {
-                features.publish_end_of_stream(scan.header.seq, scan.header.stamp_ns)?;
-                eprintln!("feature-proc: {processed} scans, {skipped} skipped");
-                return Ok(());
+                end_of_scans = Some((scan.header.seq, scan.header.stamp_ns));
+            } else {
+                pending.push_back(PendingScan::copy(&scan));
             }
-            let started = Instant::now();
-            let input = ScanInput {
-                angle_min: f64::from(scan.angle_min),
-                angle_increment: f64::from(scan.angle_increment),
-                range_min: f64::from(scan.range_min),
-                range_max: f64::from(scan.range_max),
-                ranges: scan.ranges(),
+        }
+        if let Some(inlet) = &odometry {
+            drain_odometry(inlet, &mut track, &mut counts)?;
+        }
+        if end_of_scans.is_some() {
+            // The source sends its odometry before the scans' end: nothing more will come.
+            track.end();
+        }
+        while let Some(scan) = pending.front() {
+            let ready = odometry.is_none()
+                || track.resolves(scan.header.stamp_ns)
+                || (!lockstep && scan.arrived.elapsed() >= odometry_wait);
+            if !ready {
+                break;
+            }
+            let Some(scan) = pending.pop_front() else {
+                break;
             };
-            lines.clear();
-            corners.clear();
-            match extractor.extract(&input) {
-                Ok(found) => {
-                    lines.extend(found.lines.iter().map(to_line));
-                    corners.extend(found.corners.iter().map(to_corner));
-                }
-                Err(e) => {
-                    // A malformed scan is counted and dropped; the slot still goes downstream
-                    // (empty) so every scan has its features message and the stream has no gap.
-                    skipped += 1;
-                    eprintln!("feature-proc: scan {} skipped: {e}", scan.header.seq);
-                }
+            let paired = odometry
+                .as_ref()
+                .and_then(|_| track.at(scan.header.stamp_ns))
+                .map(|reading| OdometryAtScan {
+                    pose: reading.pose.into(),
+                    covariance: row_major(&reading.covariance),
+                });
+            track.forget_before(scan.header.stamp_ns);
+            if odometry.is_some() && paired.is_none() {
+                counts.without_odometry += 1;
             }
-            let processing_ns = started.elapsed().as_nanos() as u64;
-            let mut overflow = None;
-            features.publish(|message| {
-                message.header = scan.header;
-                message.scan_sent_ns = scan.header.sent_ns;
-                message.processing_ns = processing_ns;
-                let keep_lines = lines.len().min(ipc_types::MAX_LINES);
-                let keep_corners = corners.len().min(ipc_types::MAX_FEATURE_CORNERS);
-                if keep_lines < lines.len() || keep_corners < corners.len() {
-                    overflow = Some((lines.len(), corners.len()));
-                }
-                // Cut to capacity above, so this cannot fail.
-                let _ = message.set(&lines[..keep_lines], &corners[..keep_corners]);
-            })?;
-            if let Some((l, c)) = overflow {
-                eprintln!(
-                    "feature-proc: scan {} had {l} lines and {c} corners; kept what fits",
-                    scan.header.seq
-                );
-            }
-            processed += 1;
+            publish_features(
+                &features,
+                &mut extractor,
+                &scan,
+                paired,
+                &mut lines,
+                &mut corners,
+                &mut counts,
+            )?;
+        }
+        if let Some((seq, stamp_ns)) = end_of_scans
+            && pending.is_empty()
+        {
+            features.publish_end_of_stream(seq, stamp_ns)?;
+            eprintln!("feature-proc: {}", counts.summary());
+            return Ok(());
         }
     }
-    eprintln!("feature-proc: stopped after {processed} scans");
+    eprintln!("feature-proc: stopped; {}", counts.summary());
     Ok(())
+}
+
+/// What the run skipped or made do without, for the summary at its end.
+#[derive(Debug, Default)]
+struct Counts {
+    processed: u64,
+    skipped: u64,
+    odometry_not_finite: u64,
+    odometry_out_of_order: u64,
+    without_odometry: u64,
+}
+
+impl Counts {
+    fn summary(&self) -> String {
+        let mut text = format!("{} scans, {} skipped", self.processed, self.skipped);
+        if self.odometry_not_finite > 0 {
+            text.push_str(&format!(
+                ", {} non-finite odometry readings refused",
+                self.odometry_not_finite
+            ));
+        }
+        if self.odometry_out_of_order > 0 {
+            text.push_str(&format!(
+                ", {} odometry readings not after the one before them refused",
+                self.odometry_out_of_order
+            ));
+        }
+        if self.without_odometry > 0 {
+            text.push_str(&format!(
+                ", {} scans without odometry",
+                self.without_odometry
+            ));
+        }
+        text
+    }
+}
+
+/// A scan held until its odometry is known, copied out of shared memory so the source's
+/// slots are free meanwhile.
+struct PendingScan {
+    header: Header,
+    angle_min: f32,
+    angle_increment: f32,
+    range_min: f32,
+    range_max: f32,
+    ranges: Vec<f32>,
+    arrived: Instant,
+}
+
+impl PendingScan {
+    fn copy(scan: &LaserScan) -> Self {
+        Self {
+            header: scan.header,
+            angle_min: scan.angle_min,
+            angle_increment: scan.angle_increment,
+            range_min: scan.range_min,
+            range_max: scan.range_max,
+            ranges: scan.ranges().to_vec(),
+            arrived: Instant::now(),
+        }
+    }
+}
+
+fn drain_odometry(
+    inlet: &Inlet<Odometry>,
+    track: &mut OdometryTrack,
+    counts: &mut Counts,
+) -> Result<()> {
+    while let Some(sample) = inlet.receive()? {
+        if sample.header.is_end_of_stream() {
+            track.end();
+            continue;
+        }
+        let reading = OdometryReading {
+            stamp_ns: sample.header.stamp_ns,
+            pose: sample.pose.into(),
+            covariance: nalgebra::Matrix3::from_row_slice(&sample.covariance),
+        };
+        match track.push(reading) {
+            Ok(()) => {}
+            Err(RefusedReading::NotFinite) => counts.odometry_not_finite += 1,
+            Err(RefusedReading::OutOfOrder | RefusedReading::Duplicate) => {
+                counts.odometry_out_of_order += 1;
+            }
+        }
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn publish_features(
+    features: &Outlet<Features>,
+    extractor: &mut Extractor,
+    scan: &PendingScan,
+    odometry: Option<OdometryAtScan>,
+    lines: &mut Vec<Line>,
+    corners: &mut Vec<Corner>,
+    counts: &mut Counts,
+) -> Result<()> {
+    let started = Instant::now();
+    let input = ScanInput {
+        angle_min: f64::from(scan.angle_min),
+        angle_increment: f64::from(scan.angle_increment),
+        range_min: f64::from(scan.range_min),
+        range_max: f64::from(scan.range_max),
+        ranges: &scan.ranges,
+    };
+    lines.clear();
+    corners.clear();
+    match extractor.extract(&input) {
+        Ok(found) => {
+            lines.extend(found.lines.iter().map(to_line));
+            corners.extend(found.corners.iter().map(to_corner));
+        }
+        Err(e) => {
+            // A malformed scan is counted and dropped; the slot still goes downstream
+            // (empty) so every scan has its features message and the stream has no gap.
+            counts.skipped += 1;
+            eprintln!("feature-proc: scan {} skipped: {e}", scan.header.seq);
+        }
+    }
+    let processing_ns = started.elapsed().as_nanos() as u64;
+    let mut overflow = None;
+    features.publish(|message| {
+        message.header = scan.header;
+        message.scan_sent_ns = scan.header.sent_ns;
+        message.processing_ns = processing_ns;
+        message.set_odometry(odometry);
+        let keep_lines = lines.len().min(ipc_types::MAX_LINES);
+        let keep_corners = corners.len().min(ipc_types::MAX_FEATURE_CORNERS);
+        if keep_lines < lines.len() || keep_corners < corners.len() {
+            overflow = Some((lines.len(), corners.len()));
+        }
+        // Cut to capacity above, so this cannot fail.
+        let _ = message.set(&lines[..keep_lines], &corners[..keep_corners]);
+    })?;
+    if let Some((l, c)) = overflow {
+        eprintln!(
+            "feature-proc: scan {} had {l} lines and {c} corners; kept what fits",
+            scan.header.seq
+        );
+    }
+    counts.processed += 1;
+    Ok(())
+}
+
+fn row_major(matrix: &nalgebra::Matrix3<f64>) -> [f64; 9] {
+    std::array::from_fn(|i| matrix[(i / 3, i % 3)])
 }
 
 fn to_line(line: &feature_proc::Line) -> Line {

@@ -26,8 +26,11 @@ const _: () = {
     assert!(size_of::<PoseEstimate>() == 272);
     assert!(offset_of!(PoseEstimate, timing) == 232);
 
-    assert!(offset_of!(Features, lines) == 88);
-    assert!(size_of::<Features>() == 88 + 88 * crate::MAX_LINES + 160 * crate::MAX_FEATURE_CORNERS);
+    assert!(offset_of!(Features, odometry) == 88);
+    assert!(offset_of!(Features, lines) == 192);
+    assert!(
+        size_of::<Features>() == 192 + 88 * crate::MAX_LINES + 160 * crate::MAX_FEATURE_CORNERS
+    );
     assert!(size_of::<WorldCorners>() == 72 + 32 * crate::MAX_WORLD_CORNERS);
     assert!(size_of::<MapSnapshot>() == 72 + 168 * crate::MAX_MAP_CORNERS);
 };

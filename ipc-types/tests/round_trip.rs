@@ -110,6 +110,10 @@ fn features_round_trip() {
     features.header = header(3);
     features.scan_sent_ns = 99;
     features.processing_ns = 12_345;
+    features.set_odometry(Some(OdometryAtScan {
+        pose: Pose2::new(1.5, -2.0, 0.25),
+        covariance: [1e-3, 1e-5, 0.0, 1e-5, 2e-3, 0.0, 0.0, 0.0, 1e-4],
+    }));
     let lines: Vec<Line> = (0..5)
         .map(|i| Line {
             rho: i as f64,

@@ -11,7 +11,10 @@
 //!
 //! Stamps are the `ipc_timestamp`, kept to the nanosecond. A `FLASER` line yields its odometry
 //! first and then its scan, both with the line's stamp, so a consumer has the odometry when
-//! the scan arrives. `ROBOTLASER1`'s robot pose is not published as odometry: a localizer may
+//! the scan arrives; but once the log has given an `ODOM` line, odometry comes from `ODOM`
+//! lines only. Logs with both (ACES) copy into each `FLASER` the last `ODOM` reading before
+//! it, up to a tenth of a second stale, under the laser's stamp: the two sources together
+//! would zig-zag, and the `ODOM` lines are the readings at their true times. `ROBOTLASER1`'s robot pose is not published as odometry: a localizer may
 //! have corrected it, and logs that have such lines carry the raw odometry in `ODOM` lines.
 //! The laser's mounting offset (`laser_*` against `robot_*`) is not used either: the
 //! pipeline's sensor frame is the robot frame.
@@ -37,6 +40,9 @@ pub struct CarmenReader<R> {
     lines: NumberedLines<R>,
     /// A `FLASER` scan waiting behind its odometry.
     pending: Option<LogRecord>,
+    /// Whether an `ODOM` line has been read: from then on the odometry comes from those
+    /// lines alone.
+    odom_lines: bool,
     /// Stamp of the last scan handed out: scans must move forward in time.
     last_scan: Option<(u64, u64)>,
     skipped: BTreeMap<String, u64>,
@@ -48,6 +54,7 @@ impl<R: BufRead> CarmenReader<R> {
         Self {
             lines: NumberedLines::new(reader),
             pending: None,
+            odom_lines: false,
             last_scan: None,
             skipped: BTreeMap::new(),
             failed: false,
@@ -75,6 +82,9 @@ impl<R: BufRead> CarmenReader<R> {
             "FLASER" => {
                 let (odometry, scan) = parse_flaser(&mut fields)?;
                 let scan = self.accept_scan(scan)?;
+                if self.odom_lines {
+                    return Ok(Some(LogRecord::Scan(scan)));
+                }
                 self.pending = Some(LogRecord::Scan(scan));
                 Ok(Some(LogRecord::Odometry(odometry)))
             }
@@ -82,7 +92,11 @@ impl<R: BufRead> CarmenReader<R> {
                 let scan = parse_robotlaser1(&mut fields)?;
                 Ok(Some(LogRecord::Scan(self.accept_scan(scan)?)))
             }
-            "ODOM" => Ok(Some(LogRecord::Odometry(parse_odom(&mut fields)?))),
+            "ODOM" => {
+                let odometry = parse_odom(&mut fields)?;
+                self.odom_lines = true;
+                Ok(Some(LogRecord::Odometry(odometry)))
+            }
             other if is_record_name(other) => {
                 *self.skipped.entry(other.to_owned()).or_default() += 1;
                 Ok(None)
@@ -460,6 +474,36 @@ mod tests {
         };
         assert!(scan.intensities.is_empty());
         assert_eq!(scan.stamp_ns, 7_250_000_000);
+    }
+
+    #[test]
+    fn after_an_odom_line_flaser_odometry_is_not_replayed() {
+        let text = [
+            flaser(&["1", "2"], "5 5 0", "10.0"),
+            "ODOM 1 0 0 0 0 0 10.05 host 0".to_owned(),
+            // ACES copies the last ODOM reading into the next FLASER, stale.
+            flaser(&["1", "2"], "1 0 0", "10.1"),
+            "ODOM 2 0 0 0 0 0 10.15 host 0".to_owned(),
+        ]
+        .join("\n");
+        let kinds: Vec<(&str, u64)> = read(&text)
+            .iter()
+            .map(|r| match r {
+                Ok(LogRecord::Odometry(o)) => ("odometry", o.line),
+                Ok(LogRecord::Scan(s)) => ("scan", s.line),
+                Err(e) => panic!("{e}"),
+            })
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                ("odometry", 1),
+                ("scan", 1),
+                ("odometry", 2),
+                ("scan", 3),
+                ("odometry", 4)
+            ]
+        );
     }
 
     #[test]

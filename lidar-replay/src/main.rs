@@ -48,9 +48,9 @@ struct Args {
 
 /// A real-time source does not wait long for its subscribers, as a live sensor would not.
 const REAL_TIME_SUBSCRIBER_WAIT: Duration = Duration::from_secs(10);
-/// How long the first odometry waits for a subscriber. slam-proc looks for the odometry
-/// topic about once a second after it has found the scans, so without this wait the first
-/// poses would be lost, and which ones would depend on timing.
+/// How long the first odometry waits for a subscriber. feature-proc looks for the odometry
+/// topic once it has found the scans, which may be after the first odometry is due; without
+/// this wait the first readings would be lost, and which ones would depend on timing.
 const ODOMETRY_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
 /// Malformed lines reported one by one; the rest are only counted.
 const REPORTED_LINES: u64 = 100;
@@ -171,6 +171,11 @@ fn run() -> Result<()> {
     if shutdown::requested() {
         eprintln!("lidar-replay: stopped after {published} scans");
         return Ok(());
+    }
+    // The odometry's end first: a consumer that sees the scans' end has all of it, and
+    // scans waiting for odometry after their stamp know that none will come.
+    if let Some(outlet) = &odometry {
+        outlet.publish_end_of_stream(odometry_published, last_stamp)?;
     }
     scans.publish_end_of_stream(published, last_stamp)?;
 

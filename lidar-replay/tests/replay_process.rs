@@ -72,6 +72,7 @@ struct Received {
     scans: Vec<(u64, u64)>,
     odometry: Vec<(u64, u64, f64)>,
     end: Option<(u64, u64)>,
+    odometry_end: Option<(u64, u64)>,
     first_to_last_scan: Duration,
 }
 
@@ -99,6 +100,10 @@ fn receive(domain: &Domain, with_odometry: bool) -> Received {
         .unwrap();
         if let Some(odometry) = &odometry {
             while let Some(sample) = odometry.receive().unwrap() {
+                if sample.header.is_end_of_stream() {
+                    received.odometry_end = Some((sample.header.seq, sample.header.stamp_ns));
+                    continue;
+                }
                 assert_eq!(sample.header.frame_id(), "odom");
                 received
                     .odometry
@@ -171,6 +176,8 @@ fn lockstep_delivers_every_scan_and_odometry_with_exact_stamps() {
             .all(|(k, o)| o.2 == k as f64)
     );
     assert_eq!(received.end, Some((25, expected[24].1)));
+    // The odometry's end came before the scans' end.
+    assert_eq!(received.odometry_end, Some((25, expected[24].1)));
     assert!(
         stderr.contains("line 7: FLASER: range 2: \"oops\" is not a number (skipped)"),
         "{stderr}"

@@ -207,6 +207,10 @@ fn run() -> Result<()> {
         eprintln!("lidar-sim: stopped after {published} scans");
         return Ok(());
     }
+    // The odometry's end first: a consumer that sees the scans' end has all of it.
+    if let Some(odometry) = &odometry {
+        odometry.publish_end_of_stream(published, last_stamp)?;
+    }
     scans.publish_end_of_stream(published, last_stamp)?;
     eprintln!("lidar-sim: published {published} scans");
     Ok(())

@@ -1,16 +1,16 @@
 //! `slam-proc`: FastSLAM over corner maps, from the features topic to pose and map topics.
 
-use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
 use slam_proc::{FastSlam, LineObservation, Observation, OdometryInput, SlamConfig};
 
-/// Subscribes to features (and odometry when anyone publishes it), publishes a pose
+/// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
+/// publishes a pose
 /// estimate for every scan and the best particle's map every few scans and at the end.
 #[derive(Debug, Parser)]
 #[command(name = "slam-proc", version)]
@@ -34,9 +34,6 @@ struct Args {
     #[arg(long, default_value_t = 1)]
     subscribers: usize,
 }
-
-/// Odometry messages kept to find the one that goes with a scan.
-const ODOMETRY_BACKLOG: usize = 64;
 
 fn main() -> ExitCode {
     match run() {
@@ -70,7 +67,6 @@ fn run() -> Result<()> {
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("slam-proc")?;
     let features = Inlet::open(&node, topic::FEATURES)?;
-    let mut odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
     let delivery = features.delivery();
     let maps = Outlet::create(&domain, &node, topic::MAP, delivery, 1)?;
     let poses = Outlet::create(&domain, &node, topic::POSE, delivery, 0)?;
@@ -79,32 +75,13 @@ fn run() -> Result<()> {
         poses.wait_for_subscribers(args.subscribers, None)?;
     }
 
-    let mut odometry_backlog: VecDeque<Odometry> = VecDeque::with_capacity(ODOMETRY_BACKLOG);
     let mut observations = Vec::new();
     let mut lines = Vec::new();
     let mut processed = 0u64;
     let mut last_header = Header::new(0, 0, "map");
-    let mut last_odometry_probe = Instant::now();
     loop {
-        let wake = match &odometry {
-            Some(odometry) => wait_any(&[&features, odometry], Duration::from_millis(100))?,
-            None => wait_any(&[&features], Duration::from_millis(100))?,
-        };
-        if wake == Wake::Shutdown {
+        if wait_any(&[&features], Duration::from_millis(100))? == Wake::Shutdown {
             break;
-        }
-        if odometry.is_none() && last_odometry_probe.elapsed() > Duration::from_secs(1) {
-            // Odometry may start after us (a robot's driver, a replayed log).
-            odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
-            last_odometry_probe = Instant::now();
-        }
-        if let Some(inlet) = &odometry {
-            while let Some(sample) = inlet.receive()? {
-                if odometry_backlog.len() == ODOMETRY_BACKLOG {
-                    odometry_backlog.pop_front();
-                }
-                odometry_backlog.push_back(*sample);
-            }
         }
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
@@ -113,25 +90,13 @@ fn run() -> Result<()> {
                 eprintln!("slam-proc: {processed} scans");
                 return Ok(());
             }
-            // Odometry arrives before or with its scan; a late one is still in the queue.
-            if let Some(inlet) = &odometry {
-                while let Some(sample) = inlet.receive()? {
-                    if odometry_backlog.len() == ODOMETRY_BACKLOG {
-                        odometry_backlog.pop_front();
-                    }
-                    odometry_backlog.push_back(*sample);
-                }
-            }
             observations.clear();
             observations.extend(sample.corners().iter().map(to_observation));
             lines.clear();
             lines.extend(sample.lines().iter().map(to_line));
             let stamp = sample.header.stamp_ns;
-            let odometry_input = odometry_backlog
-                .iter()
-                .rev()
-                .find(|o| o.header.stamp_ns <= stamp)
-                .map(to_odometry);
+            // feature-proc paired the scan with the odometry at its stamp.
+            let odometry_input = sample.odometry().map(to_odometry);
             let estimate = slam.process(stamp, &observations, &lines, odometry_input.as_ref());
             let header = sample.header;
             poses.publish(|pose| {
@@ -228,9 +193,9 @@ fn to_line(line: &Line) -> LineObservation {
     }
 }
 
-fn to_odometry(odometry: &Odometry) -> OdometryInput {
+fn to_odometry(odometry: OdometryAtScan) -> OdometryInput {
     OdometryInput {
-        pose: slam_proc::Pose2::new(odometry.pose.x, odometry.pose.y, odometry.pose.yaw),
+        pose: odometry.pose.into(),
         covariance: nalgebra::Matrix3::from_row_slice(&odometry.covariance),
     }
 }

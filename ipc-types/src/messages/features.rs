@@ -7,13 +7,14 @@ use serde::{Deserialize, Serialize};
 
 use super::corner::Corner;
 use super::line::Line;
+use super::pose::Pose2;
 use crate::capacity::{CapacityError, MAX_FEATURE_CORNERS, MAX_LINES, fill, used};
 use crate::header::Header;
 
 /// The features of one scan, in the sensor frame.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("slam::Features::v1")]
+#[type_name("slam::Features::v2")]
 pub struct Features {
     /// The source scan's header (sequence, stamp, frame); `sent_ns` is this message's.
     pub header: Header,
@@ -23,6 +24,15 @@ pub struct Features {
     pub processing_ns: u64,
     pub line_count: u32,
     pub corner_count: u32,
+    /// The odometry at the scan's stamp (`odom_from_robot`, interpolated between the readings
+    /// around it: docs/CONVENTIONS.md, "Joining streams"); meaningful when `has_odometry` is 1.
+    pub odometry: Pose2,
+    /// Row-major 3x3 covariance of `odometry`, the integrated pose's.
+    pub odometry_covariance: [f64; 9],
+    /// 1 when the scan has an odometry pose, 0 when the run has no odometry.
+    pub has_odometry: u32,
+    /// Keeps the layout free of implicit padding; always 0.
+    pub reserved: u32,
     pub lines: [Line; MAX_LINES],
     pub corners: [Corner; MAX_FEATURE_CORNERS],
 }
@@ -34,6 +44,25 @@ impl Features {
 
     pub fn corners(&self) -> &[Corner] {
         used(&self.corners, self.corner_count)
+    }
+
+    /// The odometry pose at the scan's stamp and its covariance, if the run has odometry.
+    pub fn odometry(&self) -> Option<OdometryAtScan> {
+        (self.has_odometry == 1).then_some(OdometryAtScan {
+            pose: self.odometry,
+            covariance: self.odometry_covariance,
+        })
+    }
+
+    /// Sets (or clears) the odometry pose at the scan's stamp.
+    pub fn set_odometry(&mut self, odometry: Option<OdometryAtScan>) {
+        let value = odometry.unwrap_or(OdometryAtScan {
+            pose: Pose2::default(),
+            covariance: [0.0; 9],
+        });
+        self.odometry = value.pose;
+        self.odometry_covariance = value.covariance;
+        self.has_odometry = u32::from(odometry.is_some());
     }
 
     /// Replaces the lines and corners.
@@ -48,6 +77,7 @@ impl Features {
             header: self.header,
             scan_sent_ns: self.scan_sent_ns,
             processing_ns: self.processing_ns,
+            odometry: self.odometry(),
             lines: Cow::Borrowed(self.lines()),
             corners: Cow::Borrowed(self.corners()),
         }
@@ -58,9 +88,17 @@ impl Features {
         features.header = record.header;
         features.scan_sent_ns = record.scan_sent_ns;
         features.processing_ns = record.processing_ns;
+        features.set_odometry(record.odometry);
         features.set(&record.lines, &record.corners)?;
         Ok(features)
     }
+}
+
+/// The odometry pose paired with a scan (`odom_from_robot`) and its row-major covariance.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct OdometryAtScan {
+    pub pose: Pose2,
+    pub covariance: [f64; 9],
 }
 
 /// [`Features`] without their unused capacity: what gets written to disk.
@@ -69,6 +107,7 @@ pub struct FeaturesRecord<'a> {
     pub header: Header,
     pub scan_sent_ns: u64,
     pub processing_ns: u64,
+    pub odometry: Option<OdometryAtScan>,
     pub lines: Cow<'a, [Line]>,
     pub corners: Cow<'a, [Corner]>,
 }

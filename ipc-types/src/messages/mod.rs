@@ -12,7 +12,7 @@ mod pose_estimate;
 mod world_corners;
 
 pub use corner::{Corner, MapCorner, TrueCorner};
-pub use features::{Features, FeaturesRecord};
+pub use features::{Features, FeaturesRecord, OdometryAtScan};
 pub use ground_truth::GroundTruthPose;
 pub use laser_scan::{LaserScan, LaserScanRecord};
 pub use line::Line;

@@ -18,3 +18,17 @@ impl Pose2 {
         Self { x, y, yaw }
     }
 }
+
+impl From<slam_geom::Pose2> for Pose2 {
+    fn from(pose: slam_geom::Pose2) -> Self {
+        Self::new(pose.x, pose.y, pose.yaw)
+    }
+}
+
+impl From<Pose2> for slam_geom::Pose2 {
+    /// The message's yaw is wrapped by its publisher (docs/CONVENTIONS.md), so it is taken
+    /// as it is.
+    fn from(pose: Pose2) -> Self {
+        Self::new(pose.x, pose.y, pose.yaw)
+    }
+}
