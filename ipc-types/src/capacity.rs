@@ -8,6 +8,8 @@ pub const MAX_LINES: usize = 256;
 pub const MAX_FEATURE_CORNERS: usize = 128;
 /// Corners a [`crate::MapSnapshot`] can carry.
 pub const MAX_MAP_CORNERS: usize = 4096;
+/// Poses a [`crate::PathChunk`] can carry (a path of any length travels as several).
+pub const MAX_PATH_CHUNK_POSES: usize = 4096;
 /// True corners a [`crate::WorldCorners`] message can carry.
 pub const MAX_WORLD_CORNERS: usize = 4096;
 

@@ -33,4 +33,7 @@ const _: () = {
     );
     assert!(size_of::<WorldCorners>() == 72 + 32 * crate::MAX_WORLD_CORNERS);
     assert!(size_of::<MapSnapshot>() == 72 + 168 * crate::MAX_MAP_CORNERS);
+    assert!(size_of::<StampedPose>() == 32);
+    assert!(offset_of!(PathChunk, poses) == 88);
+    assert!(size_of::<PathChunk>() == 88 + 32 * crate::MAX_PATH_CHUNK_POSES);
 };

@@ -46,7 +46,8 @@ mod transport;
 mod zeroed;
 
 pub use capacity::{
-    CapacityError, MAX_BEAMS, MAX_FEATURE_CORNERS, MAX_LINES, MAX_MAP_CORNERS, MAX_WORLD_CORNERS,
+    CapacityError, MAX_BEAMS, MAX_FEATURE_CORNERS, MAX_LINES, MAX_MAP_CORNERS,
+    MAX_PATH_CHUNK_POSES, MAX_WORLD_CORNERS,
 };
 pub use domain::{Domain, DomainError, FILE_PREFIX, NodeError};
 pub use header::{FLAG_END_OF_STREAM, FRAME_ID_LEN, Header, now_ns};

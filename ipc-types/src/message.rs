@@ -6,7 +6,8 @@ use iceoryx2::prelude::ZeroCopySend;
 
 use crate::header::Header;
 use crate::messages::{
-    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PoseEstimate, WorldCorners,
+    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
+    WorldCorners,
 };
 use crate::zeroed::Zeroable;
 
@@ -40,4 +41,5 @@ impl_message!(
     Features,
     PoseEstimate,
     MapSnapshot,
+    PathChunk,
 );

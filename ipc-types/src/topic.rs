@@ -3,7 +3,8 @@
 use std::marker::PhantomData;
 
 use crate::messages::{
-    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PoseEstimate, WorldCorners,
+    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
+    WorldCorners,
 };
 
 /// A service name bound to its message type, so a process cannot open a service with the
@@ -52,5 +53,8 @@ pub const WORLD_CORNERS: Topic<WorldCorners> = Topic::new("sim/world_corners");
 pub const FEATURES: Topic<Features> = Topic::new("perception/features");
 /// The SLAM pose estimate of each scan.
 pub const POSE: Topic<PoseEstimate> = Topic::new("slam/pose");
+/// The filter's answer for the whole trajectory (the best particle's path), at the end of
+/// the stream, in chunks.
+pub const PATH: Topic<PathChunk> = Topic::new("slam/path");
 /// The best particle's map, every few scans and at the end.
 pub const MAP: Topic<MapSnapshot> = Topic::new("slam/map");

@@ -148,6 +148,26 @@ fn map_snapshot_round_trips_at_full_capacity() {
 }
 
 #[test]
+fn path_chunk_round_trips_at_full_capacity_and_refuses_more() {
+    let mut chunk = PathChunk::boxed_zeroed();
+    chunk.header = header(2);
+    chunk.first = 2 * MAX_PATH_CHUNK_POSES as u64;
+    chunk.total = 3 * MAX_PATH_CHUNK_POSES as u64 - 5;
+    let poses: Vec<StampedPose> = (0..MAX_PATH_CHUNK_POSES)
+        .map(|i| StampedPose {
+            stamp_ns: 1_000 + i as u64,
+            pose: Pose2::new(i as f64, -0.5 * i as f64, 0.001 * i as f64),
+        })
+        .collect();
+    chunk.set(&poses).unwrap();
+    let record: PathChunkRecord = decode(&encode(&*chunk));
+    assert_eq!(*PathChunk::from_record(&record).unwrap(), *chunk);
+    let mut more = poses.clone();
+    more.push(poses[0]);
+    assert!(chunk.set(&more).is_err());
+}
+
+#[test]
 fn world_corners_round_trip() {
     let mut world = WorldCorners::boxed_zeroed();
     world.header = header(0);

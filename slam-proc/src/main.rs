@@ -10,8 +10,8 @@ use ipc_types::prelude::*;
 use slam_proc::{FastSlam, LineObservation, Observation, OdometryInput, SlamConfig};
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
-/// publishes a pose
-/// estimate for every scan and the best particle's map every few scans and at the end.
+/// publishes a pose estimate for every scan, the best particle's map every few scans and at
+/// the end, and the best particle's whole path at the end.
 #[derive(Debug, Parser)]
 #[command(name = "slam-proc", version)]
 struct Args {
@@ -70,6 +70,9 @@ fn run() -> Result<()> {
     let delivery = features.delivery();
     let maps = Outlet::create(&domain, &node, topic::MAP, delivery, 1)?;
     let poses = Outlet::create(&domain, &node, topic::POSE, delivery, 0)?;
+    // The path goes out once, at the end, in many chunks: lossless whatever the run's
+    // delivery, or a real-time run would keep only the last few.
+    let path = Outlet::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
     println!("ready");
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
@@ -86,6 +89,7 @@ fn run() -> Result<()> {
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
                 publish_map(&maps, &slam, last_header)?;
+                publish_path(&path, &slam, last_header)?;
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
                 eprintln!("slam-proc: {processed} scans");
                 return Ok(());
@@ -129,8 +133,9 @@ fn run() -> Result<()> {
             }
         }
     }
-    // Stopped by a signal: leave the map as far as it got.
+    // Stopped by a signal: leave the map and the path as far as they got.
     publish_map(&maps, &slam, last_header)?;
+    publish_path(&path, &slam, last_header)?;
     eprintln!("slam-proc: stopped after {processed} scans");
     Ok(())
 }
@@ -172,6 +177,29 @@ fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> R
         // Cut to capacity above, so this cannot fail.
         let _ = message.set(&corners[..keep]);
     })?;
+    Ok(())
+}
+
+/// The best particle's whole path, in chunks numbered from 0.
+fn publish_path(outlet: &Outlet<PathChunk>, slam: &FastSlam, last: Header) -> Result<()> {
+    let path: Vec<StampedPose> = slam
+        .best_path()
+        .iter()
+        .map(|p| StampedPose {
+            stamp_ns: p.stamp_ns,
+            pose: p.pose.into(),
+        })
+        .collect();
+    let total = path.len() as u64;
+    for (index, chunk) in path.chunks(ipc_types::MAX_PATH_CHUNK_POSES).enumerate() {
+        outlet.publish(|message| {
+            message.header = Header::new(index as u64, last.stamp_ns, "map");
+            message.first = (index * ipc_types::MAX_PATH_CHUNK_POSES) as u64;
+            message.total = total;
+            // Chunks are cut to the capacity, so this cannot fail.
+            let _ = message.set(chunk);
+        })?;
+    }
     Ok(())
 }
 

@@ -16,6 +16,7 @@ use crate::kalman;
 use crate::linalg::sample_information_form3;
 use crate::map::{CornerMap, CornerState};
 use crate::observation::Prepared;
+use crate::path::Path;
 use slam_geom::Pose2;
 
 #[derive(Debug, Clone)]
@@ -30,6 +31,8 @@ pub(crate) struct Particle {
     /// motion, and repeated as a velocity it would throw the next steps off.
     pub increment: Pose2,
     pub map: CornerMap,
+    /// Every pose so far, shared with the copies of its ancestors.
+    pub path: Path,
 }
 
 /// What every particle's update reads, the same for all particles of a scan.
@@ -70,6 +73,7 @@ impl Particle {
             log_weight: 0.0,
             increment: Pose2::IDENTITY,
             map,
+            path: Path::default(),
         }
     }
 

@@ -13,6 +13,7 @@ use crate::map::{CornerMap, CornerState, MapCorner};
 use crate::motion::MotionEstimator;
 use crate::observation::{LineObservation, Observation, OdometryInput, Prepared};
 use crate::particle::{Particle, ScanContext, Scratch};
+use crate::path::PathPose;
 use crate::predict::{self, MotionNoise};
 use crate::resample::{effective_sample_size, log_sum_exp, normalise, systematic};
 use crate::rng::Streams;
@@ -111,6 +112,16 @@ impl FastSlam {
         self.particles.iter().map(|p| p.pose)
     }
 
+    /// The whole path of the particle that carries the most weight now, one pose per scan
+    /// from the first: the filter's answer for the trajectory, consistent with
+    /// [`FastSlam::best_map`] (the map was built from these poses).
+    pub fn best_path(&self) -> Vec<PathPose> {
+        self.particles
+            .get(self.best)
+            .map(|p| p.path.poses())
+            .unwrap_or_default()
+    }
+
     /// The confirmed corners of the best particle's map.
     pub fn best_map(&self) -> Vec<MapCorner> {
         self.particles
@@ -195,6 +206,10 @@ impl FastSlam {
             for (k, particle) in particles.iter_mut().enumerate() {
                 let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
                 particle.log_weight += particle.update(&context, scratch, &mut rng);
+                particle.path.push(PathPose {
+                    stamp_ns,
+                    pose: particle.pose,
+                });
             }
         };
         if rayon::current_num_threads() > 1 {

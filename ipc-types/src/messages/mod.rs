@@ -7,6 +7,7 @@ mod laser_scan;
 mod line;
 mod map_snapshot;
 mod odometry;
+mod path_chunk;
 mod pose;
 mod pose_estimate;
 mod world_corners;
@@ -18,6 +19,7 @@ pub use laser_scan::{LaserScan, LaserScanRecord};
 pub use line::Line;
 pub use map_snapshot::{MapSnapshot, MapSnapshotRecord};
 pub use odometry::Odometry;
+pub use path_chunk::{PathChunk, PathChunkRecord, StampedPose};
 pub use pose::Pose2;
 pub use pose_estimate::{PoseEstimate, StageTiming};
 pub use world_corners::{WorldCorners, WorldCornersRecord};
@@ -37,4 +39,6 @@ crate::zeroed::impl_zeroable!(
     StageTiming,
     PoseEstimate,
     MapSnapshot,
+    StampedPose,
+    PathChunk,
 );

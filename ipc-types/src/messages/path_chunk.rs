@@ -1,0 +1,82 @@
+//! The filter's whole trajectory, sent in pieces at the end of a run.
+
+use std::borrow::Cow;
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+use super::pose::Pose2;
+use crate::capacity::{CapacityError, MAX_PATH_CHUNK_POSES, fill, used};
+use crate::header::Header;
+
+/// One pose of a path: a scan's stamp and the pose (`map_from_robot`) at it.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("slam::StampedPose::v1")]
+pub struct StampedPose {
+    pub stamp_ns: u64,
+    pub pose: Pose2,
+}
+
+/// A piece of a path: poses `first .. first + pose_count` of `total`, in stamp order. A path
+/// of any length travels as consecutive chunks; the receiver has it all once it holds
+/// `total` poses.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("slam::PathChunk::v1")]
+pub struct PathChunk {
+    /// `seq` numbers the chunks of one path from 0; `stamp_ns` is the last scan's.
+    pub header: Header,
+    /// Index in the whole path of this chunk's first pose.
+    pub first: u64,
+    /// Poses in the whole path.
+    pub total: u64,
+    pub pose_count: u32,
+    /// Keeps the layout free of implicit padding; always 0.
+    pub reserved: u32,
+    pub poses: [StampedPose; MAX_PATH_CHUNK_POSES],
+}
+
+impl PathChunk {
+    pub fn poses(&self) -> &[StampedPose] {
+        used(&self.poses, self.pose_count)
+    }
+
+    pub fn set(&mut self, poses: &[StampedPose]) -> Result<(), CapacityError> {
+        self.pose_count = fill("path poses", &mut self.poses, poses)?;
+        Ok(())
+    }
+
+    pub fn to_record(&self) -> PathChunkRecord<'_> {
+        PathChunkRecord {
+            header: self.header,
+            first: self.first,
+            total: self.total,
+            poses: Cow::Borrowed(self.poses()),
+        }
+    }
+
+    pub fn from_record(record: &PathChunkRecord<'_>) -> Result<Box<Self>, CapacityError> {
+        let mut message = <Self as crate::Zeroable>::boxed_zeroed();
+        message.header = record.header;
+        message.first = record.first;
+        message.total = record.total;
+        message.set(&record.poses)?;
+        Ok(message)
+    }
+}
+
+/// [`PathChunk`] without the unused capacity.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PathChunkRecord<'a> {
+    pub header: Header,
+    pub first: u64,
+    pub total: u64,
+    pub poses: Cow<'a, [StampedPose]>,
+}
+
+impl Serialize for PathChunk {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        self.to_record().serialize(serializer)
+    }
+}
