@@ -28,6 +28,7 @@ struct Args {
     format: LogFormat,
     limit: usize,
     config: Option<PathBuf>,
+    debug: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Args> {
@@ -40,6 +41,7 @@ fn parse_args() -> Result<Args> {
         format: LogFormat::Carmen,
         limit: usize::MAX,
         config: None,
+        debug: None,
     };
     let mut log = None;
     while let Some(arg) = args.next() {
@@ -51,6 +53,7 @@ fn parse_args() -> Result<Args> {
             "--format" => parsed.format = value()?.parse().map_err(anyhow::Error::msg)?,
             "--limit" => parsed.limit = value()?.parse()?,
             "--config" => parsed.config = Some(value()?.into()),
+            "--debug" => parsed.debug = Some(value()?.into()),
             other if other.starts_with("--") => bail!("unknown option {other}"),
             other => log = Some(PathBuf::from(other)),
         }
@@ -75,11 +78,41 @@ fn main() -> Result<()> {
     let mut front_end = FrontEnd::new(config)?;
     let mut tum = String::new();
     let mut last_stamp = None;
+    let mut debug = String::new();
+    let mut previous_odometry = None;
     let mut times_us: Vec<f64> = Vec::with_capacity(scans.len());
     let wall = Instant::now();
     for scan in &scans {
         let out = front_end.process(&scan.input(args.odometry))?;
         times_us.push(out.elapsed.as_secs_f64() * 1e6);
+        if args.debug.is_some() {
+            let odometry_step = match (previous_odometry, scan.odometry) {
+                (Some(a), Some(b)) => {
+                    let a: scan_match::OdometryInput = a;
+                    a.odom_from_robot.between(&b.odom_from_robot)
+                }
+                _ => slam_geom::Pose2::IDENTITY,
+            };
+            previous_odometry = scan.odometry;
+            let i = out.increment;
+            writeln!(
+                debug,
+                "{} {:.5} {:.5} {:.5} {:.5} {:.5} {:.5} {} {} {} {:.0} {:?} {:?}",
+                slam_eval::format_stamp(out.stamp_ns),
+                i.x,
+                i.y,
+                i.yaw,
+                odometry_step.x,
+                odometry_step.y,
+                odometry_step.yaw,
+                out.points,
+                out.inliers,
+                out.keyframe as u8,
+                out.elapsed.as_secs_f64() * 1e6,
+                out.status,
+                out.odometry
+            )?;
+        }
         if let MatchStatus::Failed(why) = out.status {
             eprintln!(
                 "{}: match failed ({why:?})",
@@ -105,6 +138,9 @@ fn main() -> Result<()> {
     }
     let wall = wall.elapsed();
     std::fs::write(&args.out, tum)?;
+    if let Some(path) = &args.debug {
+        std::fs::write(path, debug)?;
+    }
     times_us.sort_by(f64::total_cmp);
     let pick = |q: f64| times_us[((times_us.len() - 1) as f64 * q) as usize];
     let stats = front_end.stats();

@@ -22,6 +22,11 @@ pub struct FrontEndConfig {
     /// Widest gate between a scan point and its map neighbour, metres. Wider than any
     /// prior's plausible error at this rate; matches beyond it are clutter.
     pub max_correspondence: f64,
+    /// The correlative search before registration spans the prior's 3-sigma window, but
+    /// at most this far each way, metres...
+    pub max_search_translation: f64,
+    /// ...and this far in yaw, radians.
+    pub max_search_yaw: f64,
     /// Gauss-Newton iterations at most per scan.
     pub max_iterations: usize,
     /// The iteration stops once a step moves every point by less than this, metres.
@@ -65,11 +70,13 @@ impl Default for FrontEndConfig {
             voxel_size: 0.05,
             min_points: 30,
             max_correspondence: 0.5,
+            max_search_translation: 0.5,
+            max_search_yaw: 0.6,
             max_iterations: 30,
             convergence: 1e-4,
             keyframe_distance: 0.3,
             keyframe_angle: 0.2,
-            max_keyframes: 30,
+            max_keyframes: 50,
             degeneracy_ratio: 0.02,
             min_inlier_fraction: 0.4,
             odometry_gate: 30.7,
@@ -91,6 +98,8 @@ impl FrontEndConfig {
             ("voxel_size", self.voxel_size),
             ("max_correspondence", self.max_correspondence),
             ("convergence", self.convergence),
+            ("max_search_translation", self.max_search_translation),
+            ("max_search_yaw", self.max_search_yaw),
             ("keyframe_distance", self.keyframe_distance),
             ("keyframe_angle", self.keyframe_angle),
             ("degeneracy_ratio", self.degeneracy_ratio),

@@ -17,10 +17,15 @@ use crate::prior::{
     OdometryRejection, Step, constant_velocity_step, odometry_step, positive_definite,
 };
 use crate::registration::{Registration, RegistrationParams, register};
+use crate::search::{Window, score_sample, search_sample, subsample};
 
 /// Steps closer in time than this (repeated or reordered stamps) are timed as this long,
 /// and teach nothing about the velocity.
 const MIN_DT: f64 = 1e-3;
+
+/// The correlative search runs only when fewer of the scan's points than this (weighted
+/// by closeness) lie near the map at the prior's prediction.
+const SEARCH_BELOW_SCORE: f64 = 0.5;
 
 /// Registers every scan against a local map of recent keyframes, fused with odometry.
 /// Feed it every scan in order with [`FrontEnd::process`].
@@ -222,7 +227,30 @@ impl FrontEnd {
         let c = &prediction.covariance;
         let gate = (3.0 * (c[(0, 0)] + c[(1, 1)]).sqrt() + 3.0 * c[(2, 2)].sqrt() * spread)
             .min(self.config.max_correspondence);
-        let found = register(&self.map, points, prediction.pose, gate, &self.params);
+        // Where the prior is less certain than the scoring distance, a correlative search
+        // picks the basin first (coarse, then fine around the best), so that a fast turn
+        // or a no-odometry guess does not leave Gauss-Newton in the wrong one.
+        let radius = 2.0 * self.config.voxel_size;
+        let window = Window {
+            translation: (3.0 * (c[(0, 0)] + c[(1, 1)]).sqrt())
+                .min(self.config.max_search_translation),
+            yaw: (3.0 * c[(2, 2)].sqrt()).min(self.config.max_search_yaw),
+        };
+        let mut seed = prediction.pose;
+        let sample = subsample(points);
+        let uncertain = window.translation > radius || window.yaw * spread > radius;
+        // A seed where most points already sit on the map is in the right basin.
+        if uncertain && score_sample(&self.map, &sample, &seed, radius) < SEARCH_BELOW_SCORE {
+            if window.translation > 3.0 * radius || window.yaw * spread > 3.0 * radius {
+                seed = search_sample(&self.map, &sample, &seed, window, 3.0 * radius).0;
+            }
+            let fine = Window {
+                translation: window.translation.min(3.0 * radius),
+                yaw: window.yaw.min(3.0 * radius / spread.max(1.0)),
+            };
+            seed = search_sample(&self.map, &sample, &seed, fine, radius).0;
+        }
+        let found = register(&self.map, points, seed, gate, &self.params);
         if (found.inliers as f64) < self.config.min_inlier_fraction * points.len() as f64 {
             return Err(MatchFailure::TooFewInliers);
         }

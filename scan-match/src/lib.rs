@@ -37,6 +37,7 @@ mod output;
 pub mod points;
 pub mod prior;
 pub mod registration;
+pub mod search;
 
 pub use config::FrontEndConfig;
 pub use error::{ConfigError, InputError};

@@ -6,7 +6,7 @@ use std::collections::VecDeque;
 use nalgebra::Vector2;
 use slam_geom::Pose2;
 
-use crate::cell_hash::{CellMap, CellSet, cell_key, pack};
+use crate::cell_hash::{CellMap, cell_key, pack};
 use crate::points::SurfacePoint;
 
 /// Cells of the neighbour grid are this many voxels wide: a query within the usual gates
@@ -20,8 +20,18 @@ const MIN_NORMAL_COSINE: f64 = 0.5;
 
 #[derive(Debug, Clone)]
 struct Keyframe {
+    id: u64,
     pose: Pose2,
-    points: Vec<SurfacePoint>,
+    /// Grid cells its points went into, to take them out again.
+    cells: Vec<u64>,
+}
+
+/// A map point with the voxel it stands for and the keyframe it came from.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    voxel: u64,
+    keyframe: u64,
+    point: SurfacePoint,
 }
 
 /// A map point found for a query.
@@ -32,17 +42,18 @@ pub struct Neighbour {
     pub distance_squared: f64,
 }
 
-/// Recent keyframes and the merged, thinned point set built from them.
+/// Recent keyframes' points in one grid, one point per voxel (the newest keyframe's).
+/// Updated in place: a keyframe's points go in and, when it is the oldest of too many,
+/// come out again, at a cost proportional to one scan, not to the map.
 #[derive(Debug, Clone)]
 pub struct LocalMap {
     voxel: f64,
     cell: f64,
     max_keyframes: usize,
+    next_id: u64,
     keyframes: VecDeque<Keyframe>,
-    /// Merged points, sorted by grid cell.
-    points: Vec<SurfacePoint>,
-    /// Grid cell -> range of `points`.
-    cells: CellMap<(u32, u32)>,
+    cells: CellMap<Vec<Entry>>,
+    len: usize,
 }
 
 impl LocalMap {
@@ -51,19 +62,20 @@ impl LocalMap {
             voxel,
             cell: GRID_CELL_VOXELS * voxel,
             max_keyframes,
+            next_id: 0,
             keyframes: VecDeque::new(),
-            points: Vec::new(),
             cells: CellMap::default(),
+            len: 0,
         }
     }
 
     pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
+        self.len == 0
     }
 
-    /// Points in the merged map.
+    /// Points in the map.
     pub fn len(&self) -> usize {
-        self.points.len()
+        self.len
     }
 
     /// Pose of the newest keyframe.
@@ -71,51 +83,54 @@ impl LocalMap {
         self.keyframes.back().map(|k| k.pose)
     }
 
-    /// Adds a scan's points (robot frame) seen from `pose`, drops the oldest keyframe if
-    /// there are too many, and rebuilds the merged set (a few thousand points: cheaper
-    /// than keeping a removable index, and done only at keyframes).
+    /// Adds a scan's points (robot frame) seen from `pose`, then drops the oldest keyframe
+    /// if there are too many. Where a voxel already has a point, the new one replaces it:
+    /// the latest view of a surface was registered with the most context.
     pub fn insert(&mut self, pose: Pose2, scan: &[SurfacePoint]) {
+        let id = self.next_id;
+        self.next_id += 1;
         let rotation = pose.rotation();
-        let points = scan
-            .iter()
-            .map(|p| SurfacePoint {
+        let mut cells = Vec::with_capacity(scan.len());
+        for p in scan {
+            let point = SurfacePoint {
                 point: pose.transform(p.point),
                 normal: rotation * p.normal,
-            })
-            .collect();
-        self.keyframes.push_back(Keyframe { pose, points });
-        while self.keyframes.len() > self.max_keyframes {
-            self.keyframes.pop_front();
+            };
+            let entry = Entry {
+                voxel: cell_key(point.point.x, point.point.y, self.voxel),
+                keyframe: id,
+                point,
+            };
+            let cell = cell_key(point.point.x, point.point.y, self.cell);
+            let entries = self.cells.entry(cell).or_default();
+            match entries.iter_mut().find(|e| e.voxel == entry.voxel) {
+                Some(existing) => *existing = entry,
+                None => {
+                    entries.push(entry);
+                    self.len += 1;
+                }
+            }
+            cells.push(cell);
         }
-        self.rebuild();
+        self.keyframes.push_back(Keyframe { id, pose, cells });
+        while self.keyframes.len() > self.max_keyframes {
+            if let Some(old) = self.keyframes.pop_front() {
+                self.remove(&old);
+            }
+        }
     }
 
-    fn rebuild(&mut self) {
-        // Newest first: where keyframes overlap, the latest view of a surface wins, since
-        // it was registered with the most context.
-        let mut taken = CellSet::default();
-        let mut merged: Vec<(u64, SurfacePoint)> = Vec::new();
-        for keyframe in self.keyframes.iter().rev() {
-            for p in &keyframe.points {
-                if taken.insert(cell_key(p.point.x, p.point.y, self.voxel)) {
-                    merged.push((cell_key(p.point.x, p.point.y, self.cell), *p));
+    fn remove(&mut self, keyframe: &Keyframe) {
+        for cell in &keyframe.cells {
+            if let Some(entries) = self.cells.get_mut(cell) {
+                let before = entries.len();
+                entries.retain(|e| e.keyframe != keyframe.id);
+                self.len -= before - entries.len();
+                if entries.is_empty() {
+                    self.cells.remove(cell);
                 }
             }
         }
-        merged.sort_unstable_by_key(|(key, _)| *key);
-        self.cells.clear();
-        self.points.clear();
-        let mut start = 0;
-        while start < merged.len() {
-            let key = merged[start].0;
-            let mut end = start;
-            while end < merged.len() && merged[end].0 == key {
-                end += 1;
-            }
-            self.cells.insert(key, (start as u32, end as u32));
-            start = end;
-        }
-        self.points.extend(merged.into_iter().map(|(_, p)| p));
     }
 
     /// The nearest map point to `query` within `radius` whose normal agrees with `normal`.
@@ -133,10 +148,11 @@ impl LocalMap {
         let mut best: Option<Neighbour> = None;
         for ix in x0..=x1 {
             for iy in y0..=y1 {
-                let Some(&(start, end)) = self.cells.get(&pack(ix, iy)) else {
+                let Some(entries) = self.cells.get(&pack(ix, iy)) else {
                     continue;
                 };
-                for p in &self.points[start as usize..end as usize] {
+                for e in entries {
+                    let p = &e.point;
                     let d2 = (p.point - query).norm_squared();
                     if d2 > r2 || best.is_some_and(|b| b.distance_squared <= d2) {
                         continue;
@@ -170,12 +186,14 @@ mod tests {
     #[test]
     fn finds_the_nearest_compatible_point_and_forgets_old_keyframes() {
         let mut map = LocalMap::new(0.05, 2);
-        let scan: Vec<SurfacePoint> = (0..40).map(|i| wall_point(f64::from(i) * 0.05)).collect();
+        let scan: Vec<SurfacePoint> = (0..40)
+            .map(|i| wall_point(f64::from(i) * 0.1 + 0.025))
+            .collect();
         map.insert(Pose2::IDENTITY, &scan);
         let hit = map
             .nearest(Vector2::new(0.52, 0.9), Vector2::new(0.0, -1.0), 0.2)
             .unwrap();
-        assert!((hit.point - Vector2::new(0.5, 1.0)).norm() < 1e-9);
+        assert!((hit.point - Vector2::new(0.525, 1.0)).norm() < 1e-9);
         // The back face of the wall is not the same surface.
         assert!(
             map.nearest(Vector2::new(0.52, 1.1), Vector2::new(0.0, 1.0), 0.2)
