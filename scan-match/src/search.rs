@@ -26,16 +26,35 @@ pub struct Window {
 /// Fraction of (subsampled) scan points that find a compatible map point within
 /// `radius` at `pose`, each weighted by closeness.
 pub fn score_sample(map: &LocalMap, sample: &[SurfacePoint], pose: &Pose2, radius: f64) -> f64 {
+    score_bounded(map, sample, pose, radius, f64::NEG_INFINITY)
+}
+
+/// [`score_sample`], abandoned (returning a lower bound) as soon as even a perfect fit of
+/// the remaining points could not reach `to_beat`: most candidates of a window are far
+/// off and are dropped after a fraction of their points.
+fn score_bounded(
+    map: &LocalMap,
+    sample: &[SurfacePoint],
+    pose: &Pose2,
+    radius: f64,
+    to_beat: f64,
+) -> f64 {
     let rotation = pose.rotation();
+    let translation = nalgebra::Vector2::new(pose.x, pose.y);
     let r2 = radius * radius;
+    let n = sample.len().max(1) as f64;
     let mut total = 0.0;
-    for p in sample {
-        let world = pose.transform(p.point);
-        if let Some(n) = map.nearest(world, rotation * p.normal, radius) {
-            total += 1.0 - n.distance_squared / r2;
+    for (i, p) in sample.iter().enumerate() {
+        let world = rotation * p.point + translation;
+        if let Some(found) = map.nearest(world, rotation * p.normal, radius) {
+            total += 1.0 - found.distance_squared / r2;
+        }
+        let remaining = (sample.len() - i - 1) as f64;
+        if (total + remaining) / n < to_beat {
+            return total / n;
         }
     }
-    total / sample.len().max(1) as f64
+    total / n
 }
 
 /// An even subsample of the scan for scoring.
@@ -108,7 +127,8 @@ pub fn search_sample(
                     k as f64 * yaw_step,
                 );
                 let pose = Pose2::new(seed.x + dx, seed.y + dy, yaw);
-                let s = score_sample(map, sample, &pose, radius) - penalty(dx, dy, dyaw);
+                let cost = penalty(dx, dy, dyaw);
+                let s = score_bounded(map, sample, &pose, radius, best.1 + cost) - cost;
                 if s > best.1 {
                     best = (pose, s);
                 }
