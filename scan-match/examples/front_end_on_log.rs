@@ -97,7 +97,7 @@ fn main() -> Result<()> {
             let i = out.increment;
             writeln!(
                 debug,
-                "{} {:.5} {:.5} {:.5} {:.5} {:.5} {:.5} {} {} {} {:.0} {:?} {:?}",
+                "{} {:.5} {:.5} {:.5} {:.5} {:.5} {:.5} {} {} {} {} {:.0} {:?} {:?}",
                 slam_eval::format_stamp(out.stamp_ns),
                 i.x,
                 i.y,
@@ -107,6 +107,7 @@ fn main() -> Result<()> {
                 odometry_step.yaw,
                 out.points,
                 out.inliers,
+                out.iterations,
                 out.keyframe as u8,
                 out.elapsed.as_secs_f64() * 1e6,
                 out.status,
@@ -137,6 +138,10 @@ fn main() -> Result<()> {
         )?;
     }
     let wall = wall.elapsed();
+    #[allow(static_mut_refs)]
+    unsafe {
+        eprintln!("COUNTS {:?}", scan_match::local_map::COUNTS);
+    }
     std::fs::write(&args.out, tum)?;
     if let Some(path) = &args.debug {
         std::fs::write(path, debug)?;

@@ -43,6 +43,9 @@ pub struct FrontEndConfig {
     /// A match is confident enough to judge the odometry only with at least this fraction
     /// of its points as inliers.
     pub min_inlier_fraction: f64,
+    /// A match overrules a contradicting odometry step only with at least this fraction of
+    /// its points as inliers; a weaker one gives way to the odometry.
+    pub strong_inlier_fraction: f64,
     /// Squared Mahalanobis distance between the odometry step and the match beyond which
     /// the odometry is rejected (chi-square, 3 degrees of freedom, p = 1e-6).
     pub odometry_gate: f64,
@@ -79,6 +82,7 @@ impl Default for FrontEndConfig {
             max_keyframes: 50,
             degeneracy_ratio: 0.02,
             min_inlier_fraction: 0.4,
+            strong_inlier_fraction: 0.6,
             odometry_gate: 30.7,
             odometry_min_sigma_xy: 0.005,
             odometry_min_sigma_yaw: 0.005,
@@ -128,6 +132,13 @@ impl FrontEndConfig {
                 name: "min_inlier_fraction",
                 value: self.min_inlier_fraction,
                 range: "[0, 1]",
+            });
+        }
+        if !(self.min_inlier_fraction..=1.0).contains(&self.strong_inlier_fraction) {
+            return Err(ConfigError::OutOfRange {
+                name: "strong_inlier_fraction",
+                value: self.strong_inlier_fraction,
+                range: "[min_inlier_fraction, 1]",
             });
         }
         if self.max_correspondence < self.voxel_size {

@@ -27,6 +27,15 @@ const MIN_DT: f64 = 1e-3;
 /// by closeness) lie near the map at the prior's prediction.
 const SEARCH_BELOW_SCORE: f64 = 0.5;
 
+/// A weak fit overrules the odometry only where the scan scores below this share of the
+/// fit's score at the odometry's pose.
+const WEAK_FIT_MARGIN: f64 = 0.7;
+
+/// ...and only if it puts at least this share of the (closeness-weighted) points on the
+/// map itself: a fit that explains little of the scan (after a gap in the data, say)
+/// is no evidence against the odometry.
+const WEAK_FIT_MIN_SCORE: f64 = 0.4;
+
 /// Registers every scan against a local map of recent keyframes, fused with odometry.
 /// Feed it every scan in order with [`FrontEnd::process`].
 #[derive(Debug, Clone)]
@@ -105,6 +114,7 @@ impl FrontEnd {
             valid_beams: extracted.valid_beams,
             points: points.len(),
             inliers: 0,
+            iterations: 0,
             keyframe: false,
             elapsed: Default::default(),
         };
@@ -151,12 +161,24 @@ impl FrontEnd {
             if let Ok(found) = &registration {
                 let distance = disagreement(&predict(&self.pose, &step), found);
                 if !(distance <= self.config.odometry_gate) {
-                    odometry = Err(OdometryStatus::Rejected(OdometryRejection::Inconsistent {
-                        mahalanobis_squared: distance,
-                    }));
-                    prior = cv;
+                    // The odometry's seed may have led the fit astray: the scan gets a
+                    // second chance from constant velocity before the two are compared.
                     if let Ok(other) = self.register(points, &cv) {
                         registration = Ok(other);
+                    }
+                    if registration
+                        .as_ref()
+                        .is_ok_and(|r| self.overrules(r, &step, points))
+                    {
+                        // A clear fit overrules the wheels.
+                        odometry = Err(OdometryStatus::Rejected(OdometryRejection::Inconsistent {
+                            mahalanobis_squared: distance,
+                        }));
+                        prior = cv;
+                    } else {
+                        // A weak one that explains the scan no better than the odometry does
+                        // not: it is more likely wrong than the wheels.
+                        registration = Err(MatchFailure::Contradicted);
                     }
                 }
             }
@@ -166,6 +188,7 @@ impl FrontEnd {
         let (pose, covariance) = match &registration {
             Ok(found) => {
                 output.inliers = found.inliers;
+                output.iterations = found.iterations;
                 let mut open = found.constraint.degenerate_directions();
                 output.status = match open.next() {
                     None => MatchStatus::Matched,
@@ -258,6 +281,21 @@ impl FrontEnd {
             return Err(MatchFailure::Unconstrained);
         }
         Ok(found)
+    }
+
+    /// Whether a fit that contradicts the odometry step overrules it: a clear fit always;
+    /// a weak one only if the scan lies on the map clearly better at the fit's pose than
+    /// at the odometry's (a stale odometry catching up, say), since a weak fit is the more
+    /// likely of the two to be wrong.
+    fn overrules(&self, found: &Registration, step: &Step, points: &[SurfacePoint]) -> bool {
+        if found.inliers as f64 >= self.config.strong_inlier_fraction * points.len() as f64 {
+            return true;
+        }
+        let sample = subsample(points);
+        let radius = 2.0 * self.config.voxel_size;
+        let at_odometry = score_sample(&self.map, &sample, &predict(&self.pose, step).pose, radius);
+        let at_fit = score_sample(&self.map, &sample, &found.pose, radius);
+        at_fit >= WEAK_FIT_MIN_SCORE && at_odometry < WEAK_FIT_MARGIN * at_fit
     }
 
     fn keyframe_due(&self) -> bool {

@@ -32,6 +32,9 @@ pub enum MatchFailure {
     TooFewInliers,
     /// The scan constrains no direction at all.
     Unconstrained,
+    /// A weak fit (below `strong_inlier_fraction`) far from a believable odometry step:
+    /// the odometry is taken instead.
+    Contradicted,
 }
 
 /// What became of the odometry at this scan.
@@ -66,6 +69,8 @@ pub struct FrontEndOutput {
     pub points: usize,
     /// Points matched to the map within the final gate.
     pub inliers: usize,
+    /// Gauss-Newton iterations of the registration that counted (0 when none ran).
+    pub iterations: usize,
     /// Whether the scan became a keyframe of the local map.
     pub keyframe: bool,
     /// Time spent in [`crate::FrontEnd::process`].

@@ -7,6 +7,9 @@ use slam_geom::Pose2;
 use crate::config::FrontEndConfig;
 use crate::input::OdometryInput;
 
+/// Constant velocity is extrapolated over at most this long a step, seconds.
+const MAX_EXTRAPOLATION_S: f64 = 1.0;
+
 /// An increment in the previous robot frame and its covariance over `(x, y, yaw)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Step {
@@ -76,10 +79,13 @@ pub fn odometry_step(
 /// The constant-velocity step over `dt` from the velocity `(vx, vy, yaw rate)` in the robot
 /// frame, its uncertainty that of a velocity change of the configured sigmas.
 pub fn constant_velocity_step(velocity: &Vector3<f64>, dt: f64, config: &FrontEndConfig) -> Step {
+    // Across a gap in the data (seconds of lost scans) the last velocity says little:
+    // extrapolating a turn for seconds would seed far worse than standing still.
+    let moving = if dt <= MAX_EXTRAPOLATION_S { dt } else { 0.0 };
     let increment = Pose2::new(
-        velocity.x * dt,
-        velocity.y * dt,
-        slam_geom::wrap_angle(velocity.z * dt),
+        velocity.x * moving,
+        velocity.y * moving,
+        slam_geom::wrap_angle(velocity.z * moving),
     );
     let linear = (config.velocity_sigma_linear * dt).max(config.odometry_min_sigma_xy);
     let angular = (config.velocity_sigma_angular * dt).max(config.odometry_min_sigma_yaw);
