@@ -138,10 +138,6 @@ fn main() -> Result<()> {
         )?;
     }
     let wall = wall.elapsed();
-    #[allow(static_mut_refs)]
-    unsafe {
-        eprintln!("COUNTS {:?}", scan_match::local_map::COUNTS);
-    }
     std::fs::write(&args.out, tum)?;
     if let Some(path) = &args.debug {
         std::fs::write(path, debug)?;

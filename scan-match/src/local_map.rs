@@ -141,18 +141,6 @@ impl LocalMap {
         radius: f64,
     ) -> Option<Neighbour> {
         let r2 = radius * radius;
-        let b = if radius < 0.11 {
-            0
-        } else if radius < 0.21 {
-            1
-        } else if radius < 0.35 {
-            2
-        } else {
-            3
-        };
-        unsafe {
-            COUNTS[b] += 1;
-        }
         let x0 = ((query.x - radius) / self.cell).floor() as i32;
         let x1 = ((query.x + radius) / self.cell).floor() as i32;
         let y0 = ((query.y - radius) / self.cell).floor() as i32;
@@ -184,7 +172,6 @@ impl LocalMap {
     }
 }
 
-pub static mut COUNTS: [u64; 4] = [0; 4];
 #[cfg(test)]
 mod tests {
     use super::*;
