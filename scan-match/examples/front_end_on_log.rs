@@ -3,8 +3,11 @@
 //!
 //!     cargo run --release -p scan-match --example front_end_on_log -- \
 //!         ../shared/data/carmen/mit-csail.clf [--relations FILE] [--out FILE.tum] \
-//!         [--no-odometry] [--format carmen|seed-csv] [--limit N] [--config FILE.toml]
+//!         [--no-odometry] [--format carmen|seed-csv] [--limit N] [--config FILE.toml] \
+//!         [--debug FILE]
 //!
+//! `--debug` writes one line per scan: stamp, the front end's increment (x y yaw), the
+//! odometry's, points, inliers, iterations, keyframe, microseconds, status, odometry status.
 //! Odometry is the latest odometry record at or before each scan. Without `--relations`
 //! the log's own `.relations` beside it is used if there is one.
 
@@ -149,7 +152,11 @@ fn main() -> Result<()> {
         "{} scans ({}), odometry {}: {:.1} us/scan mean, p50 {:.1}, p99 {:.1}, max {:.1} (wall {:.2} s)",
         scans.len(),
         args.log.display(),
-        if args.odometry { "on" } else { "off" },
+        if args.odometry {
+            "used where the log has it"
+        } else {
+            "off"
+        },
         times_us.iter().sum::<f64>() / times_us.len().max(1) as f64,
         pick(0.5),
         pick(0.99),

@@ -43,7 +43,7 @@ impl Constraint {
         }
     }
 
-    fn to_scaled(&self) -> Matrix3<f64> {
+    fn scaling(&self) -> Matrix3<f64> {
         Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, self.length))
     }
 
@@ -87,7 +87,7 @@ impl Constraint {
                 scaled += v * v.transpose() * (self.values[i] / variance);
             }
         }
-        let to_scaled = self.to_scaled();
+        let to_scaled = self.scaling();
         to_scaled * scaled * to_scaled
     }
 
@@ -100,7 +100,7 @@ impl Constraint {
         other_covariance: &Matrix3<f64>,
         variance: f64,
     ) -> f64 {
-        let to_scaled = self.to_scaled();
+        let to_scaled = self.scaling();
         let e = self.vectors.transpose() * (to_scaled * difference);
         let other =
             self.vectors.transpose() * (to_scaled * other_covariance * to_scaled) * self.vectors;

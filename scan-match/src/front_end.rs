@@ -160,7 +160,7 @@ impl FrontEnd {
             }
             if let Ok(found) = &registration {
                 let distance = disagreement(&predict(&self.pose, &step), found);
-                if !(distance <= self.config.odometry_gate) {
+                if distance.is_nan() || distance > self.config.odometry_gate {
                     // The odometry's seed may have led the fit astray: the scan gets a
                     // second chance from constant velocity before the two are compared.
                     if let Ok(other) = self.register(points, &cv) {

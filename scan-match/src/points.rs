@@ -101,7 +101,7 @@ fn line_normal(cov: &Matrix2<f64>, range_sigma: f64) -> Option<Vector2<f64>> {
     let root = (0.25 * (a - c) * (a - c) + b * b).sqrt();
     let small = half_trace - root;
     let large = half_trace + root;
-    if !(large > 0.0) || small > 9.0 * range_sigma * range_sigma + 0.01 * large {
+    if large.is_nan() || large <= 0.0 || small > 9.0 * range_sigma * range_sigma + 0.01 * large {
         return None;
     }
     // The eigenvector of the larger eigenvalue runs along the line; the normal is across.
@@ -113,7 +113,7 @@ fn line_normal(cov: &Matrix2<f64>, range_sigma: f64) -> Option<Vector2<f64>> {
         Vector2::new(0.0, 1.0)
     };
     let norm = along.norm();
-    if !(norm > 0.0) {
+    if norm.is_nan() || norm <= 0.0 {
         return None;
     }
     Some(Vector2::new(-along.y, along.x) / norm)

@@ -136,7 +136,7 @@ fn odometry_outliers_are_rejected_and_counted_consistent_steps_used() {
     let mut odo = Pose2::new(5.0, -2.0, 1.0);
     let variance_per_step = 1e-4;
     let mut k = 0;
-    let mut feed = |front_end: &mut FrontEnd, truth: Pose2, reading: Pose2, k: &mut u64| {
+    let feed = |front_end: &mut FrontEnd, truth: Pose2, reading: Pose2, k: &mut u64| {
         let ranges = raycast(&walls, &truth, &SICK, 361, 0.005);
         let out = front_end
             .process(&scan(
