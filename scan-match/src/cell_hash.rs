@@ -1,16 +1,22 @@
 //! A hash for integer grid cells. The standard library's SipHash resists adversarial keys,
 //! which cell coordinates never are, at several times the cost in the matcher's inner loop.
+//! The table places entries by the hash's low bits, and a product's low bits depend only
+//! on the key's low bits (here: the cell's y), so the result is mixed once more at the
+//! end (splitmix64's finaliser): without it every cell of a row would share a bucket.
 
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
 
-/// Multiply-rotate hashing of the one `u64` a cell key writes (Fx-style).
+/// Multiply-rotate hashing of the one `u64` a cell key writes (Fx-style), mixed at the end.
 #[derive(Debug, Default, Clone, Copy)]
 pub(crate) struct CellHasher(u64);
 
 impl Hasher for CellHasher {
     fn finish(&self) -> u64 {
-        self.0
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
     }
 
     fn write(&mut self, bytes: &[u8]) {
