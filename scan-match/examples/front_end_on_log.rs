@@ -1,0 +1,184 @@
+//! Runs the front end over a recorded log, writes its trajectory (TUM) and scores it
+//! against a `.relations` file.
+//!
+//!     cargo run --release -p scan-match --example front_end_on_log -- \
+//!         ../shared/data/carmen/mit-csail.clf [--relations FILE] [--out FILE.tum] \
+//!         [--no-odometry] [--format carmen|seed-csv] [--limit N] [--config FILE.toml] \
+//!         [--debug FILE]
+//!
+//! `--debug` writes one line per scan: stamp, the front end's increment (x y yaw), the
+//! odometry's, points, inliers, iterations, keyframe, microseconds, status, odometry status.
+//! Odometry is the latest odometry record at or before each scan. Without `--relations`
+//! the log's own `.relations` beside it is used if there is one.
+
+#[path = "../tests/support/logs.rs"]
+mod logs;
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use lidar_replay::LogFormat;
+use scan_match::{FrontEnd, FrontEndConfig, MatchStatus};
+use slam_eval::{Trajectory, read_relations, score};
+
+struct Args {
+    log: PathBuf,
+    relations: Option<PathBuf>,
+    out: PathBuf,
+    odometry: bool,
+    format: LogFormat,
+    limit: usize,
+    config: Option<PathBuf>,
+    debug: Option<PathBuf>,
+}
+
+fn parse_args() -> Result<Args> {
+    let mut args = std::env::args().skip(1);
+    let mut parsed = Args {
+        log: PathBuf::new(),
+        relations: None,
+        out: PathBuf::from("front_end.tum"),
+        odometry: true,
+        format: LogFormat::Carmen,
+        limit: usize::MAX,
+        config: None,
+        debug: None,
+    };
+    let mut log = None;
+    while let Some(arg) = args.next() {
+        let mut value = || args.next().with_context(|| format!("{arg} needs a value"));
+        match arg.as_str() {
+            "--relations" => parsed.relations = Some(value()?.into()),
+            "--out" => parsed.out = value()?.into(),
+            "--no-odometry" => parsed.odometry = false,
+            "--format" => parsed.format = value()?.parse().map_err(anyhow::Error::msg)?,
+            "--limit" => parsed.limit = value()?.parse()?,
+            "--config" => parsed.config = Some(value()?.into()),
+            "--debug" => parsed.debug = Some(value()?.into()),
+            other if other.starts_with("--") => bail!("unknown option {other}"),
+            other => log = Some(PathBuf::from(other)),
+        }
+    }
+    parsed.log = log.context("usage: front_end_on_log LOG [--relations FILE] [--out FILE] [--no-odometry] [--format F] [--limit N] [--config FILE]")?;
+    if parsed.relations.is_none() {
+        let beside = parsed.log.with_extension("relations");
+        if beside.exists() {
+            parsed.relations = Some(beside);
+        }
+    }
+    Ok(parsed)
+}
+
+fn main() -> Result<()> {
+    let args = parse_args()?;
+    let config = match &args.config {
+        Some(path) => toml::from_str(&std::fs::read_to_string(path)?)?,
+        None => FrontEndConfig::default(),
+    };
+    let scans = logs::load(&args.log, args.format, args.limit)?;
+    let mut front_end = FrontEnd::new(config)?;
+    let mut tum = String::new();
+    let mut last_stamp = None;
+    let mut debug = String::new();
+    let mut previous_odometry = None;
+    let mut times_us: Vec<f64> = Vec::with_capacity(scans.len());
+    let wall = Instant::now();
+    for scan in &scans {
+        let out = front_end.process(&scan.input(args.odometry))?;
+        times_us.push(out.elapsed.as_secs_f64() * 1e6);
+        if args.debug.is_some() {
+            let odometry_step = match (previous_odometry, scan.odometry) {
+                (Some(a), Some(b)) => {
+                    let a: scan_match::OdometryInput = a;
+                    a.odom_from_robot.between(&b.odom_from_robot)
+                }
+                _ => slam_geom::Pose2::IDENTITY,
+            };
+            previous_odometry = scan.odometry;
+            let i = out.increment;
+            writeln!(
+                debug,
+                "{} {:.5} {:.5} {:.5} {:.5} {:.5} {:.5} {} {} {} {} {:.0} {:?} {:?}",
+                slam_eval::format_stamp(out.stamp_ns),
+                i.x,
+                i.y,
+                i.yaw,
+                odometry_step.x,
+                odometry_step.y,
+                odometry_step.yaw,
+                out.points,
+                out.inliers,
+                out.iterations,
+                out.keyframe as u8,
+                out.elapsed.as_secs_f64() * 1e6,
+                out.status,
+                out.odometry
+            )?;
+        }
+        if let MatchStatus::Failed(why) = out.status {
+            eprintln!(
+                "{}: match failed ({why:?})",
+                slam_eval::format_stamp(out.stamp_ns)
+            );
+        }
+        // A log whose lines go back in time can repeat a stamp; a trajectory cannot.
+        if last_stamp.is_some_and(|s| out.stamp_ns <= s) {
+            continue;
+        }
+        last_stamp = Some(out.stamp_ns);
+        let p = out.odom_from_robot;
+        let (s, c) = (0.5 * p.yaw).sin_cos();
+        writeln!(
+            tum,
+            "{} {:.6} {:.6} 0 0 0 {:.9} {:.9}",
+            slam_eval::format_stamp(out.stamp_ns),
+            p.x,
+            p.y,
+            s,
+            c
+        )?;
+    }
+    let wall = wall.elapsed();
+    std::fs::write(&args.out, tum)?;
+    if let Some(path) = &args.debug {
+        std::fs::write(path, debug)?;
+    }
+    times_us.sort_by(f64::total_cmp);
+    let pick = |q: f64| times_us[((times_us.len() - 1) as f64 * q) as usize];
+    let stats = front_end.stats();
+    println!(
+        "{} scans ({}), odometry {}: {:.1} us/scan mean, p50 {:.1}, p99 {:.1}, max {:.1} (wall {:.2} s)",
+        scans.len(),
+        args.log.display(),
+        if args.odometry {
+            "used where the log has it"
+        } else {
+            "off"
+        },
+        times_us.iter().sum::<f64>() / times_us.len().max(1) as f64,
+        pick(0.5),
+        pick(0.99),
+        pick(1.0),
+        wall.as_secs_f64()
+    );
+    println!("{stats:?}; map points {}", front_end.map_points());
+    println!("trajectory: {}", args.out.display());
+    if let Some(relations) = &args.relations {
+        let trajectory = Trajectory::read_tum(&args.out)?;
+        let relations = read_relations(relations)?;
+        let s = score(&trajectory, &relations, 1_000_000);
+        println!(
+            "relations {} used {}: translation {:.4} +- {:.4} m (max {:.3}), rotation {:.4} +- {:.4} deg",
+            s.relations,
+            s.used,
+            s.translation_m.mean,
+            s.translation_m.std,
+            s.translation_m.max,
+            s.rotation_deg.mean,
+            s.rotation_deg.std
+        );
+    }
+    Ok(())
+}

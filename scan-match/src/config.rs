@@ -1,0 +1,208 @@
+//! The front end's settings: one set of defaults for every planar lidar log of the SICK /
+//! Hokuyo family, derived from the sensor's noise and the motion of an indoor robot rather
+//! than fitted to one recording.
+
+use serde::Deserialize;
+
+use crate::error::ConfigError;
+
+/// Every setting of [`crate::FrontEnd`]. Deserialises from a TOML/JSON table where any field
+/// may be left out (its default is used) and an unknown field is an error.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FrontEndConfig {
+    /// Standard deviation of one range reading, metres. SICK LMS and Hokuyo UTM datasheets
+    /// give about 1 cm; it floors the fit's residual noise and sets the finest gate.
+    pub range_sigma: f64,
+    /// Edge of the voxels that thin scans and the local map, metres. A few times the range
+    /// noise: finer adds points that carry the same information, coarser loses corners.
+    pub voxel_size: f64,
+    /// A scan with fewer usable points (valid, with a surface normal) is not matched.
+    pub min_points: usize,
+    /// Widest gate between a scan point and its map neighbour, metres. Wider than any
+    /// prior's plausible error at this rate; matches beyond it are clutter.
+    pub max_correspondence: f64,
+    /// The correlative search before registration spans the prior's 3-sigma window, but
+    /// at most this far each way, metres...
+    pub max_search_translation: f64,
+    /// ...and this far in yaw, radians.
+    pub max_search_yaw: f64,
+    /// Gauss-Newton iterations at most per scan.
+    pub max_iterations: usize,
+    /// The iteration stops once a step moves every point by less than this, metres.
+    pub convergence: f64,
+    /// A new keyframe joins the local map after the robot has moved this far, metres...
+    pub keyframe_distance: f64,
+    /// ...or turned this much, radians.
+    pub keyframe_angle: f64,
+    /// Keyframes in the local map at most; the oldest leaves first.
+    pub max_keyframes: usize,
+    /// A direction (translation, or yaw scaled by the scan's spread) whose information is
+    /// below this fraction of the strongest direction's is degenerate: left to the prior.
+    pub degeneracy_ratio: f64,
+    /// A match is confident enough to judge the odometry only with at least this fraction
+    /// of its points as inliers.
+    pub min_inlier_fraction: f64,
+    /// A match overrules a contradicting odometry step only with at least this fraction of
+    /// its points as inliers; a weaker one gives way to the odometry.
+    pub strong_inlier_fraction: f64,
+    /// Squared Mahalanobis distance between the odometry step and the match beyond which
+    /// the odometry is rejected (chi-square, 3 degrees of freedom, p = 1e-6).
+    pub odometry_gate: f64,
+    /// Floor of the odometry step's standard deviation, metres: encoder quantisation and
+    /// the timing between the odometry and the scan, which a stopped robot's zero growth
+    /// of covariance would hide.
+    pub odometry_min_sigma_xy: f64,
+    /// The same floor for yaw, radians.
+    pub odometry_min_sigma_yaw: f64,
+    /// A step faster than this is not a robot's, m/s: rejected whatever its covariance.
+    pub max_linear_speed: f64,
+    /// Nor one turning faster than this, rad/s.
+    pub max_angular_speed: f64,
+    /// Without odometry the prior is constant velocity; its velocity may change by this
+    /// much (one sigma) between scans, m/s.
+    pub velocity_sigma_linear: f64,
+    /// The same for the turn rate, rad/s.
+    pub velocity_sigma_angular: f64,
+}
+
+impl Default for FrontEndConfig {
+    fn default() -> Self {
+        Self {
+            range_sigma: 0.01,
+            voxel_size: 0.05,
+            min_points: 30,
+            max_correspondence: 0.5,
+            max_search_translation: 0.5,
+            max_search_yaw: 0.6,
+            max_iterations: 30,
+            convergence: 1e-4,
+            keyframe_distance: 0.3,
+            keyframe_angle: 0.2,
+            max_keyframes: 50,
+            degeneracy_ratio: 0.02,
+            min_inlier_fraction: 0.4,
+            strong_inlier_fraction: 0.6,
+            odometry_gate: 30.7,
+            odometry_min_sigma_xy: 0.005,
+            odometry_min_sigma_yaw: 0.005,
+            max_linear_speed: 10.0,
+            max_angular_speed: 10.0,
+            velocity_sigma_linear: 0.5,
+            velocity_sigma_angular: 1.0,
+        }
+    }
+}
+
+impl FrontEndConfig {
+    /// Checks every field; the error names the first that is out of range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let positive = [
+            ("range_sigma", self.range_sigma),
+            ("voxel_size", self.voxel_size),
+            ("max_correspondence", self.max_correspondence),
+            ("convergence", self.convergence),
+            ("max_search_translation", self.max_search_translation),
+            ("max_search_yaw", self.max_search_yaw),
+            ("keyframe_distance", self.keyframe_distance),
+            ("keyframe_angle", self.keyframe_angle),
+            ("degeneracy_ratio", self.degeneracy_ratio),
+            ("odometry_gate", self.odometry_gate),
+            ("odometry_min_sigma_xy", self.odometry_min_sigma_xy),
+            ("odometry_min_sigma_yaw", self.odometry_min_sigma_yaw),
+            ("max_linear_speed", self.max_linear_speed),
+            ("max_angular_speed", self.max_angular_speed),
+            ("velocity_sigma_linear", self.velocity_sigma_linear),
+            ("velocity_sigma_angular", self.velocity_sigma_angular),
+        ];
+        for (name, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ConfigError::NotPositive { name, value });
+            }
+        }
+        if self.degeneracy_ratio >= 1.0 {
+            return Err(ConfigError::OutOfRange {
+                name: "degeneracy_ratio",
+                value: self.degeneracy_ratio,
+                range: "(0, 1)",
+            });
+        }
+        if !(0.0..=1.0).contains(&self.min_inlier_fraction) {
+            return Err(ConfigError::OutOfRange {
+                name: "min_inlier_fraction",
+                value: self.min_inlier_fraction,
+                range: "[0, 1]",
+            });
+        }
+        if !(self.min_inlier_fraction..=1.0).contains(&self.strong_inlier_fraction) {
+            return Err(ConfigError::OutOfRange {
+                name: "strong_inlier_fraction",
+                value: self.strong_inlier_fraction,
+                range: "[min_inlier_fraction, 1]",
+            });
+        }
+        if self.max_correspondence < self.voxel_size {
+            return Err(ConfigError::OutOfRange {
+                name: "max_correspondence",
+                value: self.max_correspondence,
+                range: "at least voxel_size",
+            });
+        }
+        let counts = [
+            ("min_points", self.min_points),
+            ("max_iterations", self.max_iterations),
+            ("max_keyframes", self.max_keyframes),
+        ];
+        for (name, value) in counts {
+            if value == 0 {
+                return Err(ConfigError::ZeroCount { name });
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_partial_tables_fill_in() {
+        FrontEndConfig::default().validate().unwrap();
+        let config: FrontEndConfig = toml::from_str("voxel_size = 0.1").unwrap();
+        assert_eq!(config.voxel_size, 0.1);
+        assert_eq!(config.range_sigma, FrontEndConfig::default().range_sigma);
+        assert!(toml::from_str::<FrontEndConfig>("voxel = 0.1").is_err());
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let config = FrontEndConfig {
+            range_sigma: -1.0,
+            ..FrontEndConfig::default()
+        };
+        assert!(
+            config
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .contains("range_sigma")
+        );
+        let config = FrontEndConfig {
+            max_keyframes: 0,
+            ..FrontEndConfig::default()
+        };
+        assert!(
+            config
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .contains("max_keyframes")
+        );
+        let config = FrontEndConfig {
+            degeneracy_ratio: f64::NAN,
+            ..FrontEndConfig::default()
+        };
+        assert!(config.validate().is_err());
+    }
+}

@@ -1,0 +1,357 @@
+//! The front end: per scan, the motion prior, registration against the local map, the
+//! odometry check, fusion, and the local map's upkeep.
+
+use std::time::Instant;
+
+use nalgebra::{Matrix3, Vector3};
+use slam_geom::Pose2;
+
+use crate::config::FrontEndConfig;
+use crate::error::{ConfigError, InputError};
+use crate::fusion::{Prediction, disagreement, fuse, predict, robot_to_map};
+use crate::input::{OdometryInput, ScanInput};
+use crate::local_map::LocalMap;
+use crate::output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
+use crate::points::{SurfacePoint, extract};
+use crate::prior::{
+    OdometryRejection, Step, constant_velocity_step, odometry_step, positive_definite,
+};
+use crate::registration::{Registration, RegistrationParams, register};
+use crate::search::{Window, score_sample, search_sample, subsample};
+
+/// Steps closer in time than this (repeated or reordered stamps) are timed as this long,
+/// and teach nothing about the velocity.
+const MIN_DT: f64 = 1e-3;
+
+/// The correlative search runs only when fewer of the scan's points than this (weighted
+/// by closeness) lie near the map at the prior's prediction.
+const SEARCH_BELOW_SCORE: f64 = 0.5;
+
+/// A weak fit overrules the odometry only where the scan scores below this share of the
+/// fit's score at the odometry's pose.
+const WEAK_FIT_MARGIN: f64 = 0.7;
+
+/// ...and only if it puts at least this share of the (closeness-weighted) points on the
+/// map itself: a fit that explains little of the scan (after a gap in the data, say)
+/// is no evidence against the odometry.
+const WEAK_FIT_MIN_SCORE: f64 = 0.4;
+
+/// Registers every scan against a local map of recent keyframes, fused with odometry.
+/// Feed it every scan in order with [`FrontEnd::process`].
+#[derive(Debug, Clone)]
+pub struct FrontEnd {
+    config: FrontEndConfig,
+    params: RegistrationParams,
+    map: LocalMap,
+    pose: Pose2,
+    last_stamp_ns: Option<u64>,
+    /// `(vx, vy, yaw rate)` in the robot frame, from the last step.
+    velocity: Vector3<f64>,
+    last_odometry: Option<OdometryInput>,
+    stats: FrontEndStats,
+}
+
+impl FrontEnd {
+    pub fn new(config: FrontEndConfig) -> Result<Self, ConfigError> {
+        config.validate()?;
+        Ok(Self {
+            params: RegistrationParams {
+                range_sigma: config.range_sigma,
+                voxel: config.voxel_size,
+                max_iterations: config.max_iterations,
+                convergence: config.convergence,
+                degeneracy_ratio: config.degeneracy_ratio,
+            },
+            map: LocalMap::new(config.voxel_size, config.max_keyframes),
+            config,
+            pose: Pose2::IDENTITY,
+            last_stamp_ns: None,
+            velocity: Vector3::zeros(),
+            last_odometry: None,
+            stats: FrontEndStats::default(),
+        })
+    }
+
+    pub fn config(&self) -> &FrontEndConfig {
+        &self.config
+    }
+
+    /// The latest pose, `odom_from_robot` in the front end's frame.
+    pub fn pose(&self) -> Pose2 {
+        self.pose
+    }
+
+    /// Counts over the run so far.
+    pub fn stats(&self) -> FrontEndStats {
+        self.stats
+    }
+
+    /// Points in the local map.
+    pub fn map_points(&self) -> usize {
+        self.map.len()
+    }
+
+    /// Processes the next scan. `Err` only for a scan whose geometry makes no sense; a
+    /// scan that cannot be matched is reported in the output's status.
+    pub fn process(&mut self, scan: &ScanInput<'_>) -> Result<FrontEndOutput, InputError> {
+        let start = Instant::now();
+        scan.geometry.check()?;
+        let extracted = extract(
+            &scan.geometry,
+            scan.ranges,
+            self.config.range_sigma,
+            self.config.voxel_size,
+        );
+        let points = &extracted.points;
+        let floor = self.floor_covariance();
+        let mut output = FrontEndOutput {
+            stamp_ns: scan.stamp_ns,
+            odom_from_robot: self.pose,
+            increment: Pose2::IDENTITY,
+            increment_covariance: floor,
+            status: MatchStatus::First,
+            odometry: OdometryStatus::Absent,
+            valid_beams: extracted.valid_beams,
+            points: points.len(),
+            inliers: 0,
+            iterations: 0,
+            keyframe: false,
+            elapsed: Default::default(),
+        };
+        let Some(last_stamp_ns) = self.last_stamp_ns else {
+            if let Some(odometry) = scan.odometry {
+                output.odometry = OdometryStatus::Started;
+                self.last_odometry = Some(odometry);
+            }
+            if points.len() >= self.config.min_points {
+                self.map.insert(self.pose, points);
+                output.keyframe = true;
+            }
+            self.last_stamp_ns = Some(scan.stamp_ns);
+            return Ok(self.finish(output, start));
+        };
+        let elapsed_s = scan.stamp_ns.saturating_sub(last_stamp_ns) as f64 * 1e-9;
+        let dt = elapsed_s.max(MIN_DT);
+
+        let cv = constant_velocity_step(&self.velocity, dt, &self.config);
+        let mut odometry = match (scan.odometry, self.last_odometry) {
+            (None, _) => Err(OdometryStatus::Absent),
+            (Some(_), None) => Err(OdometryStatus::Started),
+            (Some(current), Some(previous)) => odometry_step(&previous, &current, dt, &self.config)
+                .map_err(OdometryStatus::Rejected),
+        };
+        // The next step starts from this reading even if this step was rejected: a reset
+        // odometry frame then costs one rejection, not all the following steps.
+        match scan.odometry {
+            None => self.last_odometry = None,
+            Some(current) if is_finite(&current) => self.last_odometry = Some(current),
+            Some(_) => {}
+        }
+
+        let mut prior = odometry.unwrap_or(cv);
+        let mut registration = self.register(points, &prior);
+        if let Ok(step) = odometry {
+            if registration.is_err() {
+                // The odometry may have put the scan where it finds no map: try the
+                // other prior before believing it.
+                if let Ok(other) = self.register(points, &cv) {
+                    registration = Ok(other);
+                }
+            }
+            if let Ok(found) = &registration {
+                let distance = disagreement(&predict(&self.pose, &step), found);
+                if distance.is_nan() || distance > self.config.odometry_gate {
+                    // The odometry's seed may have led the fit astray: the scan gets a
+                    // second chance from constant velocity before the two are compared.
+                    if let Ok(other) = self.register(points, &cv) {
+                        registration = Ok(other);
+                    }
+                    if registration
+                        .as_ref()
+                        .is_ok_and(|r| self.overrules(r, &step, points))
+                    {
+                        // A clear fit overrules the wheels.
+                        odometry = Err(OdometryStatus::Rejected(OdometryRejection::Inconsistent {
+                            mahalanobis_squared: distance,
+                        }));
+                        prior = cv;
+                    } else {
+                        // A weak one that explains the scan no better than the odometry does
+                        // not: it is more likely wrong than the wheels.
+                        registration = Err(MatchFailure::Contradicted);
+                    }
+                }
+            }
+        }
+
+        let prediction = predict(&self.pose, &prior);
+        let (pose, covariance) = match &registration {
+            Ok(found) => {
+                output.inliers = found.inliers;
+                output.iterations = found.iterations;
+                let mut open = found.constraint.degenerate_directions();
+                output.status = match open.next() {
+                    None => MatchStatus::Matched,
+                    Some(weakest) => MatchStatus::Degenerate {
+                        direction: robot_direction(&found.pose, &weakest),
+                        count: 1 + open.count() as u8,
+                    },
+                };
+                fuse(&prediction, found)
+            }
+            Err(failure) => {
+                output.status = MatchStatus::Failed(*failure);
+                (prediction.pose, prediction.covariance)
+            }
+        };
+        output.odometry = match odometry {
+            Ok(_) => OdometryStatus::Used,
+            Err(status) => status,
+        };
+
+        let to_map = robot_to_map(&self.pose);
+        let increment = self.pose.between(&pose);
+        output.increment = increment;
+        output.increment_covariance = positive_definite(
+            &(to_map.transpose() * covariance * to_map),
+            &floor.diagonal(),
+        );
+        if elapsed_s >= MIN_DT {
+            self.velocity = Vector3::new(increment.x, increment.y, increment.yaw) / elapsed_s;
+        }
+        self.pose = pose;
+        self.last_stamp_ns = Some(scan.stamp_ns);
+        output.odom_from_robot = pose;
+
+        let lost = matches!(
+            output.status,
+            MatchStatus::Failed(MatchFailure::TooFewInliers)
+        );
+        if points.len() >= self.config.min_points && (lost || self.keyframe_due()) {
+            self.map.insert(pose, points);
+            output.keyframe = true;
+        }
+        Ok(self.finish(output, start))
+    }
+
+    /// Registration seeded by `step`, judged: enough points, enough of them matched, at
+    /// least one direction constrained.
+    fn register(&self, points: &[SurfacePoint], step: &Step) -> Result<Registration, MatchFailure> {
+        if points.len() < self.config.min_points {
+            return Err(MatchFailure::TooFewPoints);
+        }
+        if self.map.is_empty() {
+            return Err(MatchFailure::TooFewInliers);
+        }
+        let prediction: Prediction = predict(&self.pose, step);
+        let spread = (points.iter().map(|p| p.point.norm_squared()).sum::<f64>()
+            / points.len() as f64)
+            .sqrt();
+        let c = &prediction.covariance;
+        let gate = (3.0 * (c[(0, 0)] + c[(1, 1)]).sqrt() + 3.0 * c[(2, 2)].sqrt() * spread)
+            .min(self.config.max_correspondence);
+        // Where the prior is less certain than the scoring distance, a correlative search
+        // picks the basin first (coarse, then fine around the best), so that a fast turn
+        // or a no-odometry guess does not leave Gauss-Newton in the wrong one.
+        let radius = 2.0 * self.config.voxel_size;
+        let window = Window {
+            translation: (3.0 * (c[(0, 0)] + c[(1, 1)]).sqrt())
+                .min(self.config.max_search_translation),
+            yaw: (3.0 * c[(2, 2)].sqrt()).min(self.config.max_search_yaw),
+        };
+        let mut seed = prediction.pose;
+        let sample = subsample(points);
+        let uncertain = window.translation > radius || window.yaw * spread > radius;
+        // A seed where most points already sit on the map is in the right basin.
+        if uncertain && score_sample(&self.map, &sample, &seed, radius) < SEARCH_BELOW_SCORE {
+            if window.translation > 3.0 * radius || window.yaw * spread > 3.0 * radius {
+                seed = search_sample(&self.map, &sample, &seed, window, 3.0 * radius).0;
+            }
+            let fine = Window {
+                translation: window.translation.min(3.0 * radius),
+                yaw: window.yaw.min(3.0 * radius / spread.max(1.0)),
+            };
+            seed = search_sample(&self.map, &sample, &seed, fine, radius).0;
+        }
+        let found = register(&self.map, points, seed, gate, &self.params);
+        if (found.inliers as f64) < self.config.min_inlier_fraction * points.len() as f64 {
+            return Err(MatchFailure::TooFewInliers);
+        }
+        if found.constraint.is_void() {
+            return Err(MatchFailure::Unconstrained);
+        }
+        Ok(found)
+    }
+
+    /// Whether a fit that contradicts the odometry step overrules it: a clear fit always;
+    /// a weak one only if the scan lies on the map clearly better at the fit's pose than
+    /// at the odometry's (a stale odometry catching up, say), since a weak fit is the more
+    /// likely of the two to be wrong.
+    fn overrules(&self, found: &Registration, step: &Step, points: &[SurfacePoint]) -> bool {
+        if found.inliers as f64 >= self.config.strong_inlier_fraction * points.len() as f64 {
+            return true;
+        }
+        let sample = subsample(points);
+        let radius = 2.0 * self.config.voxel_size;
+        let at_odometry = score_sample(&self.map, &sample, &predict(&self.pose, step).pose, radius);
+        let at_fit = score_sample(&self.map, &sample, &found.pose, radius);
+        at_fit >= WEAK_FIT_MIN_SCORE && at_odometry < WEAK_FIT_MARGIN * at_fit
+    }
+
+    fn keyframe_due(&self) -> bool {
+        match self.map.last_keyframe() {
+            None => true,
+            Some(keyframe) => {
+                let moved = keyframe.between(&self.pose);
+                moved.translation_norm() > self.config.keyframe_distance
+                    || moved.yaw.abs() > self.config.keyframe_angle
+            }
+        }
+    }
+
+    fn floor_covariance(&self) -> Matrix3<f64> {
+        Matrix3::from_diagonal(&Vector3::new(
+            self.config.odometry_min_sigma_xy.powi(2),
+            self.config.odometry_min_sigma_xy.powi(2),
+            self.config.odometry_min_sigma_yaw.powi(2),
+        ))
+    }
+
+    fn finish(&mut self, mut output: FrontEndOutput, start: Instant) -> FrontEndOutput {
+        output.elapsed = start.elapsed();
+        let stats = &mut self.stats;
+        stats.scans += 1;
+        stats.busy_ns += u64::try_from(output.elapsed.as_nanos()).unwrap_or(u64::MAX);
+        match output.status {
+            MatchStatus::First => {}
+            MatchStatus::Matched => stats.matched += 1,
+            MatchStatus::Degenerate { .. } => stats.degenerate += 1,
+            MatchStatus::Failed(_) => stats.failed_matches += 1,
+        }
+        match output.odometry {
+            OdometryStatus::Used => stats.odometry_used += 1,
+            OdometryStatus::Rejected(_) => stats.odometry_rejected += 1,
+            OdometryStatus::Absent | OdometryStatus::Started => {}
+        }
+        if output.keyframe {
+            stats.keyframes += 1;
+        }
+        output
+    }
+}
+
+fn is_finite(odometry: &OdometryInput) -> bool {
+    let p = odometry.odom_from_robot;
+    p.x.is_finite()
+        && p.y.is_finite()
+        && p.yaw.is_finite()
+        && odometry.covariance.iter().all(|v| v.is_finite())
+}
+
+/// A direction over `(x, y, yaw)` in the map frame, turned into the robot frame at `pose`
+/// and normalised.
+fn robot_direction(pose: &Pose2, direction: &Vector3<f64>) -> Vector3<f64> {
+    let turned = robot_to_map(pose).transpose() * direction;
+    let norm = turned.norm();
+    if norm > 0.0 { turned / norm } else { turned }
+}

@@ -1,0 +1,47 @@
+//! # scan-match
+//!
+//! The scan-matching front end of the pipeline: every scan is registered against a local
+//! map of recent keyframes (all valid points, not features) and fused with the odometry, so
+//! the motion the filter receives is the scan's wherever the scan is sure of it and the
+//! odometry's where it is not.
+//!
+//! Per scan ([`FrontEnd::process`] on a [`ScanInput`]):
+//! 1. valid beams become points with surface normals, thinned to one per voxel
+//!    ([`points`]);
+//! 2. the prior step is the odometry increment with the growth of its covariance, or
+//!    constant velocity without odometry ([`prior`]);
+//! 3. point-to-line Gauss-Newton with a Cauchy loss and a shrinking gate registers the scan
+//!    against the local map from the prior's prediction ([`registration`]); the fit's
+//!    Hessian says which directions the scan fixes and which it leaves open
+//!    ([`constraint`]: a corridor's length is left to the prior);
+//! 4. an odometry step the match contradicts (Mahalanobis), or that is not finite or
+//!    faster than a robot, is rejected and counted; otherwise the two are fused by their
+//!    information ([`fusion`]);
+//! 5. the scan joins the local map when the robot has moved or turned enough
+//!    ([`local_map`]).
+//!
+//! The result ([`FrontEndOutput`]) is the pose in the front end's own frame (the identity
+//! at the first scan), the increment with its covariance, and what happened (matched,
+//! degenerate and along which direction, failed; odometry used or rejected; counts; time).
+//! [`FrontEnd::stats`] counts over the run. All settings are in [`FrontEndConfig`].
+
+mod cell_hash;
+mod config;
+pub mod constraint;
+mod error;
+mod front_end;
+pub mod fusion;
+mod input;
+pub mod local_map;
+mod output;
+pub mod points;
+pub mod prior;
+pub mod registration;
+pub mod search;
+
+pub use config::FrontEndConfig;
+pub use error::{ConfigError, InputError};
+pub use front_end::FrontEnd;
+pub use input::{BeamGeometry, OdometryInput, ScanInput};
+pub use output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
+pub use prior::OdometryRejection;

@@ -1,0 +1,154 @@
+//! From ranges to the points the matcher uses: every valid beam, its surface normal from
+//! the neighbouring beams, then thinned to one point per voxel.
+
+use nalgebra::{Matrix2, Vector2};
+
+use crate::cell_hash::{CellSet, cell_key};
+use crate::input::BeamGeometry;
+
+/// Neighbouring beams on each side that a normal is fitted over.
+const NORMAL_HALF_WINDOW: usize = 3;
+
+/// A scan point in the robot frame with the unit normal of its surface, pointing towards
+/// the sensor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    pub point: Vector2<f64>,
+    pub normal: Vector2<f64>,
+}
+
+/// The usable points of one scan and how many beams were valid.
+#[derive(Debug, Clone, Default)]
+pub struct ScanPoints {
+    pub points: Vec<SurfacePoint>,
+    pub valid_beams: usize,
+}
+
+/// Valid beams to points, normals fitted over their neighbours along the scan, thinned to
+/// the first point of each `voxel` cell. Points on no straight-enough surface (clutter,
+/// isolated returns, the edges of depth jumps) get no normal and are dropped: a
+/// point-to-line residual needs one, and such points are the least repeatable.
+pub fn extract(
+    geometry: &BeamGeometry,
+    ranges: &[f32],
+    range_sigma: f64,
+    voxel: f64,
+) -> ScanPoints {
+    let step = geometry.angle_increment.abs();
+    let mut raw: Vec<(usize, Vector2<f64>, f64)> = Vec::with_capacity(ranges.len());
+    for (i, &r) in ranges.iter().enumerate() {
+        let r = f64::from(r);
+        if !r.is_finite() || r < geometry.range_min || r > geometry.range_max || r <= 0.0 {
+            continue;
+        }
+        let bearing = geometry.angle_min + i as f64 * geometry.angle_increment;
+        let (s, c) = bearing.sin_cos();
+        raw.push((i, Vector2::new(r * c, r * s), r));
+    }
+    let valid_beams = raw.len();
+    let mut taken = CellSet::default();
+    let mut points = Vec::with_capacity(raw.len());
+    for k in 0..raw.len() {
+        let (beam, p, r) = raw[k];
+        // Neighbours on one surface are a few beam spacings apart at this range (more on
+        // an oblique wall); a larger gap is a depth jump to another surface.
+        let radius = (4.0 * NORMAL_HALF_WINDOW as f64 * r * step).clamp(2.0 * voxel, 1.0);
+        let lo = k.saturating_sub(NORMAL_HALF_WINDOW);
+        let hi = (k + NORMAL_HALF_WINDOW).min(raw.len() - 1);
+        let mut n = 0.0;
+        let mut sum = Vector2::zeros();
+        let mut sum_sq = Matrix2::zeros();
+        for &(other_beam, q, _) in &raw[lo..=hi] {
+            if other_beam.abs_diff(beam) > NORMAL_HALF_WINDOW
+                || (q - p).norm_squared() > radius * radius
+            {
+                continue;
+            }
+            n += 1.0;
+            sum += q;
+            sum_sq += q * q.transpose();
+        }
+        if n < 3.0 {
+            continue;
+        }
+        let mean = sum / n;
+        let cov = sum_sq / n - mean * mean.transpose();
+        let Some(normal) = line_normal(&cov, range_sigma) else {
+            continue;
+        };
+        if !taken.insert(cell_key(p.x, p.y, voxel)) {
+            continue;
+        }
+        // Towards the sensor, so the two faces of a thin wall never pair up.
+        let normal = if normal.dot(&p) > 0.0 {
+            -normal
+        } else {
+            normal
+        };
+        points.push(SurfacePoint { point: p, normal });
+    }
+    ScanPoints {
+        points,
+        valid_beams,
+    }
+}
+
+/// The unit normal of the line through points of scatter `cov`, if they lie on one: the
+/// spread across it within a few range sigmas (plus a little for a gently curved surface).
+fn line_normal(cov: &Matrix2<f64>, range_sigma: f64) -> Option<Vector2<f64>> {
+    let (a, b, c) = (cov[(0, 0)], cov[(0, 1)], cov[(1, 1)]);
+    let half_trace = 0.5 * (a + c);
+    let root = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    let small = half_trace - root;
+    let large = half_trace + root;
+    if large.is_nan() || large <= 0.0 || small > 9.0 * range_sigma * range_sigma + 0.01 * large {
+        return None;
+    }
+    // The eigenvector of the larger eigenvalue runs along the line; the normal is across.
+    let along = if b.abs() > 1e-15 {
+        Vector2::new(large - c, b)
+    } else if a >= c {
+        Vector2::new(1.0, 0.0)
+    } else {
+        Vector2::new(0.0, 1.0)
+    };
+    let norm = along.norm();
+    if norm.is_nan() || norm <= 0.0 {
+        return None;
+    }
+    Some(Vector2::new(-along.y, along.x) / norm)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::f64::consts::PI;
+
+    use super::*;
+
+    #[test]
+    fn a_wall_gives_points_with_normals_towards_the_sensor() {
+        // A wall at x = 2, seen over +-40 degrees.
+        let geometry = BeamGeometry {
+            angle_min: -0.7,
+            angle_increment: PI / 360.0,
+            range_min: 0.1,
+            range_max: 30.0,
+        };
+        let n = (1.4 / geometry.angle_increment) as usize;
+        let mut ranges: Vec<f32> = (0..n)
+            .map(|i| {
+                (2.0 / (geometry.angle_min + i as f64 * geometry.angle_increment).cos()) as f32
+            })
+            .collect();
+        ranges[5] = f32::NAN;
+        ranges[6] = f32::INFINITY;
+        ranges[7] = 0.05;
+        let scan = extract(&geometry, &ranges, 0.01, 0.05);
+        assert_eq!(scan.valid_beams, n - 3);
+        assert!(scan.points.len() > 20 && scan.points.len() < n);
+        for p in &scan.points {
+            assert!((p.point.x - 2.0).abs() < 1e-5);
+            assert!((p.normal - Vector2::new(-1.0, 0.0)).norm() < 1e-4);
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! Loading the shared recordings into front-end inputs, for the example, the bench and the
+//! real-data tests (included with `#[path]`: lidar-replay is a dev-dependency only).
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use lidar_replay::{LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, open_log};
+use nalgebra::Matrix3;
+use scan_match::{BeamGeometry, OdometryInput, ScanInput};
+use slam_geom::Pose2;
+
+/// One scan of a log with the odometry paired to it: the latest odometry record at or
+/// before it (a FLASER line yields its odometry just before its scan, same stamp).
+#[derive(Debug, Clone)]
+pub struct LoggedScan {
+    pub stamp_ns: u64,
+    pub geometry: BeamGeometry,
+    pub ranges: Vec<f32>,
+    pub odometry: Option<OdometryInput>,
+}
+
+impl LoggedScan {
+    pub fn input(&self, with_odometry: bool) -> ScanInput<'_> {
+        ScanInput {
+            stamp_ns: self.stamp_ns,
+            geometry: self.geometry,
+            ranges: &self.ranges,
+            odometry: if with_odometry { self.odometry } else { None },
+        }
+    }
+}
+
+/// The shared data directory: `$SLAM_DATA_DIR`, else `../shared/data` beside the workspace.
+pub fn data_dir() -> PathBuf {
+    std::env::var_os("SLAM_DATA_DIR").map_or_else(
+        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data")),
+        PathBuf::from,
+    )
+}
+
+/// Reads at most `limit` scans of a log, each with the odometry at its stamp and that
+/// odometry's covariance as lidar-replay publishes it (a random walk with the motion).
+pub fn load(path: &Path, format: LogFormat, limit: usize) -> Result<Vec<LoggedScan>> {
+    let reader = open_log(format, path).with_context(|| format!("opening {}", path.display()))?;
+    let mut covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
+    let mut odometry: Option<OdometryInput> = None;
+    let mut scans = Vec::new();
+    for record in reader {
+        let Ok(record) = record else { continue };
+        match record {
+            LogRecord::Odometry(o) => {
+                let c = covariance.update(&o);
+                odometry = Some(OdometryInput {
+                    odom_from_robot: Pose2::new(o.x, o.y, o.yaw),
+                    covariance: Matrix3::from_row_slice(&c),
+                });
+            }
+            LogRecord::Scan(s) => {
+                scans.push(LoggedScan {
+                    stamp_ns: s.stamp_ns,
+                    geometry: BeamGeometry {
+                        angle_min: s.geometry.angle_min,
+                        angle_increment: s.geometry.angle_increment,
+                        range_min: s.geometry.range_min,
+                        range_max: s.geometry.range_max,
+                    },
+                    ranges: s.ranges,
+                    odometry,
+                });
+                if scans.len() >= limit {
+                    break;
+                }
+            }
+        }
+    }
+    Ok(scans)
+}

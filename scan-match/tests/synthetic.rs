@@ -1,0 +1,258 @@
+//! Registration, degeneracy and fusion on constructed scans with a known motion.
+
+#[path = "support/world.rs"]
+mod world;
+
+use nalgebra::Matrix3;
+use scan_match::{
+    FrontEnd, FrontEndConfig, MatchFailure, MatchStatus, OdometryInput, OdometryRejection,
+    OdometryStatus, ScanInput,
+};
+use slam_geom::{Pose2, wrap_angle};
+use world::{HOKUYO, SICK, corridor, raycast, room};
+
+const PERIOD_NS: u64 = 100_000_000;
+
+fn scan<'a>(
+    stamp: u64,
+    ranges: &'a [f32],
+    geometry: scan_match::BeamGeometry,
+    odometry: Option<OdometryInput>,
+) -> ScanInput<'a> {
+    ScanInput {
+        stamp_ns: stamp * PERIOD_NS,
+        geometry,
+        ranges,
+        odometry,
+    }
+}
+
+fn odometry(pose: Pose2, variance: f64) -> OdometryInput {
+    OdometryInput {
+        odom_from_robot: pose,
+        covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(variance, variance, variance)),
+    }
+}
+
+fn assert_close(a: &Pose2, b: &Pose2, metres: f64, radians: f64) {
+    assert!(
+        (a.x - b.x).abs() < metres
+            && (a.y - b.y).abs() < metres
+            && wrap_angle(a.yaw - b.yaw).abs() < radians,
+        "{a:?} vs {b:?}"
+    );
+}
+
+#[test]
+fn a_known_motion_in_a_room_is_recovered_within_millimetres() {
+    for (geometry, beams) in [(SICK, 361), (HOKUYO, 1081)] {
+        let walls = room();
+        let start = Pose2::new(0.5, 0.2, 0.1);
+        let motion = Pose2::new(0.12, -0.04, 0.06);
+        let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+        let first = raycast(&walls, &start, &geometry, beams, 0.0);
+        let out = front_end.process(&scan(0, &first, geometry, None)).unwrap();
+        assert_eq!(out.status, MatchStatus::First);
+        assert_eq!(out.odom_from_robot, Pose2::IDENTITY);
+        // No odometry, zero velocity: the whole motion comes from the scan.
+        let second = raycast(&walls, &start.compose(&motion), &geometry, beams, 0.0);
+        let out = front_end
+            .process(&scan(1, &second, geometry, None))
+            .unwrap();
+        assert_eq!(out.status, MatchStatus::Matched, "{out:?}");
+        assert_eq!(out.odometry, OdometryStatus::Absent);
+        assert_close(&out.increment, &motion, 0.003, 0.001);
+        assert!(out.increment_covariance.cholesky().is_some());
+        assert!(out.inliers > out.points / 2);
+    }
+}
+
+#[test]
+fn sensor_noise_costs_millimetres_not_centimetres() {
+    let walls = room();
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let mut truth = Pose2::new(-1.0, 0.5, 0.0);
+    let step = Pose2::new(0.08, 0.0, 0.02);
+    for k in 0..20 {
+        let ranges = raycast(&walls, &truth, &SICK, 361, 0.01);
+        let out = front_end.process(&scan(k, &ranges, SICK, None)).unwrap();
+        if k > 0 {
+            assert_close(&out.increment, &step, 0.01, 0.004);
+        }
+        truth = truth.compose(&step);
+    }
+    // Twenty steps (1.6 m, 0.4 rad) drift by less than 3 cm against the local map.
+    let end = front_end.pose();
+    let expected = (0..19).fold(Pose2::IDENTITY, |p, _| p.compose(&step));
+    assert_close(&end, &expected, 0.03, 0.01);
+}
+
+#[test]
+fn a_corridor_leaves_its_length_to_the_odometry() {
+    let walls = corridor();
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let start = Pose2::new(0.0, 0.1, 0.02);
+    let motion = Pose2::new(0.40, 0.03, -0.02);
+    // The odometry is 6 cm long, 2 cm sideways and 0.01 rad off, with a 5 cm, 0.05 rad sigma.
+    let odometry_motion = Pose2::new(0.46, 0.05, -0.01);
+    let a = raycast(&walls, &start, &SICK, 361, 0.0);
+    front_end
+        .process(&scan(0, &a, SICK, Some(odometry(Pose2::IDENTITY, 0.0))))
+        .unwrap();
+    let b = raycast(&walls, &start.compose(&motion), &SICK, 361, 0.0);
+    let out = front_end
+        .process(&scan(1, &b, SICK, Some(odometry(odometry_motion, 0.0025))))
+        .unwrap();
+    let MatchStatus::Degenerate { direction, count } = out.status else {
+        panic!("not degenerate: {out:?}");
+    };
+    assert_eq!(count, 1);
+    // Along the corridor, in the robot frame (turned by 0.02 rad from it).
+    assert!(direction.x.abs() > 0.99, "{direction:?}");
+    assert_eq!(out.odometry, OdometryStatus::Used);
+    // Across and in yaw the scan corrects the odometry; along, the odometry stands. The
+    // comparison is in the corridor's frame, where "along" is x.
+    let before = start;
+    let after = before.compose(&out.increment);
+    let truth = start.compose(&motion);
+    assert!((after.y - truth.y).abs() < 0.003, "{after:?} vs {truth:?}");
+    assert!(wrap_angle(after.yaw - truth.yaw).abs() < 0.002);
+    let odometry_after = before.compose(&odometry_motion);
+    assert!(
+        (after.x - odometry_after.x).abs() < 0.01,
+        "{after:?} vs {odometry_after:?}"
+    );
+    // The covariance says so: along the corridor as uncertain as the odometry.
+    assert!(out.increment_covariance[(0, 0)] > 0.5 * 0.0025);
+    assert!(out.increment_covariance[(1, 1)] < 0.1 * 0.0025);
+}
+
+#[test]
+fn odometry_outliers_are_rejected_and_counted_consistent_steps_used() {
+    let walls = room();
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let step = Pose2::new(0.1, 0.0, 0.03);
+    let mut truth = Pose2::new(0.0, 0.0, 0.0);
+    let mut odo = Pose2::new(5.0, -2.0, 1.0);
+    let variance_per_step = 1e-4;
+    let mut k = 0;
+    let feed = |front_end: &mut FrontEnd, truth: Pose2, reading: Pose2, k: &mut u64| {
+        let ranges = raycast(&walls, &truth, &SICK, 361, 0.005);
+        let out = front_end
+            .process(&scan(
+                *k,
+                &ranges,
+                SICK,
+                Some(odometry(reading, variance_per_step * *k as f64)),
+            ))
+            .unwrap();
+        *k += 1;
+        out
+    };
+    for _ in 0..5 {
+        let out = feed(&mut front_end, truth, odo, &mut k);
+        assert!(matches!(
+            out.odometry,
+            OdometryStatus::Used | OdometryStatus::Started
+        ));
+        truth = truth.compose(&step);
+        odo = odo.compose(&step);
+    }
+    assert_eq!(front_end.stats().odometry_rejected, 0);
+    // A jump of 1000 m: rejected, and the pose follows the scan.
+    let jumped = odo.compose(&Pose2::new(1000.0, 0.0, 0.0));
+    let before = front_end.pose();
+    let out = feed(&mut front_end, truth, jumped, &mut k);
+    assert_eq!(
+        out.odometry,
+        OdometryStatus::Rejected(OdometryRejection::Implausible)
+    );
+    assert_close(&out.increment, &step, 0.01, 0.005);
+    assert_close(
+        &before.compose(&out.increment),
+        &front_end.pose(),
+        1e-9,
+        1e-9,
+    );
+    assert_eq!(front_end.stats().odometry_rejected, 1);
+    // The reading after it is a step back from the jump: rejected too; the one after
+    // that is consistent again and used.
+    truth = truth.compose(&step);
+    odo = odo.compose(&step);
+    let out = feed(&mut front_end, truth, odo.compose(&step), &mut k);
+    assert!(matches!(out.odometry, OdometryStatus::Rejected(_)));
+    truth = truth.compose(&step);
+    odo = odo.compose(&step).compose(&step);
+    let out = feed(&mut front_end, truth, odo, &mut k);
+    assert_eq!(out.odometry, OdometryStatus::Used);
+    // A value of 1e300 (implausible) and a NaN (not finite).
+    let mut stale = 0;
+    for bad in [Pose2::new(1e300, 0.0, 0.0), Pose2::new(f64::NAN, 0.0, 0.0)] {
+        truth = truth.compose(&step);
+        odo = odo.compose(&step);
+        stale += 1;
+        let out = feed(&mut front_end, truth, bad, &mut k);
+        assert!(
+            matches!(out.odometry, OdometryStatus::Rejected(_)),
+            "{out:?}"
+        );
+        assert_close(&out.increment, &step, 0.01, 0.005);
+    }
+    assert_eq!(front_end.stats().odometry_rejected, 4);
+    assert!(stale == 2);
+    // The NaN did not replace the last finite reading (1e300): the next step is measured
+    // from it, rejected again; from then on the steps are good.
+    truth = truth.compose(&step);
+    odo = odo.compose(&step);
+    let out = feed(&mut front_end, truth, odo, &mut k);
+    assert_eq!(
+        out.odometry,
+        OdometryStatus::Rejected(OdometryRejection::Implausible)
+    );
+    truth = truth.compose(&step);
+    odo = odo.compose(&step);
+    let out = feed(&mut front_end, truth, odo, &mut k);
+    assert_eq!(out.odometry, OdometryStatus::Used);
+    // A plausible but wrong step, 15 cm sideways (15 sigma): the match overrules it.
+    truth = truth.compose(&step);
+    odo = odo.compose(&step);
+    let out = feed(
+        &mut front_end,
+        truth,
+        odo.compose(&Pose2::new(0.0, 0.15, 0.0)),
+        &mut k,
+    );
+    assert!(
+        matches!(
+            out.odometry,
+            OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. })
+        ),
+        "{out:?}"
+    );
+    assert_close(&out.increment, &step, 0.01, 0.005);
+    let stats = front_end.stats();
+    assert_eq!(stats.odometry_rejected, 6);
+    assert_eq!(stats.failed_matches, 0);
+    assert!(stats.odometry_used >= 5);
+}
+
+#[test]
+fn without_odometry_or_points_the_motion_is_constant_velocity() {
+    let walls = room();
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let step = Pose2::new(0.1, 0.02, 0.01);
+    let mut truth = Pose2::IDENTITY;
+    for k in 0..6 {
+        let ranges = raycast(&walls, &truth, &SICK, 361, 0.0);
+        front_end.process(&scan(k, &ranges, SICK, None)).unwrap();
+        truth = truth.compose(&step);
+    }
+    let blind = vec![f32::NAN; 361];
+    let before = front_end.pose();
+    let out = front_end.process(&scan(6, &blind, SICK, None)).unwrap();
+    assert_eq!(out.status, MatchStatus::Failed(MatchFailure::TooFewPoints));
+    assert_eq!(out.points, 0);
+    assert_close(&out.increment, &step, 0.003, 0.001);
+    assert_close(&before.compose(&step), &out.odom_from_robot, 0.003, 0.001);
+    assert_eq!(front_end.stats().failed_matches, 1);
+}
