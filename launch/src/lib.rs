@@ -16,6 +16,7 @@
 //! * shared memory of crashed earlier runs is cleaned up at start, and nothing of this run is
 //!   left in /dev/shm at the end.
 
+pub mod bench;
 pub mod config;
 pub mod relations;
 pub mod stage;
