@@ -16,13 +16,15 @@ use slam_eval::ScoreSummary;
 /// -> map-sink as separate processes over iceoryx2 shared memory in a domain of their own,
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
-/// Every setting can also come from a TOML file (--config) with the key `source` and the
+/// Every setting can also come from a TOML file (--config) with the keys `source` and
+/// `relations` and the
 /// sections [sim], [replay], [hokuyo], [features] and [slam]; options given here override
 /// the file. Keys a section does not know are refused by the process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
-    /// TOML file with `source` and [sim], [replay], [hokuyo], [features], [slam] sections.
+    /// TOML file with `source`, `relations` and [sim], [replay], [hokuyo], [features], [slam]
+    /// sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
