@@ -17,9 +17,9 @@ use slam_eval::ScoreSummary;
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source` and
-/// `relations` and the
-/// sections [sim], [replay], [hokuyo], [features] and [slam]; options given here override
-/// the file. Keys a section does not know are refused by the process that reads it.
+/// `relations` and the sections [sim], [replay], [hokuyo], [features] and [slam]; options
+/// given here override the file. Keys a section does not know are refused by the process
+/// that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
