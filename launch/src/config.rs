@@ -80,6 +80,8 @@ pub struct ReplaySection {
     pub rate: f64,
     /// Publish the log's odometry (when it has any).
     pub odometry: bool,
+    /// Scans to publish; 0 = the whole log.
+    pub frames: u64,
 }
 
 impl Default for ReplaySection {
@@ -89,6 +91,7 @@ impl Default for ReplaySection {
             format: "carmen".into(),
             rate: 0.0,
             odometry: true,
+            frames: 0,
         }
     }
 }
@@ -146,6 +149,9 @@ impl Default for SlamSection {
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
     pub source: SourceKind,
+    /// Ground-truth relations (Kuemmerle et al. 2009) to score the run against; for a replay
+    /// of `DIR/NAME.clf` without one, `DIR/NAME.relations` if it exists.
+    pub relations: Option<PathBuf>,
     pub sim: SimSection,
     pub replay: ReplaySection,
     pub hokuyo: HokuyoSection,

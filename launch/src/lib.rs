@@ -10,10 +10,15 @@
 //!   node is cleaned up at once (a dead subscriber would otherwise stall a lossless
 //!   publisher), the others are stopped and the run fails;
 //! * Ctrl-C or SIGTERM stops every child and waits for map-sink to write its results;
+//! * given ground-truth relations (or finding them beside a replayed log, see
+//!   [`relations::relations_beside`]), it checks they parse before anything starts and has
+//!   map-sink score the run with them;
 //! * shared memory of crashed earlier runs is cleaned up at start, and nothing of this run is
 //!   left in /dev/shm at the end.
 
+pub mod bench;
 pub mod config;
+pub mod relations;
 pub mod stage;
 pub mod status;
 pub mod supervisor;

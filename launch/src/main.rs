@@ -7,19 +7,24 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use ipc_types::{Domain, shutdown};
 use launch::config::{RunConfig, SourceKind};
+use launch::relations::relations_beside;
 use launch::supervisor::{self, Display, Outcome, StagePlan};
+use map_sink::{METRICS_FILE, Metrics};
+use slam_eval::ScoreSummary;
 
 /// Runs a scan source (lidar-sim, lidar-replay or lidar-hokuyo) -> feature-proc -> slam-proc
 /// -> map-sink as separate processes over iceoryx2 shared memory in a domain of their own,
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
-/// Every setting can also come from a TOML file (--config) with the key `source` and the
-/// sections [sim], [replay], [hokuyo], [features] and [slam]; options given here override
-/// the file. Keys a section does not know are refused by the process that reads it.
+/// Every setting can also come from a TOML file (--config) with the keys `source` and
+/// `relations` and the sections [sim], [replay], [hokuyo], [features] and [slam]; options
+/// given here override the file. Keys a section does not know are refused by the process
+/// that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
-    /// TOML file with `source` and [sim], [replay], [hokuyo], [features], [slam] sections.
+    /// TOML file with `source`, `relations` and [sim], [replay], [hokuyo], [features], [slam]
+    /// sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -40,7 +45,7 @@ struct Args {
     /// Do not use the odometry of a replayed log.
     #[arg(long)]
     no_odometry: bool,
-    /// Scans to simulate (0 = the whole path of the world).
+    /// Scans to simulate or replay (0 = the whole path of the world, the whole log).
     #[arg(long)]
     frames: Option<u64>,
     /// Scans per second (a replay: times the log's own speed); 0 = lockstep: nothing is lost
@@ -56,6 +61,12 @@ struct Args {
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
     #[arg(long)]
     odometry: bool,
+    /// Ground-truth relations (t1 t2 x y z roll pitch yaw, Kuemmerle et al. 2009) to score
+    /// the run against: trajectory.tum, dead_reckoning.tum and trajectory_online.tum, where
+    /// written. A replay of DIR/NAME.clf is scored against DIR/NAME.relations without this
+    /// option if that file exists.
+    #[arg(long, value_name = "FILE")]
+    relations: Option<PathBuf>,
     /// Output directory (default: runs/<world or log name>).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -90,6 +101,23 @@ fn run() -> Result<ExitCode> {
     };
     apply_overrides(&mut config, &args);
     config.validate()?;
+    if config.relations.is_none()
+        && config.source == SourceKind::Replay
+        && let Some(found) = config.replay.file.as_deref().and_then(relations_beside)
+    {
+        if !args.quiet {
+            eprintln!("scoring against {} (beside the log)", found.display());
+        }
+        config.relations = Some(found);
+    }
+    // A bad relations file would only show once the whole log has run: check it now.
+    if let Some(path) = &config.relations {
+        let relations = slam_eval::read_relations(path)
+            .context("refusing to start: the relations file cannot be used")?;
+        if !args.quiet {
+            eprintln!("{} relations in {}", relations.len(), path.display());
+        }
+    }
 
     let bin_dir = match &args.bin_dir {
         Some(dir) => dir.clone(),
@@ -136,8 +164,12 @@ fn run() -> Result<ExitCode> {
     let plan = plan(&config, &domain, &bin_dir, &out, &config_dir)?;
     let display = Display {
         label,
-        total_frames: (config.source == SourceKind::Sim && config.sim.frames > 0)
-            .then_some(config.sim.frames),
+        total_frames: match config.source {
+            SourceKind::Sim => Some(config.sim.frames),
+            SourceKind::Replay => Some(config.replay.frames),
+            SourceKind::Hokuyo => None,
+        }
+        .filter(|&frames| frames > 0),
         quiet: args.quiet,
     };
     let outcome = supervisor::run(&plan, &domain, &log_dir, &display)?;
@@ -214,6 +246,10 @@ fn apply_overrides(config: &mut RunConfig, args: &Args) {
     }
     if let Some(frames) = args.frames {
         config.sim.frames = frames;
+        config.replay.frames = frames;
+    }
+    if let Some(relations) = &args.relations {
+        config.relations = Some(relations.clone());
     }
     if let Some(rate) = args.rate {
         config.sim.rate = rate;
@@ -259,7 +295,7 @@ fn plan(
     };
     let d = domain.name().to_owned();
 
-    let sink = vec![
+    let mut sink: Vec<String> = vec![
         "--domain".into(),
         d.clone(),
         "--out".into(),
@@ -273,6 +309,12 @@ fn plan(
             config.slam.seed
         ),
     ];
+    // map-sink scores: it writes metrics.json and map.svg once, at the end, and the score
+    // belongs in both (see map_sink::score_run).
+    if let Some(relations) = &config.relations {
+        sink.push("--relations".into());
+        sink.push(relations.display().to_string());
+    }
     let mut slam = vec![
         "--domain".into(),
         d.clone(),
@@ -305,6 +347,8 @@ fn plan(
                 d.clone(),
                 "--subscribers".into(),
                 "2".into(),
+                "--frames".into(),
+                config.replay.frames.to_string(),
             ];
             if !config.replay.odometry {
                 args.push("--no-odometry".into());
@@ -394,32 +438,56 @@ fn sim_stage(
 
 /// Prints the key numbers of metrics.json.
 fn print_summary(out: &Path) -> Result<()> {
-    let path = out.join("metrics.json");
+    let path = out.join(METRICS_FILE);
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("the run finished but {} is missing", path.display()))?;
-    let metrics: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
-    let number = |key: &str| metrics.get(key).and_then(serde_json::Value::as_f64);
-    let mut line = format!("results in {}", out.display());
-    for (key, label, unit) in [
-        ("frames_processed", "scans", ""),
-        ("scans_per_s", "rate", " scans/s"),
-        ("ate_rmse_m", "ATE RMSE", " m"),
-        ("map_corner_rmse_m", "map RMSE", " m"),
-        ("map_corners", "map", " corners"),
-    ] {
-        if let Some(value) = number(key) {
-            line.push_str(&format!(" | {label} {}{unit}", trim(value)));
-        }
-    }
-    println!("{line}");
+    let metrics: Metrics = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not the metrics map-sink writes", path.display()))?;
+    println!("{}", summary(out, &metrics));
     Ok(())
 }
 
-fn trim(value: f64) -> String {
-    if value.fract() == 0.0 && value.abs() < 1e12 {
-        format!("{value:.0}")
-    } else {
-        format!("{value:.3}")
+/// One line: where the results are and the numbers that matter.
+fn summary(out: &Path, m: &Metrics) -> String {
+    let mut parts = vec![
+        format!("results in {}", out.display()),
+        format!("scans {}", m.frames_processed),
+    ];
+    if let Some(rate) = m.scans_per_s {
+        parts.push(format!("rate {rate:.0} scans/s"));
     }
+    if let Some(duration) = m.duration_s.filter(|_| m.wall_s > 0.0) {
+        parts.push(format!("{:.0} x real time", duration / m.wall_s));
+    }
+    if let Some(ate) = m.ate_rmse_m {
+        parts.push(format!("ATE RMSE {ate:.3} m"));
+    }
+    if let Some(rmse) = m.map_corner_rmse_m {
+        parts.push(format!("map RMSE {rmse:.3} m"));
+    }
+    parts.push(format!("map {} corners", m.map_corners));
+    if let Some(rpe) = &m.relative_pose_error {
+        for (name, summary) in [
+            ("RPE", &rpe.trajectory),
+            ("online RPE", &rpe.trajectory_online),
+            ("front end RPE", &rpe.dead_reckoning),
+        ] {
+            if let Some(summary) = summary {
+                parts.push(format!("{name} {}", rpe_text(summary)));
+            }
+        }
+    }
+    parts.join(" | ")
+}
+
+/// `0.580 +- 1.782 m, 2.60 +- 6.04 deg over 1172/1172 relations`.
+fn rpe_text(s: &ScoreSummary) -> String {
+    let errors = match (s.translation_m, s.rotation_deg) {
+        (Some(t), Some(r)) => format!(
+            "{:.3} +- {:.3} m, {:.2} +- {:.2} deg",
+            t.mean, t.std, r.mean, r.std
+        ),
+        _ => "none: no relation has both poses".to_owned(),
+    };
+    format!("{errors} over {}/{} relations", s.used, s.relations)
 }

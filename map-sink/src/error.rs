@@ -7,7 +7,8 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum SinkError {
     /// A file system operation failed; `action` says which, `path` on what.
-    #[error("cannot {action} {}: {source}", path.display())]
+    // The cause is the source, not part of the message: `{:#}` would print it twice.
+    #[error("cannot {action} {}", path.display())]
     Io {
         action: &'static str,
         path: PathBuf,
@@ -24,6 +25,10 @@ pub enum SinkError {
     /// A [`RecorderOptions`](crate::RecorderOptions) value is out of range.
     #[error("invalid recorder option: {0}")]
     InvalidOption(String),
+    /// A trajectory could not be scored against the relations (the error names the file
+    /// and line).
+    #[error(transparent)]
+    Score(#[from] slam_eval::EvalError),
     /// The metrics could not be serialised (only non-string map keys could cause it).
     #[error("cannot serialise the metrics: {0}")]
     Json(#[from] serde_json::Error),

@@ -14,6 +14,9 @@
 //!   least-squares rigid SE(2) fit ([`align_se2`], as `evo_ape -a`) before the absolute
 //!   trajectory error ([`ate`]) is taken, and the map corners are moved by the same
 //!   transform before they are scored.
+//! * Given ground-truth relations ([`RecorderOptions::relations`]), the trajectory files are
+//!   scored with the relative-pose error of Kuemmerle et al. 2009 through slam-eval
+//!   ([`score_run`]; why here and not in slam-launch is said there).
 //!
 //! ```
 //! use map_sink::{Pose2, Recorder, RecorderOptions};
@@ -48,6 +51,7 @@ mod metrics;
 mod percentile;
 mod pose;
 mod recorder;
+mod rpe;
 mod scan_points;
 mod svg;
 mod tum;
@@ -67,6 +71,7 @@ pub use recorder::{
     DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Recorder,
     RecorderOptions, TRAJECTORY_FILE,
 };
+pub use rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 pub use scan_points::scan_points;
 pub use svg::{SvgInput, render_svg};
 pub use tum::{TumPose, TumWriter, format_stamp, format_tum_line, read_tum, yaw_quaternion};

@@ -8,10 +8,12 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
-use map_sink::{FrameCounts, Recorder, RecorderOptions};
+use map_sink::{FrameCounts, Recorder, RecorderOptions, RelationsFile};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
-/// trajectory.tum, ground_truth.tum, map_corners.csv, map.svg and metrics.json into DIR.
+/// trajectory.tum, ground_truth.tum, map_corners.csv, map.svg and metrics.json into DIR;
+/// with --relations, metrics.json and the picture also give the relative-pose error of each
+/// trajectory file.
 #[derive(Debug, Parser)]
 #[command(name = "map-sink", version)]
 struct Args {
@@ -27,6 +29,10 @@ struct Args {
     /// Title of the picture.
     #[arg(long, default_value = "lidar SLAM run")]
     title: String,
+    /// Ground-truth relations (Kuemmerle et al. 2009: t1 t2 x y z roll pitch yaw) to score
+    /// the trajectories against at the end; read and checked before anything else.
+    #[arg(long, value_name = "FILE")]
+    relations: Option<PathBuf>,
 }
 
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
@@ -70,10 +76,17 @@ impl Progress {
 fn run() -> Result<()> {
     let args = Args::parse();
     shutdown::install().context("cannot install the Ctrl-C handler")?;
+    // A bad relations file fails the run now, not after the whole log.
+    let relations = args
+        .relations
+        .as_deref()
+        .map(RelationsFile::read)
+        .transpose()?;
     let mut recorder = Recorder::create(
         &args.out,
         RecorderOptions {
             title: args.title.clone(),
+            relations,
             ..RecorderOptions::default()
         },
     )?;

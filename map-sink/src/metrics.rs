@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::rpe::RelativePoseErrors;
+
 /// How many scans the pipeline published, processed and dropped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct FrameCounts {
@@ -23,6 +25,10 @@ pub struct Metrics {
     pub map_corners: usize,
     /// From the first message recorded to the last.
     pub wall_s: f64,
+    /// From the first processed scan's stamp to the last one's: for a replay, how long the
+    /// log took to record, so `duration_s / wall_s` is the speed against real time.
+    #[serde(default)]
+    pub duration_s: Option<f64>,
     /// `frames_processed / wall_s`.
     pub scans_per_s: Option<f64>,
     /// Scan stamp to pose published, milliseconds.
@@ -40,4 +46,7 @@ pub struct Metrics {
     /// The dead-reckoning trajectory scored on its own alignment, as a baseline.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dead_reckoning_ate_rmse_m: Option<f64>,
+    /// The trajectories scored against ground-truth relations, when there were any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relative_pose_error: Option<RelativePoseErrors>,
 }

@@ -17,6 +17,7 @@ use crate::hit_grid::HitGrid;
 use crate::metrics::{FrameCounts, Metrics};
 use crate::percentile::percentile;
 use crate::pose::Pose2;
+use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 use crate::scan_points::scan_points;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum::TumWriter;
@@ -49,6 +50,10 @@ pub struct RecorderOptions {
     pub cell_m: f64,
     /// Beams of a scan looked at, at most (evenly strided); 0 for all.
     pub max_points_per_scan: usize,
+    /// Ground-truth relations to score the trajectory files against when the run finishes.
+    pub relations: Option<RelationsFile>,
+    /// How far a pose's stamp may be from a relation's, nanoseconds.
+    pub relations_tolerance_ns: u64,
 }
 
 impl Default for RecorderOptions {
@@ -57,6 +62,8 @@ impl Default for RecorderOptions {
             title: "lidar SLAM run".to_owned(),
             cell_m: 0.05,
             max_points_per_scan: 2048,
+            relations: None,
+            relations_tolerance_ns: slam_eval::DEFAULT_TOLERANCE_NS,
         }
     }
 }
@@ -96,6 +103,8 @@ pub struct Recorder {
     first_message: Option<Instant>,
     last_message: Option<Instant>,
     wall_s: Option<f64>,
+    /// Earliest and latest pose stamps, for the duration the run covers.
+    stamps_ns: Option<(u64, u64)>,
 }
 
 impl Recorder {
@@ -111,6 +120,7 @@ impl Recorder {
         fs::create_dir_all(dir).map_err(|e| SinkError::io("create directory", dir, e))?;
         for stale in [
             GROUND_TRUTH_FILE,
+            TRAJECTORY_ONLINE_FILE,
             DEAD_RECKONING_FILE,
             MAP_CORNERS_FILE,
             MAP_SVG_FILE,
@@ -143,6 +153,7 @@ impl Recorder {
             first_message: None,
             last_message: None,
             wall_s: None,
+            stamps_ns: None,
         })
     }
 
@@ -161,6 +172,10 @@ impl Recorder {
         latency_ns: Option<u64>,
     ) -> Result<(), SinkError> {
         self.touch();
+        self.stamps_ns = Some(match self.stamps_ns {
+            Some((first, last)) => (first.min(stamp_ns), last.max(stamp_ns)),
+            None => (stamp_ns, stamp_ns),
+        });
         self.trajectory.append(stamp_ns, est)?;
         if let Some(dr) = dead_reckoning {
             append_lazily(
@@ -253,7 +268,8 @@ impl Recorder {
         self.wall_s = Some(wall_s);
     }
 
-    /// Syncs the trajectories, scores the run and writes `map_corners.csv`, `map.svg` and
+    /// Syncs the trajectories, scores the run (against the relations too, if given: every
+    /// trajectory file is complete by then) and writes `map_corners.csv`, `map.svg` and
     /// finally `metrics.json`, each atomically. Returns the metrics written.
     pub fn finish(self) -> Result<Metrics, SinkError> {
         self.trajectory.sync()?;
@@ -275,7 +291,14 @@ impl Recorder {
                 .collect();
             nearest_rmse(&aligned, &self.true_corners)
         });
-        let metrics = self.metrics(&trajectory, stats, dead_reckoning_stats, map_corner_rmse_m);
+        let relative_pose_error = self
+            .options
+            .relations
+            .as_ref()
+            .map(|truth| score_run(&self.dir, truth, self.options.relations_tolerance_ns))
+            .transpose()?;
+        let mut metrics = self.metrics(&trajectory, stats, dead_reckoning_stats, map_corner_rmse_m);
+        metrics.relative_pose_error = relative_pose_error;
 
         write_atomic(
             &self.dir.join(MAP_CORNERS_FILE),
@@ -344,6 +367,9 @@ impl Recorder {
             path_length_m: trajectory.windows(2).map(|w| distance(w[0], w[1])).sum(),
             map_corners: self.map.len(),
             wall_s,
+            duration_s: self
+                .stamps_ns
+                .map(|(first, last)| (last - first) as f64 * 1e-9),
             scans_per_s: (wall_s > 0.0).then(|| counts.processed as f64 / wall_s),
             latency_ms_p50: percentile(&latencies_ms, 50.0),
             latency_ms_p99: percentile(&latencies_ms, 99.0),
@@ -352,6 +378,7 @@ impl Recorder {
             final_error_m: stats.map(|s| s.final_error_m),
             map_corner_rmse_m,
             dead_reckoning_ate_rmse_m: dead_reckoning.map(|s| s.rmse_m),
+            relative_pose_error: None,
         }
     }
 
@@ -436,7 +463,8 @@ fn subtitle(m: &Metrics) -> Vec<String> {
         optional(m.latency_ms_p50, "ms"),
         optional(m.latency_ms_p99, "ms"),
     );
-    let second = match (m.ate_rmse_m, m.ate_max_m, m.final_error_m) {
+    let mut lines = vec![first];
+    match (m.ate_rmse_m, m.ate_max_m, m.final_error_m) {
         (Some(rmse), Some(max), Some(last)) => {
             let mut line = format!("ATE RMSE {rmse:.3} m, max {max:.3} m, final {last:.3} m");
             if let Some(v) = m.map_corner_rmse_m {
@@ -445,11 +473,42 @@ fn subtitle(m: &Metrics) -> Vec<String> {
             if let Some(v) = m.dead_reckoning_ate_rmse_m {
                 line.push_str(&format!("  ·  dead reckoning ATE RMSE {v:.3} m"));
             }
-            line
+            lines.push(line);
         }
-        _ => "no ground truth".to_owned(),
-    };
-    vec![first, second]
+        // A replay has no true poses, but its relations are ground truth all the same.
+        _ if m.relative_pose_error.is_some() => {}
+        _ => lines.push("no ground truth".to_owned()),
+    }
+    lines.extend(m.relative_pose_error.as_ref().map(rpe_line));
+    lines
+}
+
+/// The relative-pose errors in one line, e.g. `relative pose error: estimate 0.580 +- 1.782
+/// m, 2.60 +- 6.04 deg (1172/1172 relations)  ·  front end ...`.
+fn rpe_line(rpe: &RelativePoseErrors) -> String {
+    let mut parts = Vec::new();
+    for (name, summary) in [
+        ("estimate", &rpe.trajectory),
+        ("online", &rpe.trajectory_online),
+        ("front end", &rpe.dead_reckoning),
+    ] {
+        let Some(summary) = summary else { continue };
+        let errors = match (summary.translation_m, summary.rotation_deg) {
+            (Some(t), Some(r)) => format!(
+                "{:.3} +- {:.3} m, {:.2} +- {:.2} deg",
+                t.mean, t.std, r.mean, r.std
+            ),
+            _ => "no relation with both poses".to_owned(),
+        };
+        parts.push(format!(
+            "{name} {errors} ({}/{} relations)",
+            summary.used, summary.relations
+        ));
+    }
+    if parts.is_empty() {
+        return "relative pose error: no trajectory to score".to_owned();
+    }
+    format!("relative pose error: {}", parts.join("  ·  "))
 }
 
 #[cfg(test)]

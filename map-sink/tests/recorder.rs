@@ -7,19 +7,21 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    FrameCounts, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Pose2, Recorder,
-    RecorderOptions, SinkError, TRAJECTORY_FILE, corners_csv_header, read_tum,
+    FrameCounts, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Metrics, Pose2,
+    Recorder, RecorderOptions, RelationsFile, SinkError, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE,
+    corners_csv_header, format_stamp, read_tum, score_run,
 };
 
 type TestResult = Result<(), Box<dyn std::error::Error>>;
 
-const BASE_KEYS: [&str; 9] = [
+const BASE_KEYS: [&str; 10] = [
     "frames_published",
     "frames_processed",
     "frames_dropped",
     "path_length_m",
     "map_corners",
     "wall_s",
+    "duration_s",
     "scans_per_s",
     "latency_ms_p50",
     "latency_ms_p99",
@@ -131,6 +133,129 @@ fn full_run_writes_every_file() -> TestResult {
         svg.matches("<polyline").count(),
         3,
         "estimate, truth, dead reckoning"
+    );
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// Relations between the true poses `step` scans apart, as a relations file would give
+/// them (`t1 t2 x y z roll pitch yaw`), plus one whose second stamp no run has.
+fn relations_from_truth(truth: &Path, step: usize) -> Result<String, Box<dyn std::error::Error>> {
+    let poses = read_tum(truth)?;
+    let mut text = String::from("# t1 t2 x y z roll pitch yaw\n");
+    for (a, b) in poses.iter().zip(poses.iter().skip(step)) {
+        let (pa, pb) = (
+            Pose2::new(a.position[0], a.position[1], a.yaw()),
+            Pose2::new(b.position[0], b.position[1], b.yaw()),
+        );
+        let delta = common::compose(common::inverse(pa), pb);
+        text.push_str(&format!(
+            "{} {} {} {} 0 0 0 {}\n",
+            format_stamp(a.stamp_ns),
+            format_stamp(b.stamp_ns),
+            delta.x,
+            delta.y,
+            delta.yaw
+        ));
+    }
+    text.push_str(&format!(
+        "{} 1.5 1 0 0 0 0 0\n",
+        format_stamp(poses[0].stamp_ns)
+    ));
+    Ok(text)
+}
+
+#[test]
+fn relations_score_every_trajectory_file() -> TestResult {
+    let run = || Synthetic {
+        scans: 200,
+        beams: 181,
+        truth: true,
+        dead_reckoning: true,
+    };
+    // A first run gives the true poses the relations are made of.
+    let truth_dir = common::scratch_dir("relations-truth");
+    let mut recorder = Recorder::create(&truth_dir, RecorderOptions::default())?;
+    common::drive(&mut recorder, run())?;
+    recorder.finish()?;
+    let relations_path = truth_dir.join("truth.relations");
+    fs::write(
+        &relations_path,
+        relations_from_truth(&truth_dir.join(GROUND_TRUTH_FILE), 5)?,
+    )?;
+
+    let dir = common::scratch_dir("relations");
+    let options = RecorderOptions {
+        relations: Some(RelationsFile::read(&relations_path)?),
+        ..RecorderOptions::default()
+    };
+    let mut recorder = Recorder::create(&dir, options)?;
+    common::drive(&mut recorder, run())?;
+    let metrics = recorder.finish()?;
+
+    let rpe = metrics.relative_pose_error.clone().ok_or("no score")?;
+    assert_eq!(rpe.relations_file, relations_path);
+    let estimate = rpe.trajectory.ok_or("trajectory not scored")?;
+    assert_eq!(
+        (estimate.relations, estimate.used, estimate.unmatched),
+        (196, 195, 1)
+    );
+    // The estimate wobbles by centimetres around the truth in the robot's frame, which
+    // turns by 9 degrees over the 5 scans of a relation: errors of about 2 cm.
+    let t = estimate.translation_m.ok_or("no translational error")?;
+    assert!(t.mean > 0.005 && t.mean < 0.05, "{t:?}");
+    let dead_reckoning = rpe.dead_reckoning.ok_or("dead reckoning not scored")?;
+    let r = dead_reckoning.rotation_deg.ok_or("no rotational error")?;
+    // 0.12 rad over 200 scans: 0.003 rad = 0.17 degrees every 5 scans, beside the wobble.
+    assert!((r.mean - 0.17).abs() < 0.05, "{r:?}");
+    assert_eq!(rpe.trajectory_online, None, "not written, not scored");
+
+    // metrics.json reads back typed, and the picture says it.
+    let json = fs::read_to_string(dir.join(METRICS_FILE))?;
+    let back = serde_json::from_str::<Metrics>(&json)?
+        .relative_pose_error
+        .and_then(|rpe| rpe.trajectory)
+        .ok_or("no score in metrics.json")?;
+    assert_eq!(back.used, estimate.used);
+    let back_t = back
+        .translation_m
+        .ok_or("no translational error in metrics.json")?;
+    assert!((back_t.mean - t.mean).abs() < 1e-12);
+    let svg = fs::read_to_string(dir.join(MAP_SVG_FILE))?;
+    check_svg(&svg)?;
+    let line = format!(
+        "relative pose error: estimate {:.3} +- {:.3} m",
+        t.mean, t.std
+    );
+    assert!(svg.contains(&line), "{line} not in the picture");
+
+    // An online trajectory, once there is one, is scored too.
+    fs::copy(dir.join(TRAJECTORY_FILE), dir.join(TRAJECTORY_ONLINE_FILE))?;
+    let options = RelationsFile::read(&relations_path)?;
+    let again = score_run(&dir, &options, slam_eval_tolerance())?;
+    assert_eq!(again.trajectory_online, again.trajectory);
+    let _ = fs::remove_dir_all(&dir);
+    let _ = fs::remove_dir_all(&truth_dir);
+    Ok(())
+}
+
+/// The tolerance map-sink uses by default.
+fn slam_eval_tolerance() -> u64 {
+    RecorderOptions::default().relations_tolerance_ns
+}
+
+#[test]
+fn a_bad_relations_file_names_its_line() -> TestResult {
+    let dir = common::scratch_dir("bad-relations");
+    fs::create_dir_all(&dir)?;
+    let path = dir.join("bad.relations");
+    fs::write(&path, "1.0 2.0 1 0 0 0 0 0\n1.0 2.0 1 0 0 0 0\n")?;
+    let error = RelationsFile::read(&path).err().ok_or("accepted")?;
+    assert!(
+        error
+            .to_string()
+            .ends_with("bad.relations, line 2: 7 fields, expected 8 (t1 t2 x y z roll pitch yaw)"),
+        "{error}"
     );
     let _ = fs::remove_dir_all(&dir);
     Ok(())

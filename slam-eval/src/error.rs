@@ -4,17 +4,19 @@ use std::path::PathBuf;
 
 #[derive(Debug, thiserror::Error)]
 pub enum EvalError {
-    #[error("cannot read {path}: {source}")]
+    // The cause is the error's source, not part of its message: `{:#}` prints the chain,
+    // and would print the cause twice.
+    #[error("cannot read {}", path.display())]
     Io {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("{path}, line {line}: {reason}")]
+    #[error("{}, line {line}: {reason}", path.display())]
     Malformed {
         path: PathBuf,
         line: usize,
         reason: String,
     },
-    #[error("{path} has no {what}")]
+    #[error("{} has no {what}", path.display())]
     Empty { path: PathBuf, what: &'static str },
 }

@@ -12,6 +12,9 @@
 //!   standard deviation of the translational (m) and rotational (deg) errors, plain and
 //!   squared, as the paper's tables do.
 //!
+//! [`ScoreSummary`] is what a run's `metrics.json` keeps of a score (map-sink writes it,
+//! slam-launch and slam-bench read it back).
+//!
 //! Stamps are compared as integer nanoseconds, parsed exactly from their decimal text.
 
 mod error;
@@ -20,13 +23,15 @@ mod relations;
 mod score;
 mod stamp;
 mod stats;
+mod summary;
 mod text;
 mod trajectory;
 
 pub use error::EvalError;
 pub use pose::{Pose, from_tum, from_xyz_rpy, magnitude};
 pub use relations::{Relation, read_relations};
-pub use score::{Score, Unmatched, score};
+pub use score::{DEFAULT_TOLERANCE_NS, Score, Unmatched, score};
 pub use stamp::{format_stamp, parse_stamp_ns};
 pub use stats::ErrorStats;
+pub use summary::ScoreSummary;
 pub use trajectory::Trajectory;

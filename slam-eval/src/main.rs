@@ -5,7 +5,9 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use slam_eval::{ErrorStats, Score, Trajectory, format_stamp, read_relations, score};
+use slam_eval::{
+    DEFAULT_TOLERANCE_NS, ErrorStats, Score, Trajectory, format_stamp, read_relations, score,
+};
 
 /// Scores a trajectory with the relative-pose metric of Kuemmerle et al. 2009: for every
 /// ground-truth relation (t1, t2, motion) the trajectory's own motion from t1 to t2 is
@@ -21,7 +23,7 @@ struct Args {
     #[arg(long, value_name = "FILE")]
     relations: PathBuf,
     /// How far a pose's stamp may be from a relation's, milliseconds.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = DEFAULT_TOLERANCE_NS as f64 / 1e6)]
     tolerance_ms: f64,
     /// Print the score as JSON instead of text.
     #[arg(long)]

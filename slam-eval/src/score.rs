@@ -13,6 +13,11 @@ use crate::relations::Relation;
 use crate::stats::ErrorStats;
 use crate::trajectory::Trajectory;
 
+/// How far a pose's stamp may be from a relation's by default: 1 ms. The relations files
+/// of Kuemmerle et al. round the log's stamps to 5 decimals (10 us), and scans come at
+/// most at 75 Hz (13 ms apart), so 1 ms finds the scan meant and never its neighbour.
+pub const DEFAULT_TOLERANCE_NS: u64 = 1_000_000;
+
 /// A relation whose poses the trajectory lacks.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Unmatched {

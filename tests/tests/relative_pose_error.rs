@@ -1,0 +1,104 @@
+//! A real benchmark log scored through slam-launch: the relations beside the log are found,
+//! the run is scored against them, and a bad relations file stops the run before it starts.
+
+use tests::*;
+
+/// Bound on the mean translational relative-pose error over the first 400 scans of
+/// mit-csail (seed 1, 100 particles). Measured today: 0.086 m (seeds 1-5: 0.086-0.112 m;
+/// the whole log: 0.58 m). The margin is for noise, not for a regression: tighten it as
+/// the pipeline improves.
+const MIT_CSAIL_400_MAX_TRANSLATION_M: f64 = 0.25;
+/// Scans replayed: the first fifth of the log, with its first loop.
+const FRAMES: &str = "400";
+
+fn number_at(value: &serde_json::Value, key: &str) -> f64 {
+    value
+        .get(key)
+        .and_then(serde_json::Value::as_f64)
+        .unwrap_or_else(|| panic!("no number '{key}' in {value}"))
+}
+
+#[test]
+fn mit_csail_is_scored_against_the_relations_beside_it() {
+    let log = data_dir().join("carmen/mit-csail.clf");
+    let relations = log.with_extension("relations");
+    let domain = domain("mit-csail-rpe");
+    let out = scratch("mit-csail-rpe");
+    // No --relations: slam-launch finds mit-csail.relations beside the log.
+    let output = launch(
+        &domain,
+        &out,
+        &[
+            "--replay",
+            log.to_str().unwrap(),
+            "--format",
+            "carmen",
+            "--frames",
+            FRAMES,
+            "--seed",
+            "1",
+            "--particles",
+            "100",
+        ],
+    );
+    assert_success(&output);
+    let metrics = metrics(&out);
+    assert_eq!(number(&metrics, "frames_processed"), 400.0);
+
+    let rpe = &metrics["relative_pose_error"];
+    assert_eq!(rpe["relations_file"], relations.to_str().unwrap(), "{rpe}");
+    let estimate = &rpe["trajectory"];
+    let total = number_at(estimate, "relations");
+    let used = number_at(estimate, "used");
+    assert_eq!(total, 1172.0, "{estimate}");
+    // 400 of 1988 scans hold about a fifth of the relations (216 today); the rest have
+    // no poses and are counted, not scored.
+    assert!((150.0..=300.0).contains(&used), "{estimate}");
+    assert_eq!(used + number_at(estimate, "unmatched"), total);
+    let translation = number_at(&estimate["translation_m"], "mean");
+    assert!(
+        translation > 0.0 && translation <= MIT_CSAIL_400_MAX_TRANSLATION_M,
+        "mean translational error {translation} m > {MIT_CSAIL_400_MAX_TRANSLATION_M} m: {estimate}"
+    );
+    assert!(number_at(&estimate["rotation_deg"], "mean") > 0.0);
+    // The front end's own estimate is scored over the same relations.
+    assert_eq!(number_at(&rpe["dead_reckoning"], "used"), used);
+    assert!(rpe.get("trajectory_online").is_none(), "not written yet");
+
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let expected = format!("| RPE {translation:.3} +- ");
+    assert!(stdout.contains(&expected), "{expected} not in {stdout}");
+    assert!(stdout.contains("| front end RPE "), "{stdout}");
+    let svg = std::fs::read_to_string(out.join("map.svg")).unwrap();
+    assert!(svg.contains(&format!(
+        "relative pose error: estimate {translation:.3} +- "
+    )));
+    assert!(shm_leftovers(&domain).is_empty());
+}
+
+#[test]
+fn a_bad_relations_file_stops_the_run_before_it_starts() {
+    let log = data_dir().join("carmen/mit-csail.clf");
+    let dir = scratch("bad-relations");
+    let bad = dir.join("bad.relations");
+    std::fs::write(&bad, "1.0 2.0 1 0 0 0 0 0\n1.0 2.0 1 0 0 0 0\n").unwrap();
+    let out = dir.join("run");
+    let output = launch(
+        &domain("bad-relations"),
+        &out,
+        &[
+            "--replay",
+            log.to_str().unwrap(),
+            "--relations",
+            bad.to_str().unwrap(),
+        ],
+    );
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("bad.relations, line 2: 7 fields, expected 8 (t1 t2 x y z roll pitch yaw)"),
+        "{stderr}"
+    );
+    // Refused before anything ran: no output directory, no process logs.
+    assert!(!out.exists(), "{} was created", out.display());
+}
