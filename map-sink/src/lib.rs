@@ -1,7 +1,8 @@
 //! # map-sink
 //!
-//! Records a lidar SLAM run into a directory: the estimated (and true, and dead-reckoning)
-//! trajectories in TUM format, the corner map as CSV, a picture of the run as SVG and a
+//! Records a lidar SLAM run into a directory: the estimated trajectory (the filter's final
+//! path; the online per-scan estimate beside it), the true and dead-reckoning trajectories
+//! in TUM format, the corner map as CSV, a picture of the run as SVG and a
 //! `metrics.json` with throughput, latency and, when the truth is known, accuracy scores.
 //!
 //! This is the library half; the process shell receives the pipeline's messages and feeds
@@ -48,6 +49,7 @@ mod corners_csv;
 mod error;
 mod hit_grid;
 mod metrics;
+mod path_assembly;
 mod percentile;
 mod pose;
 mod recorder;
@@ -65,6 +67,7 @@ pub use corners_csv::{corners_csv, corners_csv_header};
 pub use error::SinkError;
 pub use hit_grid::{HitCell, HitGrid};
 pub use metrics::{FrameCounts, Metrics};
+pub use path_assembly::{ChunkError, PathAssembly, PathPose};
 pub use percentile::percentile;
 pub use pose::{Pose2, wrap_angle};
 pub use recorder::{

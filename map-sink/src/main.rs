@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
-use map_sink::{FrameCounts, Recorder, RecorderOptions, RelationsFile};
+use map_sink::{FrameCounts, PathAssembly, PathPose, Recorder, RecorderOptions, RelationsFile};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
 /// trajectory.tum, ground_truth.tum, map_corners.csv, map.svg and metrics.json into DIR;
@@ -101,9 +101,10 @@ fn run() -> Result<()> {
     let scans = Inlet::open(&node, topic::SCAN)?;
     let maps = Inlet::open(&node, topic::MAP)?;
     let poses = Inlet::open(&node, topic::POSE)?;
+    let path = Inlet::open(&node, topic::PATH)?;
     println!("ready");
 
-    let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps];
+    let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps, &path];
     if let Some(truth) = &truth {
         wakeables.push(truth);
     }
@@ -112,6 +113,7 @@ fn run() -> Result<()> {
     }
 
     let mut progress = Progress::default();
+    let mut assembly = PathAssembly::new();
     let mut published = None;
     let mut last_status = Instant::now();
     let mut finished = false;
@@ -136,6 +138,7 @@ fn run() -> Result<()> {
         while let Some(sample) = maps.receive()? {
             recorder.set_map(map_corners(&sample));
         }
+        drain_path(&path, &mut assembly, &mut recorder)?;
         while let Some(sample) = poses.receive()? {
             if sample.header.is_end_of_stream() {
                 finished = true;
@@ -144,6 +147,7 @@ fn run() -> Result<()> {
                 while let Some(sample) = maps.receive()? {
                     recorder.set_map(map_corners(&sample));
                 }
+                drain_path(&path, &mut assembly, &mut recorder)?;
                 break;
             }
             let latency = sample.header.sent_ns.checked_sub(sample.scan_sent_ns);
@@ -186,6 +190,33 @@ fn run() -> Result<()> {
         metrics.map_corners,
         args.out.display()
     );
+    Ok(())
+}
+
+/// Takes the final path's chunks; a complete path goes to the recorder. A chunk that does
+/// not fit is reported and the path left incomplete (the online estimate stands in).
+fn drain_path(
+    inlet: &Inlet<PathChunk>,
+    assembly: &mut PathAssembly,
+    recorder: &mut Recorder,
+) -> Result<()> {
+    while let Some(chunk) = inlet.receive()? {
+        let poses: Vec<PathPose> = chunk
+            .poses()
+            .iter()
+            .map(|p| PathPose {
+                stamp_ns: p.stamp_ns,
+                pose: pose(p.pose),
+            })
+            .collect();
+        if let Err(e) = assembly.add(chunk.first, chunk.total, &poses) {
+            eprintln!("map-sink: {e}; the final path is incomplete");
+            continue;
+        }
+        if let Some(path) = assembly.complete() {
+            recorder.set_final_path(path);
+        }
+    }
     Ok(())
 }
 

@@ -46,6 +46,10 @@ pub struct Metrics {
     /// The dead-reckoning trajectory scored on its own alignment, as a baseline.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dead_reckoning_ate_rmse_m: Option<f64>,
+    /// The online estimate (each scan's weighted mean, `trajectory_online.tum`) scored on its
+    /// own alignment; `ate_rmse_m` is the final path's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub online_ate_rmse_m: Option<f64>,
     /// The trajectories scored against ground-truth relations, when there were any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative_pose_error: Option<RelativePoseErrors>,

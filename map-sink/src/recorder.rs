@@ -15,15 +15,17 @@ use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
 use crate::hit_grid::HitGrid;
 use crate::metrics::{FrameCounts, Metrics};
+use crate::path_assembly::PathPose;
 use crate::percentile::percentile;
 use crate::pose::Pose2;
 use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 use crate::scan_points::scan_points;
 use crate::svg::{SvgInput, render_svg};
-use crate::tum::TumWriter;
+use crate::tum::{TumWriter, format_tum_line};
 
-/// The estimated trajectory (the particles' weighted mean pose per scan), appended as it
-/// grows.
+/// The estimated trajectory: the filter's final path (the best particle's, consistent with
+/// its map), written atomically by [`Recorder::finish`]; the online estimates when no final
+/// path came (a run whose filter died).
 pub const TRAJECTORY_FILE: &str = "trajectory.tum";
 /// The simulator's true trajectory, appended as it grows (only when truth is recorded).
 pub const GROUND_TRUTH_FILE: &str = "ground_truth.tum";
@@ -70,14 +72,15 @@ impl Default for RecorderOptions {
 
 #[derive(Debug, Clone, Copy)]
 struct Estimate {
+    stamp_ns: u64,
     pose: Pose2,
     dead_reckoning: Option<Pose2>,
 }
 
 /// Records one run into a directory.
 ///
-/// The TUM trajectories are appended and flushed line by line as poses arrive, so a killed
-/// run keeps every pose it had ([`TumWriter`] explains why they are not written atomically);
+/// The online estimate (`trajectory_online.tum`) and the other per-scan trajectories are
+/// appended and flushed line by line as poses arrive, so a killed run keeps every pose it had ([`TumWriter`] explains why they are not written atomically);
 /// the map, the picture and the metrics are whole-file results written atomically by
 /// [`finish`](Self::finish), so a crash never leaves one half-written.
 ///
@@ -88,11 +91,14 @@ struct Estimate {
 pub struct Recorder {
     dir: PathBuf,
     options: RecorderOptions,
-    trajectory: TumWriter,
+    online: TumWriter,
     ground_truth: Option<TumWriter>,
     dead_reckoning: Option<TumWriter>,
     estimates: BTreeMap<u64, Estimate>,
     truth: BTreeMap<u64, Pose2>,
+    /// The truth again by stamp, to score the final path (which carries stamps only).
+    truth_by_stamp: BTreeMap<u64, Pose2>,
+    final_path: Option<Vec<PathPose>>,
     pending_scans: BTreeMap<u64, Vec<[f64; 2]>>,
     grid: HitGrid,
     latencies_ns: Vec<u64>,
@@ -108,7 +114,7 @@ pub struct Recorder {
 }
 
 impl Recorder {
-    /// Creates `dir` if needed and starts `trajectory.tum`. Files of an earlier run in the
+    /// Creates `dir` if needed and starts `trajectory_online.tum`. Files of an earlier run in the
     /// same directory are removed, so none can be mistaken for this run's.
     pub fn create(dir: &Path, options: RecorderOptions) -> Result<Self, SinkError> {
         if !(options.cell_m.is_finite() && options.cell_m > 0.0) {
@@ -120,7 +126,7 @@ impl Recorder {
         fs::create_dir_all(dir).map_err(|e| SinkError::io("create directory", dir, e))?;
         for stale in [
             GROUND_TRUTH_FILE,
-            TRAJECTORY_ONLINE_FILE,
+            TRAJECTORY_FILE,
             DEAD_RECKONING_FILE,
             MAP_CORNERS_FILE,
             MAP_SVG_FILE,
@@ -134,16 +140,18 @@ impl Recorder {
                 _ => {}
             }
         }
-        let trajectory = TumWriter::create(&dir.join(TRAJECTORY_FILE))?;
+        let online = TumWriter::create(&dir.join(TRAJECTORY_ONLINE_FILE))?;
         Ok(Self {
             dir: dir.to_path_buf(),
             grid: HitGrid::new(options.cell_m),
             options,
-            trajectory,
+            online,
             ground_truth: None,
             dead_reckoning: None,
             estimates: BTreeMap::new(),
             truth: BTreeMap::new(),
+            truth_by_stamp: BTreeMap::new(),
+            final_path: None,
             pending_scans: BTreeMap::new(),
             latencies_ns: Vec::new(),
             map: Vec::new(),
@@ -176,7 +184,7 @@ impl Recorder {
             Some((first, last)) => (first.min(stamp_ns), last.max(stamp_ns)),
             None => (stamp_ns, stamp_ns),
         });
-        self.trajectory.append(stamp_ns, est)?;
+        self.online.append(stamp_ns, est)?;
         if let Some(dr) = dead_reckoning {
             append_lazily(
                 &mut self.dead_reckoning,
@@ -189,6 +197,7 @@ impl Recorder {
         self.estimates.insert(
             seq,
             Estimate {
+                stamp_ns,
                 pose: est,
                 dead_reckoning,
             },
@@ -211,6 +220,7 @@ impl Recorder {
             pose,
         )?;
         self.truth.insert(seq, pose);
+        self.truth_by_stamp.insert(stamp_ns, pose);
         Ok(())
     }
 
@@ -246,6 +256,11 @@ impl Recorder {
         }
     }
 
+    /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).
+    pub fn set_final_path(&mut self, path: &[PathPose]) {
+        self.final_path = Some(path.to_vec());
+    }
+
     /// Replaces the map (the latest snapshot wins), in the SLAM frame.
     pub fn set_map(&mut self, corners: Vec<MapCorner>) {
         self.map = corners;
@@ -272,16 +287,32 @@ impl Recorder {
     /// trajectory file is complete by then) and writes `map_corners.csv`, `map.svg` and
     /// finally `metrics.json`, each atomically. Returns the metrics written.
     pub fn finish(self) -> Result<Metrics, SinkError> {
-        self.trajectory.sync()?;
+        self.online.sync()?;
         for writer in [&self.ground_truth, &self.dead_reckoning]
             .into_iter()
             .flatten()
         {
             writer.sync()?;
         }
-        let trajectory: Vec<[f64; 2]> =
-            self.estimates.values().map(|e| e.pose.position()).collect();
-        let stats = self.score(|e| Some(e.pose));
+        let final_path: Vec<PathPose> = match &self.final_path {
+            Some(path) => path.clone(),
+            None => self
+                .estimates
+                .values()
+                .map(|e| PathPose {
+                    stamp_ns: e.stamp_ns,
+                    pose: e.pose,
+                })
+                .collect(),
+        };
+        let text: String = final_path
+            .iter()
+            .map(|p| format_tum_line(p.stamp_ns, p.pose))
+            .collect();
+        write_atomic(&self.dir.join(TRAJECTORY_FILE), text.as_bytes())?;
+        let trajectory: Vec<[f64; 2]> = final_path.iter().map(|p| p.pose.position()).collect();
+        let stats = self.score_path(&final_path);
+        let online_stats = self.score(|e| Some(e.pose));
         let dead_reckoning_stats = self.score(|e| e.dead_reckoning);
         let map_corner_rmse_m = stats.and_then(|s| {
             let aligned: Vec<[f64; 2]> = self
@@ -299,6 +330,7 @@ impl Recorder {
             .transpose()?;
         let mut metrics = self.metrics(&trajectory, stats, dead_reckoning_stats, map_corner_rmse_m);
         metrics.relative_pose_error = relative_pose_error;
+        metrics.online_ate_rmse_m = online_stats.map(|s| s.rmse_m);
 
         write_atomic(
             &self.dir.join(MAP_CORNERS_FILE),
@@ -322,6 +354,20 @@ impl Recorder {
         for p in points {
             self.grid.add(pose.transform_point(*p));
         }
+    }
+
+    /// ATE of the final path over the poses whose stamps have truth.
+    fn score_path(&self, path: &[PathPose]) -> Option<AteStats> {
+        let (est, truth): (Vec<[f64; 2]>, Vec<[f64; 2]>) = path
+            .iter()
+            .filter_map(|p| {
+                Some((
+                    p.pose.position(),
+                    self.truth_by_stamp.get(&p.stamp_ns)?.position(),
+                ))
+            })
+            .unzip();
+        ate(&est, &truth)
     }
 
     /// ATE of the trajectory `pick` takes from each estimate, over the scans with truth.
@@ -378,6 +424,7 @@ impl Recorder {
             final_error_m: stats.map(|s| s.final_error_m),
             map_corner_rmse_m,
             dead_reckoning_ate_rmse_m: dead_reckoning.map(|s| s.rmse_m),
+            online_ate_rmse_m: None,
             relative_pose_error: None,
         }
     }
