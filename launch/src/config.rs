@@ -80,6 +80,9 @@ pub struct ReplaySection {
     pub rate: f64,
     /// Publish the log's odometry (when it has any).
     pub odometry: bool,
+    /// Seconds of log time lidar-replay waits for lines written out of time order
+    /// (`--reorder-window`); unset = its default.
+    pub reorder_window: Option<f64>,
 }
 
 impl Default for ReplaySection {
@@ -89,6 +92,7 @@ impl Default for ReplaySection {
             format: "carmen".into(),
             rate: 0.0,
             odometry: true,
+            reorder_window: None,
         }
     }
 }

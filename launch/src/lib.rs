@@ -10,9 +10,12 @@
 //!   node is cleaned up at once (a dead subscriber would otherwise stall a lossless
 //!   publisher), the others are stopped and the run fails;
 //! * Ctrl-C or SIGTERM stops every child and waits for map-sink to write its results;
+//! * a stage's closing summary on stderr (`<stage>: summary ...` and the indented lines
+//!   after it, e.g. what lidar-replay could not publish) is shown when the run ends;
 //! * shared memory of crashed earlier runs is cleaned up at start, and nothing of this run is
 //!   left in /dev/shm at the end.
 
+pub mod closing;
 pub mod config;
 pub mod stage;
 pub mod status;

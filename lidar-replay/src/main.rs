@@ -198,7 +198,7 @@ fn run() -> Result<()> {
     }
     let interrupted = shutdown::requested();
     if interrupted {
-        summary.stopped = Some(format!("Ctrl-C after {published} scans"));
+        summary.stopped = Some(format!("interrupted after {published} scans"));
     } else {
         scans.publish_end_of_stream(published, last_stamp)?;
     }
