@@ -82,6 +82,9 @@ pub struct ReplaySection {
     pub odometry: bool,
     /// Scans to publish; 0 = the whole log.
     pub frames: u64,
+    /// Seconds of log time lidar-replay waits for lines written out of time order
+    /// (`--reorder-window`); unset = its default.
+    pub reorder_window: Option<f64>,
 }
 
 impl Default for ReplaySection {
@@ -92,6 +95,7 @@ impl Default for ReplaySection {
             rate: 0.0,
             odometry: true,
             frames: 0,
+            reorder_window: None,
         }
     }
 }

@@ -13,10 +13,13 @@
 //! * given ground-truth relations (or finding them beside a replayed log, see
 //!   [`relations::relations_beside`]), it checks they parse before anything starts and has
 //!   map-sink score the run with them;
+//! * a stage's closing summary on stderr (`<stage>: summary ...` and the indented lines
+//!   after it, e.g. what lidar-replay could not publish) is shown when the run ends;
 //! * shared memory of crashed earlier runs is cleaned up at start, and nothing of this run is
 //!   left in /dev/shm at the end.
 
 pub mod bench;
+pub mod closing;
 pub mod config;
 pub mod relations;
 pub mod stage;

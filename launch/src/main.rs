@@ -353,6 +353,9 @@ fn plan(
             if !config.replay.odometry {
                 args.push("--no-odometry".into());
             }
+            if let Some(window) = config.replay.reorder_window {
+                args.push(format!("--reorder-window={window}"));
+            }
             StagePlan {
                 name: "lidar-replay".into(),
                 program: program("lidar-replay")?,

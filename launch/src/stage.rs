@@ -7,6 +7,8 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
 
+use crate::closing::ClosingSummary;
+
 /// Lines of a child's stderr kept to explain its death.
 const STDERR_TAIL: usize = 20;
 
@@ -43,6 +45,7 @@ pub struct Stage {
     pub name: String,
     child: Child,
     stderr_tail: Arc<Mutex<VecDeque<String>>>,
+    summary: Arc<Mutex<ClosingSummary>>,
     stderr_reader: Option<std::thread::JoinHandle<()>>,
     exit: Option<ExitStatus>,
 }
@@ -92,12 +95,17 @@ impl Stage {
             });
         }
         let stderr_tail = Arc::new(Mutex::new(VecDeque::with_capacity(STDERR_TAIL)));
+        let summary = Arc::new(Mutex::new(ClosingSummary::new(name)));
         let mut stderr_reader = None;
         if let Some(stderr) = child.stderr.take() {
             let tail = Arc::clone(&stderr_tail);
+            let summary = Arc::clone(&summary);
             stderr_reader = Some(std::thread::spawn(move || {
                 for line in BufReader::new(stderr).lines().map_while(Result::ok) {
                     let _ = writeln!(log, "{line}");
+                    if let Ok(mut summary) = summary.lock() {
+                        summary.take(&line);
+                    }
                     if let Ok(mut tail) = tail.lock() {
                         if tail.len() == STDERR_TAIL {
                             tail.pop_front();
@@ -111,6 +119,7 @@ impl Stage {
             name: name.to_owned(),
             child,
             stderr_tail,
+            summary,
             stderr_reader,
             exit: None,
         })
@@ -126,16 +135,30 @@ impl Stage {
 
     /// The last lines the child wrote to stderr; once it has ended, all of them up to its end.
     pub fn stderr_tail(&mut self) -> Vec<String> {
+        self.join_stderr();
+        self.stderr_tail
+            .lock()
+            .map(|tail| tail.iter().cloned().collect())
+            .unwrap_or_default()
+    }
+
+    /// The stage's closing summary (see [`crate::closing`]); once it has ended, its last.
+    pub fn closing_summary(&mut self) -> Vec<String> {
+        self.join_stderr();
+        self.summary
+            .lock()
+            .map(|summary| summary.lines().to_vec())
+            .unwrap_or_default()
+    }
+
+    /// Once the child has ended, waits until its last stderr line is in.
+    fn join_stderr(&mut self) {
         if self.poll_exit().is_some()
             && let Some(reader) = self.stderr_reader.take()
         {
             // The pipe closes with the child, so this returns as soon as the last line is in.
             let _ = reader.join();
         }
-        self.stderr_tail
-            .lock()
-            .map(|tail| tail.iter().cloned().collect())
-            .unwrap_or_default()
     }
 
     /// Sends `signal` unless the child has already ended.

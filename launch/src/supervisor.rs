@@ -160,6 +160,12 @@ pub fn run(
         }
     }
     printer.finish(&progress);
+    // Even in quiet mode: what a stage could not do is part of the result.
+    for stage in &mut stages {
+        for line in stage.closing_summary() {
+            eprintln!("{line}");
+        }
+    }
     Ok(outcome)
 }
 

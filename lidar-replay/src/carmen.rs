@@ -3,61 +3,94 @@
 //!
 //! Line formats (whitespace-separated; poses in metres and radians, ranges in metres):
 //! * `FLASER n r1 .. rn x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp`
-//!   (a 180-degree laser, beam 1 on the right; `odom_*` is the raw wheel odometry);
+//!   (a SICK LMS over 180 degrees, beam 1 at -90 degrees, the step given by the beam count:
+//!   [`flaser_angle_increment`]; `odom_*` is the raw wheel odometry);
 //! * `ROBOTLASER1 type start_angle fov angular_res max_range accuracy remission_mode n r1 .. rn
 //!   m rem1 .. remm laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv
-//!   forward_safety side_safety turn_axis ipc_timestamp hostname logger_timestamp`;
+//!   forward_safety side_safety turn_axis ipc_timestamp hostname logger_timestamp` (its
+//!   geometry is the line's own and may change from one line to the next);
 //! * `ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp`.
 //!
-//! Stamps are the `ipc_timestamp`, kept to the nanosecond. A `FLASER` line yields its odometry
-//! first and then its scan, both with the line's stamp, so a consumer has the odometry when
-//! the scan arrives; but once the log has given an `ODOM` line, odometry comes from `ODOM`
-//! lines only. Logs with both (ACES) copy into each `FLASER` the last `ODOM` reading before
-//! it, up to a tenth of a second stale, under the laser's stamp: the two sources together
-//! would zig-zag, and the `ODOM` lines are the readings at their true times. `ROBOTLASER1`'s robot pose is not published as odometry: a localizer may
+//! Stamps are the `ipc_timestamp`, kept to the nanosecond. Records come out in time order
+//! within a window ([`crate::reorder`]): a line written after later ones is put in its
+//! place, and one too late for that, or repeating a stamp, is dropped and counted. A `FLASER`
+//! line yields its odometry first and then its scan, both with the line's stamp, so a
+//! consumer has the odometry when the scan arrives; but once the log has given an `ODOM` line,
+//! odometry comes from `ODOM` lines only. Logs with both (ACES) copy into each `FLASER` the
+//! last `ODOM` reading before it, up to a tenth of a second stale, under the laser's stamp:
+//! the two sources together would zig-zag, and the `ODOM` lines are the readings at their
+//! true times. `ROBOTLASER1`'s robot pose is not published as odometry: a localizer may
 //! have corrected it, and logs that have such lines carry the raw odometry in `ODOM` lines.
 //! The laser's mounting offset (`laser_*` against `robot_*`) is not used either: the
 //! pipeline's sensor frame is the robot frame.
 
-use std::collections::BTreeMap;
-use std::f64::consts::PI;
+use std::collections::{BTreeMap, VecDeque};
+use std::f64::consts::{PI, TAU};
 use std::io::BufRead;
 
 use crate::angle::wrap_angle;
-use crate::error::{LineError, ReadError};
+use crate::error::{LineError, Malformation, ReadError};
 use crate::lines::{NumberedLines, snippet};
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
+use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
 use crate::stamp::parse_stamp_ns;
 
-/// Longest range of the SICK LMS 2xx lasers of `FLASER` logs (data sheet: 80 m). Their "no
-/// return" reading, 81.91 m (8191 cm, the largest code), lies beyond it and becomes +inf;
-/// the longest real return of the MIT CSAIL log is 42.4 m.
-pub const FLASER_RANGE_MAX: f64 = 80.0;
+/// Longest range of a `FLASER` scan; readings at or beyond it become +inf (no return). The
+/// SICK LMS 2xx of these logs reports "no return" as 81.91 m (8191 cm, its largest code),
+/// but CARMEN loggers that clip at their `laser_max_range` write that value instead: ACES
+/// has 11 139 readings of exactly 50.00 m, which are no returns, not walls. Real returns
+/// beyond 50 m are rare indoors (the longest of MIT CSAIL is 42.4 m) and lose only a point,
+/// where a phantom return would add one.
+pub const FLASER_RANGE_MAX: f64 = 50.0;
 
-/// Reads the scans and odometry of a CARMEN log in log order.
+/// Bearing step of a `FLASER` scan, from its beam count: the SICK LMS modes over a 180-degree
+/// field, 1 degree for 180 or 181 beams, 0.5 for 360 or 361, 0.25 for 721. `None` for a
+/// count no mode has. (A count of 180 or 360 is a mode with the last beam left out, so its
+/// last beam falls one step short of +90 degrees.)
+pub fn flaser_angle_increment(beams: usize) -> Option<f64> {
+    let degrees = match beams {
+        180 | 181 => 1.0,
+        360 | 361 => 0.5,
+        721 => 0.25,
+        _ => return None,
+    };
+    Some(f64::to_radians(degrees))
+}
+
+/// Reads the scans and odometry of a CARMEN log, put in time order within a
+/// [`ReorderConfig`] window (see [`crate::reorder`]).
 #[derive(Debug)]
 pub struct CarmenReader<R> {
     lines: NumberedLines<R>,
-    /// A `FLASER` scan waiting behind its odometry.
-    pending: Option<LogRecord>,
+    window: ReorderWindow,
     /// Whether an `ODOM` line has been read: from then on the odometry comes from those
     /// lines alone.
     odom_lines: bool,
-    /// Stamp of the last scan handed out: scans must move forward in time.
-    last_scan: Option<(u64, u64)>,
+    /// Records let out of the window and not yet handed out (a `FLASER`'s scan waits behind
+    /// its odometry).
+    ready: VecDeque<LogRecord>,
+    /// Stamp of the last scan handed out, for the time between scans.
+    last_scan: Option<u64>,
     skipped: BTreeMap<String, u64>,
-    failed: bool,
+    /// The end of the file (or a read error) has been reached: only the window is left.
+    ended: bool,
 }
 
 impl<R: BufRead> CarmenReader<R> {
+    /// A reader with the default reordering window.
     pub fn new(reader: R) -> Self {
+        Self::with_reorder(reader, ReorderConfig::default())
+    }
+
+    pub fn with_reorder(reader: R, reorder: ReorderConfig) -> Self {
         Self {
             lines: NumberedLines::new(reader),
-            pending: None,
+            window: ReorderWindow::new(reorder),
+            ready: VecDeque::new(),
             odom_lines: false,
             last_scan: None,
             skipped: BTreeMap::new(),
-            failed: false,
+            ended: false,
         }
     }
 
@@ -71,86 +104,133 @@ impl<R: BufRead> CarmenReader<R> {
         &self.skipped
     }
 
-    /// Parses one non-comment line: `Ok(None)` for a record type that is skipped.
-    fn parse_line(&mut self, line: u64, text: &str) -> Result<Option<LogRecord>, LineError> {
-        let tokens: Vec<&str> = text.split_whitespace().collect();
-        let Some(&kind) = tokens.first() else {
-            return Ok(None);
-        };
-        let mut fields = Fields::new(line, kind, &tokens[1..]);
-        match kind {
-            "FLASER" => {
-                let (odometry, scan) = parse_flaser(&mut fields)?;
-                let scan = self.accept_scan(scan)?;
-                if self.odom_lines {
-                    return Ok(Some(LogRecord::Scan(scan)));
-                }
-                self.pending = Some(LogRecord::Scan(scan));
-                Ok(Some(LogRecord::Odometry(odometry)))
-            }
-            "ROBOTLASER1" => {
-                let scan = parse_robotlaser1(&mut fields)?;
-                Ok(Some(LogRecord::Scan(self.accept_scan(scan)?)))
-            }
-            "ODOM" => {
-                let odometry = parse_odom(&mut fields)?;
-                self.odom_lines = true;
-                Ok(Some(LogRecord::Odometry(odometry)))
-            }
-            other if is_record_name(other) => {
-                *self.skipped.entry(other.to_owned()).or_default() += 1;
-                Ok(None)
-            }
-            _ => Err(LineError::new(
-                line,
-                format!("not a CARMEN record: {}", snippet(text)),
-            )),
-        }
+    /// What putting the records in time order has reordered and dropped so far.
+    pub fn reorder_counts(&self) -> &ReorderCounts {
+        self.window.counts()
     }
 
-    /// Refuses a scan that does not come after the previous one (the pipeline's stamps only
-    /// move forward) and fills in the time since it.
-    fn accept_scan(&mut self, mut scan: ScanRecord) -> Result<ScanRecord, LineError> {
-        if let Some((stamp, line)) = self.last_scan {
-            if scan.stamp_ns <= stamp {
-                return Err(LineError::new(
-                    scan.line,
-                    format!("scan stamp is not after the previous scan's (line {line})"),
-                ));
-            }
-            scan.geometry.scan_time = (scan.stamp_ns - stamp) as f64 * 1e-9;
-        }
-        self.last_scan = Some((scan.stamp_ns, scan.line));
-        Ok(scan)
+    /// The window the records are put in order with.
+    pub fn reorder_config(&self) -> ReorderConfig {
+        self.window.config()
     }
+
+    /// Queues what the window let out, filling in the time since the previous scan.
+    fn hand_out(&mut self, entry: Entry) {
+        let mut with_scan_time = |mut scan: ScanRecord| {
+            if let Some(previous) = self.last_scan {
+                scan.geometry.scan_time = (scan.stamp_ns - previous) as f64 * 1e-9;
+            }
+            self.last_scan = Some(scan.stamp_ns);
+            LogRecord::Scan(scan)
+        };
+        match entry {
+            Entry::Odometry(odometry) => self.ready.push_back(LogRecord::Odometry(odometry)),
+            Entry::Scan(scan) => {
+                let scan = with_scan_time(scan);
+                self.ready.push_back(scan);
+            }
+            Entry::OdometryAndScan(odometry, scan) => {
+                let scan = with_scan_time(scan);
+                self.ready.push_back(LogRecord::Odometry(odometry));
+                self.ready.push_back(scan);
+            }
+        }
+    }
+}
+
+/// Parses one non-comment line: `Ok(None)` for a record type that is skipped (and counted in
+/// `skipped`).
+/// `odom_lines` says whether an `ODOM` line has been read; from then on a `FLASER` line's
+/// odometry is not used (see the module's documentation).
+fn parse_line(
+    line: u64,
+    text: &str,
+    skipped: &mut BTreeMap<String, u64>,
+    odom_lines: &mut bool,
+) -> Result<Option<Entry>, LineError> {
+    let tokens: Vec<&str> = text.split_whitespace().collect();
+    let Some(&kind) = tokens.first() else {
+        return Ok(None);
+    };
+    let mut fields = Fields::new(line, kind, &tokens[1..]);
+    let entry = match kind {
+        "FLASER" => {
+            let (odometry, scan) = parse_flaser(&mut fields)?;
+            if *odom_lines {
+                Entry::Scan(scan)
+            } else {
+                Entry::OdometryAndScan(odometry, scan)
+            }
+        }
+        "ROBOTLASER1" => Entry::Scan(parse_robotlaser1(&mut fields)?),
+        "ODOM" => {
+            let odometry = parse_odom(&mut fields)?;
+            *odom_lines = true;
+            Entry::Odometry(odometry)
+        }
+        other if is_record_name(other) => {
+            *skipped.entry(other.to_owned()).or_default() += 1;
+            return Ok(None);
+        }
+        _ => {
+            return Err(LineError::new(
+                line,
+                Malformation::NotARecord,
+                format!("not a CARMEN record: {}", snippet(text)),
+            ));
+        }
+    };
+    Ok(Some(entry))
 }
 
 impl<R: BufRead> Iterator for CarmenReader<R> {
     type Item = Result<LogRecord, ReadError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        if let Some(record) = self.pending.take() {
-            return Some(Ok(record));
-        }
-        if self.failed {
-            return None;
-        }
         loop {
-            let (line, text) = match self.lines.next_line() {
-                Ok(Some((line, Ok(text)))) => (line, text.to_owned()),
-                Ok(Some((_, Err(e)))) => return Some(Err(e.into())),
-                Ok(None) => return None,
+            if let Some(record) = self.ready.pop_front() {
+                return Some(Ok(record));
+            }
+            let released = if self.ended {
+                self.window.pop_any()
+            } else {
+                self.window.pop_ready()
+            };
+            if let Some(entry) = released {
+                self.hand_out(entry);
+                continue;
+            }
+            if self.ended {
+                return None;
+            }
+            let Self {
+                lines,
+                skipped,
+                odom_lines,
+                ..
+            } = self;
+            let parsed = match lines.next_line() {
+                Ok(Some((line, Ok(text)))) => {
+                    let text = text.trim();
+                    if text.is_empty() || text.starts_with('#') {
+                        continue;
+                    }
+                    parse_line(line, text, skipped, odom_lines)
+                }
+                Ok(Some((_, Err(e)))) => Err(e),
+                Ok(None) => {
+                    self.ended = true;
+                    continue;
+                }
                 Err(e) => {
-                    self.failed = true;
+                    // Nothing after a read error can be trusted to be read; what the window
+                    // holds still comes out after the error.
+                    self.ended = true;
                     return Some(Err(e.into()));
                 }
             };
-            let trimmed = text.trim();
-            if trimmed.is_empty() || trimmed.starts_with('#') {
-                continue;
-            }
-            match self.parse_line(line, trimmed) {
-                Ok(Some(record)) => return Some(Ok(record)),
+            match parsed {
+                Ok(Some(entry)) => self.window.push(entry),
                 Ok(None) => {}
                 Err(e) => return Some(Err(e.into())),
             }
@@ -184,16 +264,16 @@ impl<'a> Fields<'a> {
         }
     }
 
-    fn error(&self, reason: impl std::fmt::Display) -> LineError {
-        LineError::new(self.line, format!("{}: {reason}", self.kind))
+    fn error(&self, problem: Malformation, reason: impl std::fmt::Display) -> LineError {
+        LineError::new(self.line, problem, format!("{}: {reason}", self.kind)).in_record(self.kind)
     }
 
     fn token(&mut self, what: &str) -> Result<&'a str, LineError> {
         let token = self.tokens.get(self.next).copied().ok_or_else(|| {
-            self.error(format_args!(
-                "ends after {} fields, before {what}",
-                self.tokens.len()
-            ))
+            self.error(
+                Malformation::MissingFields,
+                format_args!("ends after {} fields, before {what}", self.tokens.len()),
+            )
         })?;
         self.next += 1;
         Ok(token)
@@ -205,14 +285,22 @@ impl<'a> Fields<'a> {
             .parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| self.error(format_args!("{what}: {} is not a number", snippet(token))))
+            .ok_or_else(|| {
+                self.error(
+                    Malformation::NotANumber,
+                    format_args!("{what}: {} is not a number", snippet(token)),
+                )
+            })
     }
 
     fn count(&mut self, what: &str) -> Result<usize, LineError> {
         let token = self.token(what)?;
-        token
-            .parse::<usize>()
-            .map_err(|_| self.error(format_args!("{what}: {} is not a count", snippet(token))))
+        token.parse::<usize>().map_err(|_| {
+            self.error(
+                Malformation::NotANumber,
+                format_args!("{what}: {} is not a count", snippet(token)),
+            )
+        })
     }
 
     /// `n` ranges in metres, as REP 117 values against `range_max`.
@@ -226,10 +314,10 @@ impl<'a> Fields<'a> {
                 .ok()
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| {
-                    self.error(format_args!(
-                        "range {beam}: {} is not a number",
-                        snippet(token)
-                    ))
+                    self.error(
+                        Malformation::NotANumber,
+                        format_args!("range {beam}: {} is not a number", snippet(token)),
+                    )
                 })?;
             ranges.push(rep117_range(range, range_max));
         }
@@ -239,17 +327,21 @@ impl<'a> Fields<'a> {
     fn beam_count(&mut self, at_least: usize) -> Result<usize, LineError> {
         let n = self.count("the beam count")?;
         if n < at_least || n > ipc_types::MAX_BEAMS {
-            return Err(self.error(format_args!(
-                "{n} beams; a scan needs {at_least} to {}",
-                ipc_types::MAX_BEAMS
-            )));
+            return Err(self.error(
+                Malformation::BeamCount,
+                format_args!(
+                    "{n} beams; a scan needs {at_least} to {}",
+                    ipc_types::MAX_BEAMS
+                ),
+            ));
         }
         Ok(n)
     }
 
     fn stamp(&mut self) -> Result<u64, LineError> {
         let token = self.token("ipc_timestamp")?;
-        parse_stamp_ns(token).map_err(|e| self.error(format_args!("ipc_timestamp: {e}")))
+        parse_stamp_ns(token)
+            .map_err(|e| self.error(Malformation::BadStamp, format_args!("ipc_timestamp: {e}")))
     }
 
     /// Skips fields this reader does not use (they must still be there).
@@ -264,11 +356,10 @@ impl<'a> Fields<'a> {
     fn finish(&mut self) -> Result<(), LineError> {
         self.skip("hostname and logger_timestamp", 2)?;
         if self.next != self.tokens.len() {
-            return Err(self.error(format_args!(
-                "{} fields, expected {}",
-                self.tokens.len(),
-                self.next
-            )));
+            return Err(self.error(
+                Malformation::ExtraFields,
+                format_args!("{} fields, expected {}", self.tokens.len(), self.next),
+            ));
         }
         Ok(())
     }
@@ -288,6 +379,15 @@ fn rep117_range(range: f32, range_max: f64) -> f32 {
 
 fn parse_flaser(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRecord), LineError> {
     let n = fields.beam_count(2)?;
+    let Some(angle_increment) = flaser_angle_increment(n) else {
+        return Err(fields.error(
+            Malformation::BeamCount,
+            format_args!(
+                "{n} beams match no SICK LMS mode (180 or 181 at 1 degree, 360 or 361 at \
+                 0.5, 721 at 0.25)"
+            ),
+        ));
+    };
     let ranges = fields.ranges(n, FLASER_RANGE_MAX)?;
     // The first pose may be corrected by a localizer; the raw odometry follows it.
     fields.skip("x y theta", 3)?;
@@ -309,10 +409,10 @@ fn parse_flaser(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRecord),
     let scan = ScanRecord {
         line,
         stamp_ns,
-        // 180 degrees from the right (-y) to the left (+y), both ends included.
+        // Beam 1 on the right (-y), counter-clockwise in the mode's steps.
         geometry: ScanGeometry {
             angle_min: -PI / 2.0,
-            angle_increment: PI / (n - 1) as f64,
+            angle_increment,
             time_increment: 0.0,
             scan_time: 0.0,
             range_min: 0.0,
@@ -331,13 +431,24 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<ScanRecord, LineError> {
     let angular_res = fields.number("angular_res")?;
     let max_range = fields.number("max_range")?;
     if angular_res == 0.0 {
-        return Err(fields.error("angular_res is 0"));
+        return Err(fields.error(Malformation::BadGeometry, "angular_res is 0"));
     }
     if max_range <= 0.0 {
-        return Err(fields.error(format_args!("max_range {max_range} is not positive")));
+        return Err(fields.error(
+            Malformation::BadGeometry,
+            format_args!("max_range {max_range} is not positive"),
+        ));
     }
     fields.skip("accuracy and remission_mode", 2)?;
     let n = fields.beam_count(1)?;
+    // More than a turn would put two beams on one bearing: the geometry is wrong, not the
+    // scan unusual.
+    if (n - 1) as f64 * angular_res.abs() > TAU + 1e-9 {
+        return Err(fields.error(
+            Malformation::BadGeometry,
+            format_args!("{n} beams of {angular_res} rad span more than a full turn"),
+        ));
+    }
     let ranges = fields.ranges(n, max_range)?;
     let m = fields.count("the remission count")?;
     let mut remissions = Vec::with_capacity(m.min(n));
@@ -357,9 +468,10 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<ScanRecord, LineError> {
     Ok(ScanRecord {
         line: fields.line,
         stamp_ns,
-        // CARMEN places beam i at start_angle + i * angular_res, as here.
+        // CARMEN places beam i at start_angle + i * angular_res, as here; each line has its
+        // own, which may differ from the previous line's.
         geometry: ScanGeometry {
-            angle_min: start_angle,
+            angle_min: wrap_angle(start_angle),
             angle_increment: angular_res,
             time_increment: 0.0,
             scan_time: 0.0,
@@ -394,6 +506,7 @@ fn parse_odom(fields: &mut Fields<'_>) -> Result<OdometryRecord, LineError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::reorder::Records;
 
     fn read(text: &str) -> Vec<Result<LogRecord, String>> {
         CarmenReader::new(text.as_bytes())
@@ -401,18 +514,45 @@ mod tests {
             .collect()
     }
 
+    /// A `FLASER` line of 180 beams (a 1-degree mode), the first ones `ranges`, the rest 1 m.
     fn flaser(ranges: &[&str], odom: &str, stamp: &str) -> String {
+        flaser_of(180, ranges, odom, stamp)
+    }
+
+    fn flaser_of(beams: usize, ranges: &[&str], odom: &str, stamp: &str) -> String {
+        let mut all: Vec<&str> = ranges.to_vec();
+        all.resize(beams, "1.0");
         format!(
-            "FLASER {} {} 9 9 9 {odom} {stamp} b21 0.086295",
-            ranges.len(),
-            ranges.join(" ")
+            "FLASER {beams} {} 9 9 9 {odom} {stamp} b21 0.086295",
+            all.join(" ")
         )
     }
+
+    /// What a reader yields, one short line each: `odom LINE STAMP`, `scan LINE STAMP` or
+    /// the error; and what its window counted.
+    fn outline(text: &str, reorder: ReorderConfig) -> (Vec<String>, ReorderCounts) {
+        let mut reader = CarmenReader::with_reorder(text.as_bytes(), reorder);
+        let lines = reader
+            .by_ref()
+            .map(|r| match r {
+                Ok(LogRecord::Scan(s)) => format!("scan {} {}", s.line, s.stamp_ns),
+                Ok(LogRecord::Odometry(o)) => format!("odom {} {}", o.line, o.stamp_ns),
+                Err(e) => e.to_string(),
+            })
+            .collect();
+        (lines, *reader.reorder_counts())
+    }
+
+    fn records(scans: u64, odometry: u64) -> Records {
+        Records { scans, odometry }
+    }
+
+    const SECOND: u64 = 1_000_000_000;
 
     #[test]
     fn flaser_gives_odometry_then_its_scan_with_one_exact_stamp() {
         let line = flaser(
-            &["1.40", "81.91", "0.00", "42.40", "80.00"],
+            &["1.40", "81.91", "0.00", "42.40", "80.00", "50.00", "49.99"],
             "576.536523 0.106594 -2.255213",
             "1134864629.895182",
         );
@@ -432,22 +572,89 @@ mod tests {
         assert_eq!(scan.ranges[1], f32::INFINITY, "81.91 m = no return");
         assert!(scan.ranges[2].is_nan(), "0 = error");
         assert_eq!(scan.ranges[3], 42.40);
-        assert_eq!(scan.ranges[4], f32::INFINITY, "at the maximum range");
+        assert_eq!(scan.ranges[4], f32::INFINITY, "beyond the maximum range");
+        assert_eq!(scan.ranges[5], f32::INFINITY, "ACES's 50 m = no return");
+        assert_eq!(scan.ranges[6], 49.99);
         assert_eq!(scan.geometry.angle_min, -PI / 2.0);
-        assert_eq!(scan.geometry.angle_increment, PI / 4.0);
+        assert_eq!(scan.geometry.angle_increment, 1.0_f64.to_radians());
         assert_eq!((scan.line, odometry.line), (1, 1));
     }
 
     #[test]
     fn mit_csail_geometry_is_half_degree_steps_from_the_right() {
-        let ranges = vec!["1.0"; 361];
-        let records = read(&flaser(&ranges, "0 0 0", "1.0"));
+        let records = read(&flaser_of(361, &[], "0 0 0", "1.0"));
         let Ok(LogRecord::Scan(scan)) = &records[1] else {
             panic!("{records:?}");
         };
         assert!((scan.geometry.angle_increment - 0.5_f64.to_radians()).abs() < 1e-15);
         let last = scan.geometry.angle_min + 360.0 * scan.geometry.angle_increment;
         assert!((last - PI / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn flaser_geometry_follows_the_sick_modes_and_other_counts_are_refused() {
+        // (beams, step in degrees, bearing of the last beam in degrees)
+        let modes = [
+            (180, 1.0, 89.0_f64),
+            (181, 1.0, 90.0),
+            (360, 0.5, 89.5),
+            (361, 0.5, 90.0),
+            (721, 0.25, 90.0),
+        ];
+        for (beams, step, last) in modes {
+            let records = read(&flaser_of(beams, &[], "0 0 0", "1.0"));
+            let Some(Ok(LogRecord::Scan(scan))) = records.get(1) else {
+                panic!("{beams} beams: {records:?}");
+            };
+            let geometry = scan.geometry;
+            assert_eq!(
+                geometry.angle_min,
+                -PI / 2.0,
+                "{beams} beams: beam 1 on the right"
+            );
+            assert!(
+                (geometry.angle_increment - f64::to_radians(step)).abs() < 1e-15,
+                "{beams} beams: {} rad",
+                geometry.angle_increment
+            );
+            let end = geometry.angle_min + (beams - 1) as f64 * geometry.angle_increment;
+            assert!(
+                (end - last.to_radians()).abs() < 1e-12,
+                "{beams} beams end at {end}"
+            );
+        }
+        let text = [5, 179, 362, 720]
+            .iter()
+            .enumerate()
+            .map(|(k, &beams)| flaser_of(beams, &[], "0 0 0", &format!("{}.0", k + 1)))
+            .chain([flaser(&[], "0 0 0", "9.0")])
+            .collect::<Vec<_>>()
+            .join("\n");
+        let mut reader = CarmenReader::new(text.as_bytes());
+        let results: Vec<_> = reader.by_ref().collect();
+        let errors: Vec<(String, String)> = results
+            .iter()
+            .filter_map(|r| match r {
+                Err(ReadError::Line(e)) => Some((e.to_string(), e.category())),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(errors.len(), 4, "{results:?}");
+        assert_eq!(
+            errors[0],
+            (
+                "line 1: FLASER: 5 beams match no SICK LMS mode (180 or 181 at 1 degree, 360 \
+                 or 361 at 0.5, 721 at 0.25)"
+                    .to_owned(),
+                "FLASER: impossible beam count".to_owned()
+            )
+        );
+        assert!(
+            errors[3]
+                .0
+                .starts_with("line 4: FLASER: 720 beams match no")
+        );
+        assert_eq!(results.len(), 6, "the good line after them is read");
     }
 
     #[test]
@@ -476,33 +683,65 @@ mod tests {
         assert_eq!(scan.stamp_ns, 7_250_000_000);
     }
 
+    /// A `ROBOTLASER1` line with `ranges`, no remissions, stamped `stamp`.
+    fn robotlaser1(start: f64, res: f64, max_range: f64, ranges: &[&str], stamp: &str) -> String {
+        format!(
+            "ROBOTLASER1 0 {start} {} {res} {max_range} 0.01 0 {} {} 0 \
+             0.1 0 0 1 2 0.5 0.3 0.1 0 0 0 {stamp} host 0",
+            res * (ranges.len() - 1) as f64,
+            ranges.len(),
+            ranges.join(" ")
+        )
+    }
+
     #[test]
-    fn after_an_odom_line_flaser_odometry_is_not_replayed() {
+    fn robotlaser1_geometry_may_change_from_line_to_line() {
         let text = [
-            flaser(&["1", "2"], "5 5 0", "10.0"),
-            "ODOM 1 0 0 0 0 0 10.05 host 0".to_owned(),
-            // ACES copies the last ODOM reading into the next FLASER, stale.
-            flaser(&["1", "2"], "1 0 0", "10.1"),
-            "ODOM 2 0 0 0 0 0 10.15 host 0".to_owned(),
+            robotlaser1(-1.5, 0.5, 8.0, &["1", "8", "3", "4", "5", "6", "7"], "1.0"),
+            robotlaser1(-0.5, 0.25, 30.0, &["1", "8", "3", "4", "5"], "1.1"),
+            // Another mounting: counter-clockwise from behind, unwrapped in the log.
+            robotlaser1(3.5, 0.125, 80.0, &["1", "8"], "1.2"),
+            robotlaser1(-1.5, 0.5, 8.0, &["1", "8", "3", "4", "5", "6", "7"], "1.3"),
+            // 40 beams of 10 degrees overlap themselves: refused, reading goes on.
+            robotlaser1(-PI, 10f64.to_radians(), 8.0, &["1"; 40], "1.4"),
         ]
         .join("\n");
-        let kinds: Vec<(&str, u64)> = read(&text)
+        let records = read(&text);
+        let scans: Vec<&ScanRecord> = records
             .iter()
-            .map(|r| match r {
-                Ok(LogRecord::Odometry(o)) => ("odometry", o.line),
-                Ok(LogRecord::Scan(s)) => ("scan", s.line),
-                Err(e) => panic!("{e}"),
+            .filter_map(|r| match r {
+                Ok(LogRecord::Scan(scan)) => Some(scan),
+                _ => None,
+            })
+            .collect();
+        let geometry: Vec<(f64, f64, f64, usize)> = scans
+            .iter()
+            .map(|s| {
+                let g = s.geometry;
+                (g.angle_min, g.angle_increment, g.range_max, s.ranges.len())
             })
             .collect();
         assert_eq!(
-            kinds,
-            [
-                ("odometry", 1),
-                ("scan", 1),
-                ("odometry", 2),
-                ("scan", 3),
-                ("odometry", 4)
+            geometry,
+            vec![
+                (-1.5, 0.5, 8.0, 7),
+                (-0.5, 0.25, 30.0, 5),
+                (wrap_angle(3.5), 0.125, 80.0, 2),
+                (-1.5, 0.5, 8.0, 7),
             ]
+        );
+        assert!(wrap_angle(3.5) < 0.0, "wrapped to [-pi, pi)");
+        // 8 m is "no return" on the 8 m lines only.
+        assert_eq!(scans[0].ranges[1], f32::INFINITY);
+        assert_eq!(scans[1].ranges[1], 8.0);
+        assert_eq!(scans[2].ranges[1], 8.0);
+        assert_eq!(scans[3].ranges[1], f32::INFINITY);
+        let Some(Err(refused)) = records.first() else {
+            panic!("{records:?}");
+        };
+        assert!(
+            refused.starts_with("line 5: ROBOTLASER1: 40 beams of 0.17453"),
+            "{refused}"
         );
     }
 
@@ -527,58 +766,64 @@ mod tests {
             "# a comment".to_owned(),
             "PARAM robot_length 0.5 nohost 0".to_owned(),
             String::new(),
-            flaser(&["1", "2"], "0 0 0", "10.5"),
-            "FLASER 3 1 2".to_owned(),
+            flaser(&[], "0 0 0", "10.5"),
+            "FLASER 180 1 2".to_owned(),
             flaser(&["1", "x"], "0 0 0", "11.5"),
             "ODOM 1 2 3 0 0 0 -12.0 host 0".to_owned(),
             "14029,14083,14083".to_owned(),
             "SYNC tag 0 host 0".to_owned(),
             "  # indented comment".to_owned(),
-            flaser(&["1", "2"], "0 0 0", "10.5"),
-            flaser(&["1", "2"], "0 0 0", "12.000000001"),
-            flaser(&["1", "2"], "0 0 0", "13.0") + " extra",
+            flaser(&[], "0 0 0", "10.5"),
+            flaser(&[], "0 0 0", "12.000000001"),
+            flaser(&[], "0 0 0", "13.0") + " extra",
         ]
         .join("\n");
         let mut reader = CarmenReader::new(text.as_bytes());
-        let records: Vec<_> = reader
-            .by_ref()
-            .map(|r| r.map_err(|e| e.to_string()))
-            .collect();
-        let summary: Vec<String> = records
+        let results: Vec<_> = reader.by_ref().collect();
+        let summary: Vec<String> = results
             .iter()
             .map(|r| match r {
                 Ok(LogRecord::Scan(s)) => format!("scan {} {}", s.line, s.stamp_ns),
                 Ok(LogRecord::Odometry(o)) => format!("odom {} {}", o.line, o.stamp_ns),
-                Err(e) => e.clone(),
+                Err(ReadError::Line(e)) => format!("{e} [{}]", e.category()),
+                Err(e) => e.to_string(),
             })
             .collect();
+        // Errors come as the lines are read; records once their window has passed (here at
+        // the end, all being within 2 s).
         assert_eq!(
             summary,
             vec![
+                "line 5: FLASER: ends after 3 fields, before the last range \
+                 [FLASER: fields missing]",
+                "line 6: FLASER: range 2: \"x\" is not a number [FLASER: a field is not a number]",
+                "line 7: ODOM: ipc_timestamp: \"-12.0\" is not a timestamp in seconds \
+                 (expected digits before the decimal point) [ODOM: bad timestamp]",
+                "line 8: not a CARMEN record: \"14029,14083,14083\" [not a record of the format]",
+                "line 13: FLASER: 191 fields, expected 190 [FLASER: extra fields]",
                 "odom 4 10500000000",
                 "scan 4 10500000000",
-                "line 5: FLASER: ends after 3 fields, before the last range",
-                "line 6: FLASER: range 2: \"x\" is not a number",
-                "line 7: ODOM: ipc_timestamp: \"-12.0\" is not a timestamp in seconds \
-                 (expected digits before the decimal point)",
-                "line 8: not a CARMEN record: \"14029,14083,14083\"",
-                "line 11: scan stamp is not after the previous scan's (line 4)",
                 "odom 12 12000000001",
                 "scan 12 12000000001",
-                "line 13: FLASER: 13 fields, expected 12",
             ]
         );
         assert_eq!(
             reader.skipped_records().iter().collect::<Vec<_>>(),
             vec![(&"PARAM".to_owned(), &1), (&"SYNC".to_owned(), &1)]
         );
+        assert_eq!(
+            reader.reorder_counts().duplicate,
+            records(1, 1),
+            "line 11 repeats line 4"
+        );
     }
 
     #[test]
-    fn a_scan_knows_the_time_since_the_previous_one() {
+    fn a_scan_knows_the_time_since_the_previous_one_in_time_order() {
         let text = [
-            flaser(&["1", "2"], "0 0 0", "10.0"),
-            flaser(&["1", "2"], "0 0 0", "10.25"),
+            flaser(&[], "0 0 0", "10.0"),
+            flaser(&[], "0 0 0", "10.5"),
+            flaser(&[], "0 0 0", "10.25"),
         ]
         .join("\n");
         let scans: Vec<ScanRecord> = read(&text)
@@ -588,8 +833,11 @@ mod tests {
                 _ => None,
             })
             .collect();
-        assert_eq!(scans[0].geometry.scan_time, 0.0);
-        assert_eq!(scans[1].geometry.scan_time, 0.25);
+        let times: Vec<(u64, f64)> = scans
+            .iter()
+            .map(|s| (s.line, s.geometry.scan_time))
+            .collect();
+        assert_eq!(times, vec![(1, 0.0), (3, 0.25), (2, 0.25)]);
     }
 
     #[test]
@@ -603,5 +851,186 @@ mod tests {
             records[1].as_ref().err().map(String::as_str),
             Some("line 2: FLASER: 9000 beams; a scan needs 2 to 8192")
         );
+    }
+
+    #[test]
+    fn after_an_odom_line_flaser_odometry_is_not_replayed() {
+        let text = [
+            flaser(&[], "5 5 0", "10.0"),
+            "ODOM 1 0 0 0 0 0 10.05 host 0".to_owned(),
+            // ACES copies the last ODOM reading into the next FLASER, stale.
+            flaser(&[], "1 0 0", "10.1"),
+            "ODOM 2 0 0 0 0 0 10.15 host 0".to_owned(),
+        ]
+        .join("\n");
+        let (lines, _) = outline(&text, ReorderConfig::default());
+        assert_eq!(
+            lines,
+            vec![
+                "odom 1 10000000000",
+                "scan 1 10000000000",
+                "odom 2 10050000000",
+                "scan 3 10100000000",
+                "odom 4 10150000000",
+            ]
+        );
+    }
+
+    #[test]
+    fn a_log_in_time_order_comes_out_as_it_is() {
+        let text = [
+            flaser(&[], "0 0 0", "10.0"),
+            "ODOM 0 0 0 0 0 0 10.05 host 0".to_owned(),
+            flaser(&[], "0 0 0", "10.1"),
+            flaser(&[], "0 0 0", "10.2"),
+        ]
+        .join("\n");
+        let (lines, counts) = outline(&text, ReorderConfig::default());
+        assert_eq!(
+            lines,
+            vec![
+                "odom 1 10000000000",
+                "scan 1 10000000000",
+                "odom 2 10050000000",
+                // After an ODOM line, FLASER odometry is no longer used.
+                "scan 3 10100000000",
+                "scan 4 10200000000",
+            ]
+        );
+        assert_eq!(counts, ReorderCounts::default());
+    }
+
+    #[test]
+    fn lines_that_go_back_within_the_window_are_put_in_order() {
+        // As in ACES: an ODOM line written before the FLASER taken before it.
+        let text = [
+            flaser(&[], "0 0 0", "10.0"),
+            flaser(&[], "0 0 0", "10.5"),
+            "ODOM 0 0 0 0 0 0 10.2 host 0".to_owned(),
+            flaser(&[], "0 0 0", "10.3"),
+            flaser(&[], "0 0 0", "11.9"),
+        ]
+        .join("\n");
+        let (lines, counts) = outline(&text, ReorderConfig::default());
+        assert_eq!(
+            lines,
+            vec![
+                "odom 1 10000000000",
+                "scan 1 10000000000",
+                "odom 3 10200000000",
+                "scan 4 10300000000",
+                "odom 2 10500000000",
+                "scan 2 10500000000",
+                "scan 5 11900000000",
+            ]
+        );
+        assert_eq!(counts.reordered, records(1, 1));
+        assert_eq!(counts.late.total() + counts.duplicate.total(), 0);
+    }
+
+    #[test]
+    fn a_line_later_than_the_window_is_dropped() {
+        let text = [
+            flaser(&[], "0 0 0", "10.0"),
+            // More than 2 s on: 10.0 goes out.
+            flaser(&[], "0 0 0", "12.5"),
+            // Older than what went out: too late.
+            flaser(&[], "0 0 0", "9.5"),
+            flaser(&[], "0 0 0", "12.8"),
+            // Back by 0.8 s but after what went out: put in place.
+            flaser(&[], "0 0 0", "12.0"),
+            "ODOM 0 0 0 0 0 0 9.9 host 0".to_owned(),
+        ]
+        .join("\n");
+        let (lines, counts) = outline(&text, ReorderConfig::default());
+        assert_eq!(
+            lines,
+            vec![
+                "odom 1 10000000000",
+                "scan 1 10000000000",
+                "odom 5 12000000000",
+                "scan 5 12000000000",
+                "odom 2 12500000000",
+                "scan 2 12500000000",
+                "odom 4 12800000000",
+                "scan 4 12800000000",
+            ]
+        );
+        assert_eq!(counts.late, records(1, 2));
+        assert_eq!(counts.reordered, records(1, 1));
+
+        // The same with a window of 0.25 s: 12.8 lets 12.5 out, so 12.0 is too late as well.
+        let narrow = ReorderConfig {
+            window_ns: SECOND / 4,
+            ..ReorderConfig::default()
+        };
+        let (lines, counts) = outline(&text, narrow);
+        assert_eq!(lines.len(), 6, "{lines:?}");
+        assert_eq!(counts.late, records(2, 3));
+        assert_eq!(counts.reordered, records(0, 0));
+    }
+
+    #[test]
+    fn repeated_stamps_are_dropped_and_odometry_stays_before_its_scan() {
+        let text = [
+            flaser(&[], "0 0 0", "10.0"),
+            // The same instant as the FLASER's odometry: a repeat.
+            "ODOM 0 0 0 0 0 0 10.0 host 0".to_owned(),
+            // A scan of a stamp already scanned.
+            robotlaser1(-1.5, 0.5, 8.0, &["1", "2"], "10.0"),
+            // An ODOM line first, then the FLASER of the same instant: its scan comes right
+            // after that ODOM pose (its own odometry is not used after an ODOM line).
+            "ODOM 0 0 0 0 0 0 10.5 host 0".to_owned(),
+            flaser(&[], "0 0 0", "10.5"),
+            // A FLASER scan again.
+            flaser(&[], "0 0 0", "10.0"),
+        ]
+        .join("\n");
+        let (lines, counts) = outline(&text, ReorderConfig::default());
+        assert_eq!(
+            lines,
+            vec![
+                "odom 1 10000000000",
+                "scan 1 10000000000",
+                "odom 4 10500000000",
+                "scan 5 10500000000",
+            ]
+        );
+        assert_eq!(counts.duplicate, records(2, 1));
+        assert_eq!(
+            counts.reordered,
+            records(0, 0),
+            "what went out is not counted"
+        );
+    }
+
+    #[test]
+    fn the_cap_bounds_what_is_held_and_lets_the_oldest_out_early() {
+        let text = ["10.0", "10.4", "10.2", "10.1", "10.05"]
+            .map(|stamp| flaser(&[], "0 0 0", stamp))
+            .join("\n");
+        let capped = ReorderConfig {
+            max_held: 2,
+            ..ReorderConfig::default()
+        };
+        let (lines, counts) = outline(&text, capped);
+        let scans: Vec<&String> = lines.iter().filter(|l| l.starts_with("scan")).collect();
+        assert_eq!(
+            scans,
+            vec![
+                "scan 1 10000000000",
+                "scan 4 10100000000",
+                "scan 3 10200000000",
+                "scan 2 10400000000",
+            ]
+        );
+        // 10.0 went out when 10.2 came, 10.1 when it came itself; 10.05 was then too late.
+        assert_eq!(counts.forced_out, records(2, 2));
+        assert_eq!(counts.late, records(1, 1));
+        assert_eq!(counts.reordered, records(2, 2));
+        // Without the cap, the window alone would have placed every line.
+        let (lines, counts) = outline(&text, ReorderConfig::default());
+        assert_eq!(lines.len(), 10);
+        assert_eq!(counts.late.total() + counts.forced_out.total(), 0);
     }
 }

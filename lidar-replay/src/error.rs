@@ -4,20 +4,76 @@ use std::path::PathBuf;
 
 use crate::format::LogFormat;
 
+/// What is wrong with a malformed line, coarsely: the replay's summary counts lines by it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Malformation {
+    /// Bytes that are not UTF-8 text.
+    NotText,
+    /// A line that is no record of the format at all.
+    NotARecord,
+    /// The line ends before all its fields.
+    MissingFields,
+    /// Fields after the last one the record has.
+    ExtraFields,
+    /// A field that should be a number (or a count) is not.
+    NotANumber,
+    /// The timestamp is not plain decimal seconds.
+    BadStamp,
+    /// A beam count the laser cannot have (no scanning mode, or more than a message holds).
+    BeamCount,
+    /// Angles or range limits that describe no scan.
+    BadGeometry,
+}
+
+impl std::fmt::Display for Malformation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::NotText => "not UTF-8 text",
+            Self::NotARecord => "not a record of the format",
+            Self::MissingFields => "fields missing",
+            Self::ExtraFields => "extra fields",
+            Self::NotANumber => "a field is not a number",
+            Self::BadStamp => "bad timestamp",
+            Self::BeamCount => "impossible beam count",
+            Self::BadGeometry => "impossible scan geometry",
+        })
+    }
+}
+
 /// A line of a log that could not be used; the reader skips it and goes on.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("line {line}: {reason}")]
 pub struct LineError {
     /// 1-based line number.
     pub line: u64,
+    /// What kind of problem it is, for counting.
+    pub kind: Malformation,
+    /// The record type the line claims to be (`FLASER`), when it names a known one.
+    pub record: Option<String>,
     pub reason: String,
 }
 
 impl LineError {
-    pub(crate) fn new(line: u64, reason: impl Into<String>) -> Self {
+    pub(crate) fn new(line: u64, kind: Malformation, reason: impl Into<String>) -> Self {
         Self {
             line,
+            kind,
+            record: None,
             reason: reason.into(),
+        }
+    }
+
+    pub(crate) fn in_record(mut self, record: &str) -> Self {
+        self.record = Some(record.to_owned());
+        self
+    }
+
+    /// A short name of the problem without the line's particulars, e.g. `FLASER: fields
+    /// missing`, so that lines can be counted by it.
+    pub fn category(&self) -> String {
+        match &self.record {
+            Some(record) => format!("{record}: {}", self.kind),
+            None => self.kind.to_string(),
         }
     }
 }

@@ -8,6 +8,7 @@ use std::path::Path;
 use crate::carmen::CarmenReader;
 use crate::error::{CheckError, OpenError, ReadError};
 use crate::record::LogRecord;
+use crate::reorder::{ReorderConfig, ReorderCounts};
 use crate::seed_csv::SeedCsvReader;
 
 /// A file whose first scan is not among its first this many lines is refused: CARMEN logs
@@ -64,14 +65,32 @@ impl std::str::FromStr for LogFormat {
 #[derive(Debug)]
 pub enum LogReader<R> {
     SeedCsv(SeedCsvReader<R>),
-    Carmen(CarmenReader<R>),
+    // Boxed: it carries its reordering window, ten times the CSV reader's size.
+    Carmen(Box<CarmenReader<R>>),
 }
 
 impl<R: BufRead> LogReader<R> {
+    /// A reader with the default reordering window ([`ReorderConfig::default`]).
     pub fn new(format: LogFormat, reader: R) -> Self {
+        Self::with_reorder(format, reader, ReorderConfig::default())
+    }
+
+    /// A reader that puts records in time order within `reorder` (logs that have stamps of
+    /// their own; seed-csv is stamped in line order and needs none).
+    pub fn with_reorder(format: LogFormat, reader: R, reorder: ReorderConfig) -> Self {
         match format {
             LogFormat::SeedCsv => Self::SeedCsv(SeedCsvReader::new(reader)),
-            LogFormat::Carmen => Self::Carmen(CarmenReader::new(reader)),
+            LogFormat::Carmen => {
+                Self::Carmen(Box::new(CarmenReader::with_reorder(reader, reorder)))
+            }
+        }
+    }
+
+    /// The reordering window and what it did so far; `None` for a format read in line order.
+    pub fn reordering(&self) -> Option<(ReorderConfig, ReorderCounts)> {
+        match self {
+            Self::SeedCsv(_) => None,
+            Self::Carmen(reader) => Some((reader.reorder_config(), *reader.reorder_counts())),
         }
     }
 
@@ -143,8 +162,13 @@ pub fn check_format<R: BufRead>(format: LogFormat, reader: R) -> Result<(), Chec
     Err(CheckError::Mismatch(reason))
 }
 
-/// Opens a log for replay after checking that it is of `format` (see [`check_format`]).
-pub fn open_log(format: LogFormat, path: &Path) -> Result<LogReader<BufReader<File>>, OpenError> {
+/// Opens a log for replay after checking that it is of `format` (see [`check_format`]),
+/// its records put in time order within `reorder`.
+pub fn open_log(
+    format: LogFormat,
+    path: &Path,
+    reorder: ReorderConfig,
+) -> Result<LogReader<BufReader<File>>, OpenError> {
     let open = || {
         File::open(path)
             .map(BufReader::new)
@@ -165,12 +189,20 @@ pub fn open_log(format: LogFormat, path: &Path) -> Result<LogReader<BufReader<Fi
         },
     })?;
     // Read again from the top, so the lines looked at are replayed and reported as usual.
-    Ok(LogReader::new(format, open()?))
+    Ok(LogReader::with_reorder(format, open()?, reorder))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A valid `FLASER` line: 180 beams of 1 m.
+    fn flaser() -> String {
+        format!(
+            "FLASER 180 {} 0 0 0 0 0 0 1.0 h 0\n",
+            vec!["1.0"; 180].join(" ")
+        )
+    }
 
     fn refusal(format: LogFormat, text: &str) -> String {
         match check_format(format, text.as_bytes()) {
@@ -191,8 +223,8 @@ mod tests {
 
     #[test]
     fn a_carmen_log_is_not_a_seed_csv() {
-        let clf = "# message formats\nFLASER 2 1.0 2.0 0 0 0 0 0 0 1.0 h 0\n";
-        let reason = refusal(LogFormat::SeedCsv, clf);
+        let clf = format!("# message formats\n{}", flaser());
+        let reason = refusal(LogFormat::SeedCsv, &clf);
         assert!(reason.starts_with("no valid scan in its 2 lines (first problem: line 1: "));
     }
 
@@ -216,14 +248,14 @@ mod tests {
     #[test]
     fn the_first_scan_must_come_early() {
         let mut text = "PARAM a 1 h 0\n".repeat(SNIFF_LINES as usize);
-        text.push_str("FLASER 2 1.0 2.0 0 0 0 0 0 0 1.0 h 0\n");
+        text.push_str(&flaser());
         assert_eq!(
             refusal(LogFormat::Carmen, &text),
             format!(
                 "no valid scan in its first {SNIFF_LINES} lines; records not replayed: PARAM x{SNIFF_LINES}"
             )
         );
-        let text = "PARAM a 1 h 0\nbad\nFLASER 2 1.0 2.0 0 0 0 0 0 0 1.0 h 0\n";
+        let text = format!("PARAM a 1 h 0\nbad\n{}", flaser());
         assert!(check_format(LogFormat::Carmen, text.as_bytes()).is_ok());
     }
 

@@ -7,6 +7,10 @@
 //! * Readers ([`SeedCsvReader`], [`CarmenReader`], or [`LogReader`] over either) yield
 //!   [`LogRecord`]s in publishing order; a malformed line is a [`LineError`] naming its line,
 //!   and reading goes on after it.
+//! * A CARMEN log that is not quite in time order is put in order within a bounded window of
+//!   log time ([`reorder`], [`ReorderConfig`]); what cannot be placed is dropped and counted.
+//! * [`ReplaySummary`] is the block a replay ends with: everything skipped, reordered or
+//!   dropped, and why.
 //! * [`open_log`] refuses a file that is not of its format ([`check_format`]) before anything
 //!   is published.
 //! * Stamps are the log's own, parsed to nanoseconds exactly ([`parse_stamp_ns`]); the
@@ -27,16 +31,20 @@ mod lines;
 mod odometry_noise;
 mod pacing;
 mod record;
+pub mod reorder;
 pub mod seed_csv;
 mod stamp;
+mod summary;
 
 pub use angle::wrap_angle;
 pub use carmen::CarmenReader;
-pub use error::{CheckError, LineError, OpenError, ReadError};
+pub use error::{CheckError, LineError, Malformation, OpenError, ReadError};
 pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};
 pub use format::{LogFormat, LogReader, SNIFF_LINES, check_format, open_log};
 pub use odometry_noise::{LOG_ODOMETRY_NOISE, OdometryCovariance, OdometryNoise};
 pub use pacing::Pacer;
 pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
+pub use reorder::{Records, ReorderConfig, ReorderCounts};
 pub use seed_csv::SeedCsvReader;
 pub use stamp::parse_stamp_ns;
+pub use summary::{ReplaySummary, SUMMARY_HEAD};

@@ -2,7 +2,7 @@
 
 use std::io::BufRead;
 
-use crate::error::LineError;
+use crate::error::{LineError, Malformation};
 
 /// Reads a log line by line, counting lines and stripping `\n` / `\r\n`.
 #[derive(Debug)]
@@ -42,8 +42,8 @@ impl<R: BufRead> NumberedLines<R> {
         if let Some(rest) = text.strip_suffix(b"\r") {
             text = rest;
         }
-        let text =
-            std::str::from_utf8(text).map_err(|_| LineError::new(self.line, "not UTF-8 text"));
+        let text = std::str::from_utf8(text)
+            .map_err(|_| LineError::new(self.line, Malformation::NotText, "not UTF-8 text"));
         Ok(Some((self.line, text)))
     }
 }

@@ -8,17 +8,20 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
+use lidar_replay::reorder::{DEFAULT_REORDER_CAP, DEFAULT_REORDER_WINDOW_NS};
 use lidar_replay::{
-    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, Pacer, ReadError, fill_odometry,
-    fill_scan, open_log,
+    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, Pacer, ReadError, Records,
+    ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log,
 };
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
 /// log has it, Odometry (published before the scan it goes with, with the same stamp).
 ///
 /// Stamps are the log's own at full precision; seed-csv has none and is stamped every 0.1 s
-/// from 0. Malformed lines are reported with their line numbers and skipped; a file that is
-/// not of the format is refused.
+/// from 0. A CARMEN log's records are put in time order within --reorder-window; what comes
+/// later than that, or repeats a stamp, is dropped. Malformed lines are reported with their
+/// line numbers and skipped; a file that is not of the format is refused. The replay ends
+/// with a summary of everything not published, and why.
 #[derive(Debug, Parser)]
 #[command(name = "lidar-replay", version)]
 struct Args {
@@ -44,6 +47,14 @@ struct Args {
     /// Scans to publish; 0 = the whole log.
     #[arg(long, default_value_t = 0)]
     frames: u64,
+    /// Log time (seconds) a record waits for older ones read after it (CARMEN logs that go
+    /// back in time); records later than that are dropped. 0 = nothing may go back further
+    /// than behind the newest record.
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_REORDER_WINDOW_NS as f64 * 1e-9)]
+    reorder_window: f64,
+    /// Log lines held at most while reordering; beyond it the oldest goes out early.
+    #[arg(long, value_name = "LINES", default_value_t = DEFAULT_REORDER_CAP)]
+    reorder_cap: usize,
 }
 
 /// A real-time source does not wait long for its subscribers, as a live sensor would not.
@@ -74,9 +85,19 @@ fn run() -> Result<()> {
         "--rate must be 0 (lockstep) or a positive speed factor, not {}",
         args.rate
     );
+    // An hour is far beyond any log's disorder, and keeps the nanoseconds within u64.
+    anyhow::ensure!(
+        args.reorder_window.is_finite() && (0.0..=3600.0).contains(&args.reorder_window),
+        "--reorder-window must be between 0 and 3600 seconds, not {}",
+        args.reorder_window
+    );
+    let reorder = ReorderConfig {
+        window_ns: (args.reorder_window * 1e9).round() as u64,
+        max_held: args.reorder_cap,
+    };
     shutdown::install().context("cannot install the Ctrl-C handler")?;
     // Refuse a file that is not of the format before anyone sees a port.
-    let mut log = open_log(args.format, &args.file)?;
+    let mut log = open_log(args.format, &args.file, reorder)?;
 
     let mut pacer = Pacer::new(args.rate);
     let delivery = if pacer.is_lockstep() {
@@ -106,19 +127,26 @@ fn run() -> Result<()> {
 
     let mut published = 0u64;
     let mut odometry_published = 0u64;
-    let mut odometry_ignored = 0u64;
     let mut odometry_waited = false;
     let mut odometry_covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
-    let mut malformed = 0u64;
+    let mut summary = ReplaySummary {
+        file: args.file.display().to_string(),
+        ..ReplaySummary::default()
+    };
     let mut last_stamp = 0;
     for record in log.by_ref() {
-        if shutdown::requested() || (args.frames > 0 && published == args.frames) {
+        if shutdown::requested() {
+            break;
+        }
+        if args.frames > 0 && published == args.frames {
+            summary.stopped = Some(format!("--frames {} reached", args.frames));
             break;
         }
         let record = match record {
             Ok(record) => record,
             Err(ReadError::Line(e)) => {
-                malformed += 1;
+                summary.malformed_line(&e);
+                let malformed = summary.malformed_total();
                 if malformed <= REPORTED_LINES {
                     eprintln!("lidar-replay: {}: {e} (skipped)", args.file.display());
                 }
@@ -134,7 +162,7 @@ fn run() -> Result<()> {
         match record {
             LogRecord::Odometry(pose) => {
                 let Some(outlet) = &odometry else {
-                    odometry_ignored += 1;
+                    summary.odometry_unpublished += 1;
                     continue;
                 };
                 if !odometry_waited {
@@ -168,37 +196,25 @@ fn run() -> Result<()> {
             }
         }
     }
-    if shutdown::requested() {
-        eprintln!("lidar-replay: stopped after {published} scans");
-        return Ok(());
+    let interrupted = shutdown::requested();
+    if interrupted {
+        summary.stopped = Some(format!("interrupted after {published} scans"));
+    } else {
+        // The odometry's end first: a consumer that sees the scans' end has all of it, and
+        // scans waiting for odometry after their stamp know that none will come.
+        if let Some(outlet) = &odometry {
+            outlet.publish_end_of_stream(odometry_published, last_stamp)?;
+        }
+        scans.publish_end_of_stream(published, last_stamp)?;
     }
-    // The odometry's end first: a consumer that sees the scans' end has all of it, and
-    // scans waiting for odometry after their stamp know that none will come.
-    if let Some(outlet) = &odometry {
-        outlet.publish_end_of_stream(odometry_published, last_stamp)?;
-    }
-    scans.publish_end_of_stream(published, last_stamp)?;
-
-    let mut summary = format!(
-        "lidar-replay: published {published} scans and {odometry_published} odometry poses \
-         from {} ({} lines read)",
-        args.file.display(),
-        log.line_number()
-    );
-    if odometry_ignored > 0 {
-        summary.push_str(&format!(
-            "; {odometry_ignored} odometry poses not published"
-        ));
-    }
-    summary.push_str(&format!("; {malformed} malformed lines skipped"));
-    let skipped = log.skipped_records();
-    if !skipped.is_empty() {
-        let list: Vec<String> = skipped
-            .iter()
-            .map(|(name, count)| format!("{name} x{count}"))
-            .collect();
-        summary.push_str(&format!("; records not replayed: {}", list.join(", ")));
-    }
+    summary.lines_read = log.line_number();
+    summary.published = Records {
+        scans: published,
+        odometry: odometry_published,
+    };
+    summary.reordering = log.reordering();
+    summary.not_replayed = log.skipped_records();
+    // One block at the very end, so slam-launch can show it whole (see SUMMARY_HEAD).
     eprintln!("{summary}");
     Ok(())
 }

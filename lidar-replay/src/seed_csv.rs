@@ -5,7 +5,7 @@
 use std::f64::consts::PI;
 use std::io::BufRead;
 
-use crate::error::{LineError, ReadError};
+use crate::error::{LineError, Malformation, ReadError};
 use crate::lines::{NumberedLines, snippet};
 use crate::record::{LogRecord, ScanGeometry, ScanRecord};
 
@@ -112,6 +112,7 @@ fn parse_line(line: u64, text: &str) -> Result<ScanRecord, LineError> {
         let millimetres: u32 = field.parse().map_err(|_| {
             LineError::new(
                 line,
+                Malformation::NotANumber,
                 format!(
                     "beam {}: {} is not a range in millimetres",
                     index + 1,
@@ -122,8 +123,14 @@ fn parse_line(line: u64, text: &str) -> Result<ScanRecord, LineError> {
         ranges.push(range_from_code(millimetres));
     }
     if ranges.len() != BEAMS {
+        let kind = if ranges.len() < BEAMS {
+            Malformation::MissingFields
+        } else {
+            Malformation::ExtraFields
+        };
         return Err(LineError::new(
             line,
+            kind,
             format!("{} ranges, expected {BEAMS}", ranges.len()),
         ));
     }

@@ -2,7 +2,10 @@
 
 use std::path::PathBuf;
 
-use lidar_replay::{LogFormat, LogRecord, OdometryRecord, ScanRecord, open_log};
+use lidar_replay::{
+    LogFormat, LogRecord, OdometryRecord, Records, ReorderConfig, ReorderCounts, ScanRecord,
+    open_log,
+};
 
 /// `$SLAM_DATA_DIR`, else `../shared/data` beside the workspace (docs/CONVENTIONS.md).
 fn data_file(relative: &str) -> PathBuf {
@@ -19,23 +22,45 @@ fn data_file(relative: &str) -> PathBuf {
     path
 }
 
+/// What a log yields: scans, odometry, the stamps of every record in order and the
+/// reordering window's counts (zero for seed-csv).
+struct Read {
+    scans: Vec<ScanRecord>,
+    odometry: Vec<OdometryRecord>,
+    records: Vec<LogRecord>,
+    reordering: ReorderCounts,
+}
+
 /// Every record of a log; any malformed line fails the test with its message.
 fn read_all(format: LogFormat, relative: &str) -> (Vec<ScanRecord>, Vec<OdometryRecord>, Vec<u64>) {
+    let read = read_log(format, relative);
+    let stamps = read.scans.iter().map(|s| s.stamp_ns).collect();
+    (read.scans, read.odometry, stamps)
+}
+
+fn read_log(format: LogFormat, relative: &str) -> Read {
     let path = data_file(relative);
-    let log = open_log(format, &path).unwrap_or_else(|e| panic!("{e}"));
-    let mut scans = Vec::new();
-    let mut odometry = Vec::new();
-    let mut order = Vec::new();
-    for record in log {
-        match record.unwrap_or_else(|e| panic!("{}: {e}", path.display())) {
-            LogRecord::Scan(scan) => {
-                order.push(scan.stamp_ns);
-                scans.push(scan);
-            }
-            LogRecord::Odometry(pose) => odometry.push(pose),
+    let mut log =
+        open_log(format, &path, ReorderConfig::default()).unwrap_or_else(|e| panic!("{e}"));
+    let mut read = Read {
+        scans: Vec::new(),
+        odometry: Vec::new(),
+        records: Vec::new(),
+        reordering: ReorderCounts::default(),
+    };
+    for record in log.by_ref() {
+        let record = record.unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        match &record {
+            LogRecord::Scan(scan) => read.scans.push(scan.clone()),
+            LogRecord::Odometry(pose) => read.odometry.push(*pose),
         }
+        read.records.push(record);
     }
-    (scans, odometry, order)
+    read.reordering = log
+        .reordering()
+        .map(|(_, counts)| counts)
+        .unwrap_or_default();
+    read
 }
 
 fn assert_strictly_increasing(stamps: &[u64]) {
@@ -107,4 +132,57 @@ fn mit_csail_is_1988_scans_of_361_beams_with_odometry() {
     let share = no_return as f64 / readings as f64;
     assert!((0.02..0.05).contains(&share), "no-return share {share}");
     assert!(scans.iter().flat_map(|s| &s.ranges).all(|r| !r.is_nan()));
+}
+
+#[test]
+fn aces_comes_out_in_time_order_with_its_odom_lines_as_odometry() {
+    let read = read_log(LogFormat::Carmen, "carmen/aces.clf");
+    assert_eq!(read.scans.len(), 7374, "no scan lost");
+    assert!(read.scans.iter().all(|s| s.ranges.len() == 180));
+    let scan_stamps: Vec<u64> = read.scans.iter().map(|s| s.stamp_ns).collect();
+    assert_strictly_increasing(&scan_stamps);
+    let odometry_stamps: Vec<u64> = read.odometry.iter().map(|o| o.stamp_ns).collect();
+    assert!(
+        odometry_stamps.windows(2).all(|w| w[1] > w[0]),
+        "odometry stamps must strictly increase"
+    );
+    assert!(
+        read.records
+            .windows(2)
+            .all(|w| w[1].stamp_ns() >= w[0].stamp_ns()),
+        "records in time order"
+    );
+    // The log starts with an ODOM line, so its odometry comes from the 7375 ODOM lines
+    // alone (each FLASER carries a stale copy of the last one), one of them written twice.
+    // 157 scans and 4 ODOM lines were written up to 0.108 s after later ones.
+    assert!(read.odometry[0].stamp_ns < scan_stamps[0]);
+    assert_eq!(
+        read.reordering,
+        ReorderCounts {
+            reordered: Records {
+                scans: 157,
+                odometry: 4
+            },
+            duplicate: Records {
+                scans: 0,
+                odometry: 1
+            },
+            ..ReorderCounts::default()
+        }
+    );
+    assert_eq!(read.odometry.len(), 7375 - 1);
+    // 50.00 m is ACES's "no return".
+    let no_return = read
+        .scans
+        .iter()
+        .flat_map(|s| &s.ranges)
+        .filter(|r| **r == f32::INFINITY)
+        .count();
+    assert_eq!(no_return, 11_139);
+    assert!(
+        read.scans
+            .iter()
+            .flat_map(|s| &s.ranges)
+            .all(|r| !r.is_finite() || *r < 50.0)
+    );
 }

@@ -61,9 +61,13 @@ impl Drop for Replay {
     }
 }
 
-/// A FLASER line of three beams with the stamp `stamp` and odometry x = `x`.
+/// Beams of the fixtures' FLASER lines (a SICK LMS 1-degree mode).
+const BEAMS: usize = 180;
+
+/// A FLASER line of 180 beams with the stamp `stamp` and odometry x = `x`.
 fn flaser(x: f64, stamp: &str) -> String {
-    format!("FLASER 3 1.00 81.91 2.50 {x} 0 0 {x} 0 0.5 {stamp} robot 0.1\n")
+    let rest = vec!["2.50"; BEAMS - 2].join(" ");
+    format!("FLASER {BEAMS} 1.00 81.91 {rest} {x} 0 0 {x} 0 0.5 {stamp} robot 0.1\n")
 }
 
 /// What a subscriber saw.
@@ -116,7 +120,7 @@ fn receive(domain: &Domain, with_odometry: bool) -> Received {
                 break;
             }
             assert_eq!(scan.header.frame_id(), "laser");
-            assert_eq!(scan.ranges().len(), 3);
+            assert_eq!(scan.ranges().len(), BEAMS);
             assert_eq!(scan.ranges()[0], 1.0);
             assert_eq!(scan.ranges()[1], f32::INFINITY, "81.91 m = no return");
             let now = Instant::now();
@@ -125,6 +129,19 @@ fn receive(domain: &Domain, with_odometry: bool) -> Received {
         }
     }
     received
+}
+
+/// The summary block that ends the replay's stderr: its head and the indented lines after.
+fn summary_block(stderr: &str) -> String {
+    let start = stderr
+        .rfind(lidar_replay::SUMMARY_HEAD)
+        .unwrap_or_else(|| panic!("no summary: {stderr}"));
+    let block = &stderr[start..];
+    assert!(
+        block.lines().skip(1).all(|line| line.starts_with("  ")),
+        "the summary is one block at the end: {block}"
+    );
+    block.to_owned()
 }
 
 #[test]
@@ -138,7 +155,7 @@ fn lockstep_delivers_every_scan_and_odometry_with_exact_stamps() {
     for (k, stamp) in stamps.iter().enumerate() {
         log.push_str(&flaser(k as f64, stamp));
         if k == 3 {
-            log.push_str("FLASER 3 1.0 oops\n");
+            log.push_str("FLASER 180 1.0 oops\n");
         }
     }
     let file = fixture("lockstep.clf", &log);
@@ -182,14 +199,74 @@ fn lockstep_delivers_every_scan_and_odometry_with_exact_stamps() {
         stderr.contains("line 7: FLASER: range 2: \"oops\" is not a number (skipped)"),
         "{stderr}"
     );
+    let summary = summary_block(&stderr);
     assert!(
-        stderr.contains("published 25 scans and 25 odometry poses"),
-        "{stderr}"
+        summary.contains("published:       25 scans, 25 odometry poses"),
+        "{summary}"
     );
-    assert!(stderr.contains("1 malformed lines skipped"), "{stderr}");
     assert!(
-        stderr.contains("records not replayed: PARAM x1"),
-        "{stderr}"
+        summary.contains(
+            "malformed lines: 1 skipped, by reason:\n    FLASER: a field is not a number: 1"
+        ),
+        "{summary}"
+    );
+    assert!(summary.contains("not replayed:    PARAM x1"), "{summary}");
+    assert!(summary.contains("reordered:       none"), "{summary}");
+}
+
+#[test]
+fn a_log_out_of_time_order_is_published_in_order_within_the_window() {
+    // Line 3 goes back 0.4 s; line 5 by 3.4 s, behind what line 4 let out of the window;
+    // line 6 repeats a stamp.
+    let log: String = [
+        flaser(0.0, "100.0"),
+        flaser(2.0, "100.6"),
+        flaser(1.0, "100.2"),
+        flaser(3.0, "103.9"),
+        flaser(9.0, "100.5"),
+        flaser(3.0, "103.9"),
+        flaser(4.0, "104.0"),
+    ]
+    .concat();
+    let file = fixture("disorder.clf", &log);
+    let file = file.to_str().unwrap();
+    let replay = Replay::start(
+        domain("disorder"),
+        &[
+            "--format",
+            "carmen",
+            "--file",
+            file,
+            "--reorder-window",
+            "2",
+        ],
+    );
+    let received = receive(&replay.domain, true);
+    let stderr = replay.finish();
+    let stamps: Vec<u64> = received.scans.iter().map(|s| s.1 / 100_000_000).collect();
+    assert_eq!(stamps, vec![1000, 1002, 1006, 1039, 1040], "{received:?}");
+    let odometry_x: Vec<f64> = received.odometry.iter().map(|o| o.2).collect();
+    assert_eq!(odometry_x, vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+    let summary = summary_block(&stderr);
+    for expected in [
+        "published:       5 scans, 5 odometry poses",
+        "reordered:       1 scans, 1 odometry poses",
+        "window 2 s",
+        "dropped late:    1 scans, 1 odometry poses",
+        "dropped repeats: 1 scans, 1 odometry poses",
+    ] {
+        assert!(summary.contains(expected), "{expected:?} in {summary}");
+    }
+
+    let refused = Command::new(env!("CARGO_BIN_EXE_lidar-replay"))
+        .args(["--format", "carmen", "--file", file, "--reorder-window=-1"])
+        .args(["--domain", "replay-refused-window"])
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("--reorder-window must be between"),
+        "{refused:?}"
     );
 }
 
@@ -217,9 +294,15 @@ fn no_odometry_and_frames_limit_what_is_published() {
     let seqs: Vec<u64> = received.scans.iter().map(|s| s.0).collect();
     assert_eq!(seqs, vec![0, 1, 2, 3]);
     assert_eq!(received.end, Some((4, 103_500_000_000)));
+    let summary = summary_block(&stderr);
+    assert!(summary.contains("published:       4 scans\n"), "{summary}");
     assert!(
-        stderr.contains("published 4 scans and 0 odometry poses"),
-        "{stderr}"
+        summary.contains("stopped early:   --frames 4 reached"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("not published:   4 odometry poses (--no-odometry)"),
+        "{summary}"
     );
 }
 

@@ -7,9 +7,9 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    FrameCounts, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Metrics, Pose2,
-    Recorder, RecorderOptions, RelationsFile, SinkError, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE,
-    corners_csv_header, format_stamp, read_tum, score_run,
+    FrameCounts, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Metrics,
+    PathPose, Pose2, Recorder, RecorderOptions, RelationsFile, SinkError, TRAJECTORY_FILE,
+    TRAJECTORY_ONLINE_FILE, corners_csv_header, format_stamp, read_tum, score_run,
 };
 
 type TestResult = Result<(), Box<dyn std::error::Error>>;
@@ -26,12 +26,13 @@ const BASE_KEYS: [&str; 10] = [
     "latency_ms_p50",
     "latency_ms_p99",
 ];
-const TRUTH_KEYS: [&str; 5] = [
+const TRUTH_KEYS: [&str; 6] = [
     "ate_rmse_m",
     "ate_max_m",
     "final_error_m",
     "map_corner_rmse_m",
     "dead_reckoning_ate_rmse_m",
+    "online_ate_rmse_m",
 ];
 
 /// The keys of the metrics file, in the order they appear in the text.
@@ -208,7 +209,8 @@ fn relations_score_every_trajectory_file() -> TestResult {
     let r = dead_reckoning.rotation_deg.ok_or("no rotational error")?;
     // 0.12 rad over 200 scans: 0.003 rad = 0.17 degrees every 5 scans, beside the wobble.
     assert!((r.mean - 0.17).abs() < 0.05, "{r:?}");
-    assert_eq!(rpe.trajectory_online, None, "not written, not scored");
+    // Without a final path from the filter, the final trajectory is the online one.
+    assert_eq!(rpe.trajectory_online, rpe.trajectory);
 
     // metrics.json reads back typed, and the picture says it.
     let json = fs::read_to_string(dir.join(METRICS_FILE))?;
@@ -229,11 +231,10 @@ fn relations_score_every_trajectory_file() -> TestResult {
     );
     assert!(svg.contains(&line), "{line} not in the picture");
 
-    // An online trajectory, once there is one, is scored too.
-    fs::copy(dir.join(TRAJECTORY_FILE), dir.join(TRAJECTORY_ONLINE_FILE))?;
+    // Scoring the directory again gives the same.
     let options = RelationsFile::read(&relations_path)?;
     let again = score_run(&dir, &options, slam_eval_tolerance())?;
-    assert_eq!(again.trajectory_online, again.trajectory);
+    assert_eq!(again.trajectory, rpe.trajectory);
     let _ = fs::remove_dir_all(&dir);
     let _ = fs::remove_dir_all(&truth_dir);
     Ok(())
@@ -314,6 +315,42 @@ fn empty_run_still_finishes() -> TestResult {
 }
 
 #[test]
+fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
+    let dir = common::scratch_dir("final-path");
+    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+    let (mut truth, mut path) = (Vec::new(), Vec::new());
+    for seq in 0..50_u64 {
+        let stamp_ns = 1_000_000_000 + seq * 25_000_000;
+        let pose = Pose2::new(0.1 * seq as f64, 0.02 * seq as f64, 0.01 * seq as f64);
+        recorder.record_truth(seq, stamp_ns, pose)?;
+        // The online estimate is off by a wobble; the final path is exact.
+        let wobble = if seq % 2 == 0 { 0.05 } else { -0.05 };
+        let online = Pose2::new(pose.x, pose.y + wobble, pose.yaw);
+        recorder.record_pose(seq, stamp_ns, online, None, None)?;
+        truth.push(pose);
+        path.push(PathPose { stamp_ns, pose });
+    }
+    recorder.set_final_path(&path);
+    let metrics = recorder.finish()?;
+
+    let written = read_tum(&dir.join(TRAJECTORY_FILE))?;
+    assert_eq!(written.len(), 50);
+    assert!(
+        written
+            .iter()
+            .zip(&truth)
+            .all(|(w, t)| (w.position[0] - t.x).abs() < 1e-9 && (w.position[1] - t.y).abs() < 1e-9)
+    );
+    assert_eq!(read_tum(&dir.join(TRAJECTORY_ONLINE_FILE))?.len(), 50);
+    let ate = metrics.ate_rmse_m.ok_or("no ATE")?;
+    let online = metrics.online_ate_rmse_m.ok_or("no online ATE")?;
+    assert!(ate < 1e-9, "the final path is the truth: {ate}");
+    assert!(online > 0.01, "the online estimate wobbles: {online}");
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+#[test]
 fn killed_run_keeps_its_trajectory_and_no_stale_results() -> TestResult {
     let dir = common::scratch_dir("killed");
     fs::create_dir_all(&dir)?;
@@ -330,10 +367,12 @@ fn killed_run_keeps_its_trajectory_and_no_stale_results() -> TestResult {
             None,
         )?;
     }
-    // Read while the recorder is alive: every line is already in the file.
-    assert_eq!(read_tum(&dir.join(TRAJECTORY_FILE))?.len(), 25);
+    // Read while the recorder is alive: every line of the online estimate is already in
+    // its file; the final trajectory is only written by a run that finishes.
+    assert_eq!(read_tum(&dir.join(TRAJECTORY_ONLINE_FILE))?.len(), 25);
     drop(recorder);
-    assert_eq!(read_tum(&dir.join(TRAJECTORY_FILE))?.len(), 25);
+    assert_eq!(read_tum(&dir.join(TRAJECTORY_ONLINE_FILE))?.len(), 25);
+    assert!(!dir.join(TRAJECTORY_FILE).exists());
     assert!(!dir.join(METRICS_FILE).exists());
     let _ = fs::remove_dir_all(&dir);
     Ok(())

@@ -1,0 +1,193 @@
+//! The block a replay prints at its end: what was published and everything that was not,
+//! with why.
+//!
+//! It is written for a person, and for slam-launch, which shows a stage's last block that
+//! starts with `<stage>: summary` (and the indented lines after it) when the run ends.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use crate::error::LineError;
+use crate::reorder::{Records, ReorderConfig, ReorderCounts};
+
+/// First words of the block, which slam-launch looks for.
+pub const SUMMARY_HEAD: &str = "lidar-replay: summary";
+
+/// Everything a replay counted.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReplaySummary {
+    /// The log, as given.
+    pub file: String,
+    pub lines_read: u64,
+    pub published: Records,
+    /// Odometry poses read but not published (`--no-odometry`).
+    pub odometry_unpublished: u64,
+    /// Why the replay ended before the log did, if it did (`--frames`, Ctrl-C).
+    pub stopped: Option<String>,
+    /// The reordering window and what it did; `None` for a format read in line order.
+    pub reordering: Option<(ReorderConfig, ReorderCounts)>,
+    /// Malformed lines skipped, by [`LineError::category`].
+    pub malformed: BTreeMap<String, u64>,
+    /// Record types read but not replayed (`PARAM`, `SYNC`, ...) and their line counts.
+    pub not_replayed: Vec<(String, u64)>,
+}
+
+impl ReplaySummary {
+    /// Counts a skipped line.
+    pub fn malformed_line(&mut self, error: &LineError) {
+        *self.malformed.entry(error.category()).or_default() += 1;
+    }
+
+    pub fn malformed_total(&self) -> u64 {
+        self.malformed.values().sum()
+    }
+}
+
+/// `3 scans, 2 odometry poses`, or `none`.
+struct Counted(Records);
+
+impl fmt::Display for Counted {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Records { scans, odometry } = self.0;
+        match (scans, odometry) {
+            (0, 0) => f.write_str("none"),
+            (scans, 0) => write!(f, "{scans} scans"),
+            (0, odometry) => write!(f, "{odometry} odometry poses"),
+            (scans, odometry) => write!(f, "{scans} scans, {odometry} odometry poses"),
+        }
+    }
+}
+
+impl fmt::Display for ReplaySummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "{SUMMARY_HEAD} of {} ({} lines read)",
+            self.file, self.lines_read
+        )?;
+        write!(f, "  published:       {}", Counted(self.published))?;
+        if let Some(reason) = &self.stopped {
+            write!(f, "\n  stopped early:   {reason}")?;
+        }
+        if let Some((config, counts)) = &self.reordering {
+            let window = config.window_ns as f64 * 1e-9;
+            write!(
+                f,
+                "\n  reordered:       {} (read after newer ones, put in time order; \
+                 window {window} s)",
+                Counted(counts.reordered)
+            )?;
+            write!(
+                f,
+                "\n  dropped late:    {} (older than records already published)",
+                Counted(counts.late)
+            )?;
+            write!(
+                f,
+                "\n  dropped repeats: {} (stamp already published)",
+                Counted(counts.duplicate)
+            )?;
+            if counts.forced_out.total() > 0 {
+                write!(
+                    f,
+                    "\n  let out early:   {} (more than {} lines held; may be out of order)",
+                    Counted(counts.forced_out),
+                    config.max_held
+                )?;
+            }
+        }
+        write!(f, "\n  malformed lines: {}", self.malformed_total())?;
+        if !self.malformed.is_empty() {
+            write!(f, " skipped, by reason:")?;
+        }
+        for (category, count) in &self.malformed {
+            write!(f, "\n    {category}: {count}")?;
+        }
+        if !self.not_replayed.is_empty() {
+            let list: Vec<String> = self
+                .not_replayed
+                .iter()
+                .map(|(name, count)| format!("{name} x{count}"))
+                .collect();
+            write!(f, "\n  not replayed:    {}", list.join(", "))?;
+        }
+        if self.odometry_unpublished > 0 {
+            write!(
+                f,
+                "\n  not published:   {} odometry poses (--no-odometry)",
+                self.odometry_unpublished
+            )?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::Malformation;
+
+    #[test]
+    fn a_summary_is_one_block_naming_every_loss() {
+        let mut summary = ReplaySummary {
+            file: "aces.clf".into(),
+            lines_read: 14_762,
+            published: Records {
+                scans: 7374,
+                odometry: 14_693,
+            },
+            reordering: Some((
+                ReorderConfig::default(),
+                ReorderCounts {
+                    reordered: Records {
+                        scans: 107,
+                        odometry: 108,
+                    },
+                    duplicate: Records {
+                        scans: 0,
+                        odometry: 55,
+                    },
+                    ..ReorderCounts::default()
+                },
+            )),
+            not_replayed: vec![("PARAM".into(), 4)],
+            ..ReplaySummary::default()
+        };
+        for kind in [Malformation::MissingFields, Malformation::MissingFields] {
+            summary.malformed_line(&LineError::new(7, kind, "FLASER: ...").in_record("FLASER"));
+        }
+        summary.malformed_line(&LineError::new(9, Malformation::NotARecord, "?"));
+        assert_eq!(
+            summary.to_string(),
+            "lidar-replay: summary of aces.clf (14762 lines read)\n\
+             \x20 published:       7374 scans, 14693 odometry poses\n\
+             \x20 reordered:       107 scans, 108 odometry poses (read after newer ones, put \
+             in time order; window 2 s)\n\
+             \x20 dropped late:    none (older than records already published)\n\
+             \x20 dropped repeats: 55 odometry poses (stamp already published)\n\
+             \x20 malformed lines: 3 skipped, by reason:\n\
+             \x20   FLASER: fields missing: 2\n\
+             \x20   not a record of the format: 1\n\
+             \x20 not replayed:    PARAM x4"
+        );
+    }
+
+    #[test]
+    fn a_log_in_line_order_has_no_reordering_lines() {
+        let summary = ReplaySummary {
+            file: "scans.csv".into(),
+            lines_read: 400,
+            published: Records {
+                scans: 400,
+                odometry: 0,
+            },
+            ..ReplaySummary::default()
+        };
+        assert_eq!(
+            summary.to_string(),
+            "lidar-replay: summary of scans.csv (400 lines read)\n\
+             \x20 published:       400 scans\n\
+             \x20 malformed lines: 0"
+        );
+    }
+}
