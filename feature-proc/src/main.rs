@@ -12,6 +12,10 @@ use feature_proc::{
     Extractor, FeatureConfig, OdometryReading, OdometryTrack, RefusedReading, ScanInput,
 };
 use ipc_types::prelude::*;
+use scan_match::{
+    BeamGeometry, FrontEnd, FrontEndConfig, FrontEndOutput, FrontEndStats, MatchStatus,
+    OdometryStatus,
+};
 
 /// Subscribes to scans (and odometry, when the source publishes it) and publishes their lines
 /// and corners with the odometry pose at each scan's stamp.
@@ -24,6 +28,10 @@ struct Args {
     /// TOML file with extraction thresholds (every field optional).
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
+    /// TOML file with scan-matching front-end settings (every field optional; see
+    /// scan_match::FrontEndConfig).
+    #[arg(long, value_name = "FILE")]
+    front_end_config: Option<PathBuf>,
     /// Feature subscribers to wait for before the first lockstep publish.
     #[arg(long, default_value_t = 1)]
     subscribers: usize,
@@ -48,9 +56,10 @@ fn main() -> ExitCode {
     }
 }
 
-fn load_config(path: Option<&PathBuf>) -> Result<FeatureConfig> {
+/// A settings struct from a TOML file, or its defaults without one.
+fn load_config<T: Default + serde::de::DeserializeOwned>(path: Option<&PathBuf>) -> Result<T> {
     let Some(path) = path else {
-        return Ok(FeatureConfig::default());
+        return Ok(T::default());
     };
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
@@ -60,9 +69,11 @@ fn load_config(path: Option<&PathBuf>) -> Result<FeatureConfig> {
 fn run() -> Result<()> {
     let args = Args::parse();
     shutdown::install().context("cannot install the Ctrl-C handler")?;
-    let config = load_config(args.config.as_ref())?;
+    let config: FeatureConfig = load_config(args.config.as_ref())?;
     config.validate().context("feature configuration")?;
     let mut extractor = Extractor::new(config);
+    let front_end_config: FrontEndConfig = load_config(args.front_end_config.as_ref())?;
+    let mut front_end = FrontEnd::new(front_end_config).context("front-end configuration")?;
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("feature-proc")?;
@@ -134,36 +145,37 @@ fn run() -> Result<()> {
             let Some(scan) = pending.pop_front() else {
                 break;
             };
-            let paired = odometry
+            let reading = odometry
                 .as_ref()
-                .and_then(|_| track.at(scan.header.stamp_ns))
-                .map(|reading| OdometryAtScan {
-                    pose: reading.pose.into(),
-                    covariance: row_major(&reading.covariance),
-                });
+                .and_then(|_| track.at(scan.header.stamp_ns));
             track.forget_before(scan.header.stamp_ns);
-            if odometry.is_some() && paired.is_none() {
+            if odometry.is_some() && reading.is_none() {
                 counts.without_odometry += 1;
             }
-            publish_features(
-                &features,
-                &mut extractor,
-                &scan,
-                paired,
-                &mut lines,
-                &mut corners,
-                &mut counts,
-            )?;
+            let motion = register(&mut front_end, &scan, reading.as_ref(), &mut counts);
+            let paired = reading.map(|reading| OdometryAtScan {
+                pose: reading.pose.into(),
+                covariance: row_major(&reading.covariance),
+            });
+            let work = Work {
+                extractor: &mut extractor,
+                lines: &mut lines,
+                corners: &mut corners,
+                counts: &mut counts,
+            };
+            publish_features(&features, work, &scan, paired, motion)?;
         }
         if let Some((seq, stamp_ns)) = end_of_scans
             && pending.is_empty()
         {
             features.publish_end_of_stream(seq, stamp_ns)?;
             eprintln!("feature-proc: {}", counts.summary());
+            eprintln!("{}", front_end_summary(&front_end.stats()));
             return Ok(());
         }
     }
     eprintln!("feature-proc: stopped; {}", counts.summary());
+    eprintln!("{}", front_end_summary(&front_end.stats()));
     Ok(())
 }
 
@@ -174,6 +186,8 @@ struct Counts {
     skipped: u64,
     odometry_not_finite: u64,
     odometry_out_of_order: u64,
+    /// Scans the front end refused (geometry that defines no bearing or range).
+    unregistered: u64,
     without_odometry: u64,
 }
 
@@ -190,6 +204,12 @@ impl Counts {
             text.push_str(&format!(
                 ", {} odometry readings not after the one before them refused",
                 self.odometry_out_of_order
+            ));
+        }
+        if self.unregistered > 0 {
+            text.push_str(&format!(
+                ", {} scans the front end could not register",
+                self.unregistered
             ));
         }
         if self.without_odometry > 0 {
@@ -255,15 +275,104 @@ fn drain_odometry(
 }
 
 #[allow(clippy::too_many_arguments)]
+/// Registers a scan with the front end; `None` for a scan it cannot take (counted).
+fn register(
+    front_end: &mut FrontEnd,
+    scan: &PendingScan,
+    odometry: Option<&OdometryReading>,
+    counts: &mut Counts,
+) -> Option<ScanMotion> {
+    let input = scan_match::ScanInput {
+        stamp_ns: scan.header.stamp_ns,
+        geometry: BeamGeometry {
+            angle_min: f64::from(scan.angle_min),
+            angle_increment: f64::from(scan.angle_increment),
+            range_min: f64::from(scan.range_min),
+            range_max: f64::from(scan.range_max),
+        },
+        ranges: &scan.ranges,
+        odometry: odometry.map(|o| scan_match::OdometryInput {
+            odom_from_robot: o.pose,
+            covariance: o.covariance,
+        }),
+    };
+    match front_end.process(&input) {
+        Ok(output) => Some(scan_motion(&output)),
+        Err(e) => {
+            counts.unregistered += 1;
+            eprintln!("feature-proc: scan {} not registered: {e}", scan.header.seq);
+            None
+        }
+    }
+}
+
+fn scan_motion(output: &FrontEndOutput) -> ScanMotion {
+    ScanMotion {
+        pose: output.odom_from_robot.into(),
+        increment: output.increment.into(),
+        increment_covariance: row_major(&output.increment_covariance),
+        match_status: match output.status {
+            MatchStatus::First => ScanMotion::MATCH_FIRST,
+            MatchStatus::Matched => ScanMotion::MATCH_OK,
+            MatchStatus::Degenerate { .. } => ScanMotion::MATCH_DEGENERATE,
+            MatchStatus::Failed(_) => ScanMotion::MATCH_FAILED,
+        },
+        odometry_status: match output.odometry {
+            OdometryStatus::Absent => ScanMotion::ODOMETRY_ABSENT,
+            OdometryStatus::Started => ScanMotion::ODOMETRY_STARTED,
+            OdometryStatus::Used => ScanMotion::ODOMETRY_USED,
+            OdometryStatus::Rejected(_) => ScanMotion::ODOMETRY_REJECTED,
+        },
+        points: u32::try_from(output.points).unwrap_or(u32::MAX),
+        inliers: u32::try_from(output.inliers).unwrap_or(u32::MAX),
+    }
+}
+
+/// The front end's counts over the run, as a summary block slam-launch shows at the end.
+fn front_end_summary(stats: &FrontEndStats) -> String {
+    let per_scan_ms = if stats.scans > 0 {
+        stats.busy_ns as f64 / stats.scans as f64 * 1e-6
+    } else {
+        0.0
+    };
+    format!(
+        "feature-proc: summary of the scan-matching front end\n  \
+         scans:           {} ({} matched, {} with a direction left to the prior, {} not \
+         registered)\n  \
+         odometry steps:  {} used, {} rejected\n  \
+         keyframes:       {}\n  \
+         time:            {per_scan_ms:.3} ms per scan",
+        stats.scans,
+        stats.matched,
+        stats.degenerate,
+        stats.failed_matches,
+        stats.odometry_used,
+        stats.odometry_rejected,
+        stats.keyframes,
+    )
+}
+
+/// The extractor and the buffers and counts it works with.
+struct Work<'a> {
+    extractor: &'a mut Extractor,
+    lines: &'a mut Vec<Line>,
+    corners: &'a mut Vec<Corner>,
+    counts: &'a mut Counts,
+}
+
 fn publish_features(
     features: &Outlet<Features>,
-    extractor: &mut Extractor,
+    work: Work<'_>,
     scan: &PendingScan,
     odometry: Option<OdometryAtScan>,
-    lines: &mut Vec<Line>,
-    corners: &mut Vec<Corner>,
-    counts: &mut Counts,
+    motion: Option<ScanMotion>,
 ) -> Result<()> {
+    let Work {
+        extractor,
+        lines,
+        corners,
+        counts,
+    } = work;
     let started = Instant::now();
     let input = ScanInput {
         angle_min: f64::from(scan.angle_min),
@@ -293,6 +402,7 @@ fn publish_features(
         message.scan_sent_ns = scan.header.sent_ns;
         message.processing_ns = processing_ns;
         message.set_odometry(odometry);
+        message.set_motion(motion);
         let keep_lines = lines.len().min(ipc_types::MAX_LINES);
         let keep_corners = corners.len().min(ipc_types::MAX_FEATURE_CORNERS);
         if keep_lines < lines.len() || keep_corners < corners.len() {

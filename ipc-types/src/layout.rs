@@ -26,10 +26,12 @@ const _: () = {
     assert!(size_of::<PoseEstimate>() == 272);
     assert!(offset_of!(PoseEstimate, timing) == 232);
 
+    assert!(size_of::<ScanMotion>() == 136);
     assert!(offset_of!(Features, odometry) == 88);
-    assert!(offset_of!(Features, lines) == 192);
+    assert!(offset_of!(Features, motion) == 192);
+    assert!(offset_of!(Features, lines) == 328);
     assert!(
-        size_of::<Features>() == 192 + 88 * crate::MAX_LINES + 160 * crate::MAX_FEATURE_CORNERS
+        size_of::<Features>() == 328 + 88 * crate::MAX_LINES + 160 * crate::MAX_FEATURE_CORNERS
     );
     assert!(size_of::<WorldCorners>() == 72 + 32 * crate::MAX_WORLD_CORNERS);
     assert!(size_of::<MapSnapshot>() == 72 + 168 * crate::MAX_MAP_CORNERS);

@@ -114,6 +114,15 @@ fn features_round_trip() {
         pose: Pose2::new(1.5, -2.0, 0.25),
         covariance: [1e-3, 1e-5, 0.0, 1e-5, 2e-3, 0.0, 0.0, 0.0, 1e-4],
     }));
+    features.set_motion(Some(ScanMotion {
+        pose: Pose2::new(3.0, 4.0, -1.0),
+        increment: Pose2::new(0.05, -0.001, 0.01),
+        increment_covariance: [1e-6, 0.0, 0.0, 0.0, 4e-6, 0.0, 0.0, 0.0, 1e-7],
+        match_status: ScanMotion::MATCH_DEGENERATE,
+        odometry_status: ScanMotion::ODOMETRY_REJECTED,
+        points: 300,
+        inliers: 280,
+    }));
     let lines: Vec<Line> = (0..5)
         .map(|i| Line {
             rho: i as f64,

@@ -147,8 +147,9 @@ impl Default for SlamSection {
     }
 }
 
-/// The whole run. Sections the launcher does not interpret (`features`) are handed to the
-/// process they name, which validates them and names any mistake.
+/// The whole run. Sections the launcher does not interpret (`features`, `front_end`) are
+/// handed to the process that reads them (feature-proc), which validates them and names any
+/// mistake.
 #[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
@@ -160,6 +161,8 @@ pub struct RunConfig {
     pub replay: ReplaySection,
     pub hokuyo: HokuyoSection,
     pub features: toml::Table,
+    /// The scan-matching front end's settings (scan_match::FrontEndConfig).
+    pub front_end: toml::Table,
     pub slam: SlamSection,
 }
 

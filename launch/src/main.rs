@@ -17,14 +17,14 @@ use slam_eval::ScoreSummary;
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source` and
-/// `relations` and the sections [sim], [replay], [hokuyo], [features] and [slam]; options
-/// given here override the file. Keys a section does not know are refused by the process
-/// that reads it.
+/// `relations` and the sections [sim], [replay], [hokuyo], [features], [front_end] and
+/// [slam]; options given here override the file. Keys a section does not know are refused
+/// by the process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
-    /// TOML file with `source`, `relations` and [sim], [replay], [hokuyo], [features], [slam]
-    /// sections.
+    /// TOML file with `source`, `relations` and [sim], [replay], [hokuyo], [features],
+    /// [front_end], [slam] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -284,15 +284,16 @@ fn plan(
         }
         Ok(path)
     };
-    let section = |name: &str, table: &toml::Table| -> Result<Vec<String>> {
+    let section_as = |name: &str, table: &toml::Table, flag: &str| -> Result<Vec<String>> {
         if table.is_empty() {
             return Ok(Vec::new());
         }
         let path = config_dir.join(format!("{name}.toml"));
         std::fs::write(&path, RunConfig::section_text(table))
             .with_context(|| format!("cannot write {}", path.display()))?;
-        Ok(vec!["--config".into(), path.display().to_string()])
+        Ok(vec![flag.into(), path.display().to_string()])
     };
+    let section = |name: &str, table: &toml::Table| section_as(name, table, "--config");
     let d = domain.name().to_owned();
 
     let mut sink: Vec<String> = vec![
@@ -328,6 +329,11 @@ fn plan(
     slam.extend(section("slam", &config.slam.extra)?);
     let mut features = vec!["--domain".into(), d.clone()];
     features.extend(section("features", &config.features)?);
+    features.extend(section_as(
+        "front_end",
+        &config.front_end,
+        "--front-end-config",
+    )?);
     let source = match config.source {
         SourceKind::Sim => sim_stage(config, &d, &section, &program)?,
         SourceKind::Replay => {

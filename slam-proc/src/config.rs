@@ -65,6 +65,14 @@ pub struct SlamConfig {
     /// A corner-fitted step spreads the particles by this multiple of the fit's own
     /// standard deviations (within the model above): the fit knows how well it did.
     pub noise_fit_scale: f64,
+    /// Move the particles by the front end's measured motion when the features bring one
+    /// (scan matching fused with odometry), instead of estimating the motion from the
+    /// scan's corners and lines. Off until the front end holds its course in a corridor
+    /// without odometry, where it still slides along the walls.
+    pub use_measured_motion: bool,
+    /// A measured step spreads the particles by this multiple of the front end's standard
+    /// deviations (floored like a fitted step).
+    pub measured_noise_scale: f64,
     /// Smallest translation noise of a fitted step, metres: particles must stay diverse.
     pub noise_xy_floor: f64,
     /// Smallest rotation noise of a fitted step, radians.
@@ -136,6 +144,8 @@ impl Default for SlamConfig {
             noise_yaw_per_radian: 0.05,
             noise_yaw_per_metre: 0.01,
             noise_fit_scale: 2.0,
+            use_measured_motion: false,
+            measured_noise_scale: 1.0,
             noise_xy_floor: 0.002,
             noise_yaw_floor: 0.0005,
             fallback_noise_scale: 3.0,
@@ -202,6 +212,7 @@ impl SlamConfig {
             ("noise_xy_base", self.noise_xy_base),
             ("noise_yaw_base", self.noise_yaw_base),
             ("noise_fit_scale", self.noise_fit_scale),
+            ("measured_noise_scale", self.measured_noise_scale),
             ("noise_xy_floor", self.noise_xy_floor),
             ("noise_yaw_floor", self.noise_yaw_floor),
             ("search_radius", self.search_radius),

@@ -60,7 +60,7 @@ pub use angle::wrap_angle;
 pub use config::{ConfigError, SlamConfig};
 pub use estimate::{Estimate, StageTiming};
 pub use map::MapCorner;
-pub use observation::{LineObservation, Observation, OdometryInput};
+pub use observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
 pub use path::PathPose;
 pub use slam::FastSlam;
 pub use slam_geom::Pose2;

@@ -7,7 +7,9 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
-use slam_proc::{FastSlam, LineObservation, Observation, OdometryInput, SlamConfig};
+use slam_proc::{
+    FastSlam, LineObservation, MeasuredMotion, Observation, OdometryInput, SlamConfig,
+};
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
 /// publishes a pose estimate for every scan, the best particle's map every few scans and at
@@ -99,9 +101,22 @@ fn run() -> Result<()> {
             lines.clear();
             lines.extend(sample.lines().iter().map(to_line));
             let stamp = sample.header.stamp_ns;
-            // feature-proc paired the scan with the odometry at its stamp.
-            let odometry_input = sample.odometry().map(to_odometry);
-            let estimate = slam.process(stamp, &observations, &lines, odometry_input.as_ref());
+            // feature-proc's front end measured the motion; without it (or with
+            // `use_measured_motion = false`) the filter estimates it from the corners and
+            // lines, on the odometry feature-proc paired with the scan.
+            let front_end = sample.motion();
+            let estimate = match &front_end {
+                Some(motion) if slam.config().use_measured_motion => {
+                    slam.process_measured(stamp, &observations, &lines, &to_motion(motion))
+                }
+                _ => {
+                    let odometry_input = sample.odometry().map(to_odometry);
+                    slam.process(stamp, &observations, &lines, odometry_input.as_ref())
+                }
+            };
+            // The front end's own pose is the motion estimate alone, whatever moved the
+            // particles: both start at the first scan's pose.
+            let dead_reckoning = front_end.map_or(to_pose(&estimate.dead_reckoning), |m| m.pose);
             let header = sample.header;
             poses.publish(|pose| {
                 pose.header = header;
@@ -109,7 +124,7 @@ fn run() -> Result<()> {
                 pose.scan_sent_ns = sample.scan_sent_ns;
                 pose.best = to_pose(&estimate.best);
                 pose.mean = to_pose(&estimate.mean);
-                pose.dead_reckoning = to_pose(&estimate.dead_reckoning);
+                pose.dead_reckoning = dead_reckoning;
                 for r in 0..3 {
                     for c in 0..3 {
                         pose.covariance[r * 3 + c] = estimate.covariance[(r, c)];
@@ -218,6 +233,13 @@ fn to_line(line: &Line) -> LineObservation {
         rho: line.rho,
         theta: line.theta,
         covariance: nalgebra::Matrix2::from_row_slice(&line.covariance),
+    }
+}
+
+fn to_motion(motion: &ScanMotion) -> MeasuredMotion {
+    MeasuredMotion {
+        increment: motion.increment.into(),
+        covariance: nalgebra::Matrix3::from_row_slice(&motion.increment_covariance),
     }
 }
 

@@ -49,6 +49,8 @@ pub(crate) enum MotionSource {
     Odometry,
     /// Constant velocity alone: a guess.
     ConstantVelocity,
+    /// A front end's measurement (scan matching fused with odometry), with its covariance.
+    Measured,
 }
 
 /// A candidate match: current corner `current` may be previous corner `previous`.

@@ -1,5 +1,5 @@
-//! What the filter is given each scan: corner and line features in the sensor frame and,
-//! when the robot has it, an odometry pose.
+//! What the filter is given each scan: corner and line features in the sensor frame and
+//! either the motion a front end measured or, when the robot has it, an odometry pose.
 
 use std::f64::consts::PI;
 
@@ -50,6 +50,28 @@ impl LineObservation {
 pub struct OdometryInput {
     pub pose: Pose2,
     pub covariance: Matrix3<f64>,
+}
+
+/// The motion since the previous scan as a front end measured it (the scan registered
+/// against its recent predecessors, fused with odometry): the increment in the previous
+/// robot frame and its covariance over `(x, y, yaw)`, symmetric positive definite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredMotion {
+    pub increment: Pose2,
+    pub covariance: Matrix3<f64>,
+}
+
+impl MeasuredMotion {
+    /// Whether the filter can use it: finite, with a covariance that has no negative
+    /// variance.
+    pub(crate) fn is_usable(&self) -> bool {
+        let p = &self.increment;
+        [p.x, p.y, p.yaw]
+            .iter()
+            .chain(self.covariance.iter())
+            .all(|v| v.is_finite())
+            && (0..3).all(|i| self.covariance[(i, i)] >= 0.0)
+    }
 }
 
 /// An observation checked and made ready for the filter: its vector and a covariance that

@@ -68,6 +68,16 @@ impl MotionNoise {
                     sigma_yaw,
                 }
             }
+            // A front end registers the whole scan against a local map: its covariance is
+            // that of independent beams, tighter than its errors, which the beams share;
+            // the particles spread by a multiple of it, no tighter than the floors.
+            MotionSource::Measured => {
+                let (xy, yaw) = fit_sigmas(&motion.covariance);
+                Self {
+                    sigma_xy: (config.measured_noise_scale * xy).max(config.noise_xy_floor),
+                    sigma_yaw: (config.measured_noise_scale * yaw).max(config.noise_yaw_floor),
+                }
+            }
             MotionSource::ConstantVelocity => Self {
                 sigma_xy: config.fallback_noise_scale * model.sigma_xy,
                 sigma_yaw: config.fallback_noise_scale * model.sigma_yaw,

@@ -161,9 +161,11 @@ fn sigterm_halfway_leaves_a_valid_trajectory() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("slam-launch");
+    // The online estimate grows as the run goes; trajectory.tum is written at its end.
+    let online = out.join("trajectory_online.tum");
     let trajectory = out.join("trajectory.tum");
     let deadline = Instant::now() + Duration::from_secs(60);
-    while std::fs::read_to_string(&trajectory)
+    while std::fs::read_to_string(&online)
         .map(|t| t.lines().count())
         .unwrap_or(0)
         < 40
@@ -274,7 +276,7 @@ fn a_killed_stage_is_named_and_stops_the_run() {
         .spawn()
         .expect("slam-launch");
     let deadline = Instant::now() + Duration::from_secs(60);
-    while std::fs::read_to_string(out.join("trajectory.tum"))
+    while std::fs::read_to_string(out.join("trajectory_online.tum"))
         .map(|t| t.lines().count())
         .unwrap_or(0)
         < 20

@@ -8,13 +8,14 @@ use serde::{Deserialize, Serialize};
 use super::corner::Corner;
 use super::line::Line;
 use super::pose::Pose2;
+use super::scan_motion::ScanMotion;
 use crate::capacity::{CapacityError, MAX_FEATURE_CORNERS, MAX_LINES, fill, used};
 use crate::header::Header;
 
 /// The features of one scan, in the sensor frame.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("slam::Features::v2")]
+#[type_name("slam::Features::v3")]
 pub struct Features {
     /// The source scan's header (sequence, stamp, frame); `sent_ns` is this message's.
     pub header: Header,
@@ -31,8 +32,10 @@ pub struct Features {
     pub odometry_covariance: [f64; 9],
     /// 1 when the scan has an odometry pose, 0 when the run has no odometry.
     pub has_odometry: u32,
-    /// Keeps the layout free of implicit padding; always 0.
-    pub reserved: u32,
+    /// 1 when `motion` holds the front end's estimate, 0 when no front end ran.
+    pub has_motion: u32,
+    /// The front end's motion estimate for this scan; meaningful when `has_motion` is 1.
+    pub motion: ScanMotion,
     pub lines: [Line; MAX_LINES],
     pub corners: [Corner; MAX_FEATURE_CORNERS],
 }
@@ -65,6 +68,17 @@ impl Features {
         self.has_odometry = u32::from(odometry.is_some());
     }
 
+    /// The front end's motion estimate, if one ran.
+    pub fn motion(&self) -> Option<ScanMotion> {
+        (self.has_motion == 1).then_some(self.motion)
+    }
+
+    /// Sets (or clears) the front end's motion estimate.
+    pub fn set_motion(&mut self, motion: Option<ScanMotion>) {
+        self.motion = motion.unwrap_or_default();
+        self.has_motion = u32::from(motion.is_some());
+    }
+
     /// Replaces the lines and corners.
     pub fn set(&mut self, lines: &[Line], corners: &[Corner]) -> Result<(), CapacityError> {
         self.line_count = fill("lines", &mut self.lines, lines)?;
@@ -78,6 +92,7 @@ impl Features {
             scan_sent_ns: self.scan_sent_ns,
             processing_ns: self.processing_ns,
             odometry: self.odometry(),
+            motion: self.motion(),
             lines: Cow::Borrowed(self.lines()),
             corners: Cow::Borrowed(self.corners()),
         }
@@ -89,6 +104,7 @@ impl Features {
         features.scan_sent_ns = record.scan_sent_ns;
         features.processing_ns = record.processing_ns;
         features.set_odometry(record.odometry);
+        features.set_motion(record.motion);
         features.set(&record.lines, &record.corners)?;
         Ok(features)
     }
@@ -108,6 +124,7 @@ pub struct FeaturesRecord<'a> {
     pub scan_sent_ns: u64,
     pub processing_ns: u64,
     pub odometry: Option<OdometryAtScan>,
+    pub motion: Option<ScanMotion>,
     pub lines: Cow<'a, [Line]>,
     pub corners: Cow<'a, [Corner]>,
 }

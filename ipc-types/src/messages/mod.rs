@@ -10,6 +10,7 @@ mod odometry;
 mod path_chunk;
 mod pose;
 mod pose_estimate;
+mod scan_motion;
 mod world_corners;
 
 pub use corner::{Corner, MapCorner, TrueCorner};
@@ -22,6 +23,7 @@ pub use odometry::Odometry;
 pub use path_chunk::{PathChunk, PathChunkRecord, StampedPose};
 pub use pose::Pose2;
 pub use pose_estimate::{PoseEstimate, StageTiming};
+pub use scan_motion::ScanMotion;
 pub use world_corners::{WorldCorners, WorldCornersRecord};
 
 crate::zeroed::impl_zeroable!(
@@ -41,4 +43,5 @@ crate::zeroed::impl_zeroable!(
     MapSnapshot,
     StampedPose,
     PathChunk,
+    ScanMotion,
 );

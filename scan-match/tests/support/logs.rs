@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use lidar_replay::{LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, open_log};
+use lidar_replay::{
+    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, ReorderConfig, open_log,
+};
 use nalgebra::Matrix3;
 use scan_match::{BeamGeometry, OdometryInput, ScanInput};
 use slam_geom::Pose2;
@@ -43,7 +45,8 @@ pub fn data_dir() -> PathBuf {
 /// Reads at most `limit` scans of a log, each with the odometry at its stamp and that
 /// odometry's covariance as lidar-replay publishes it (a random walk with the motion).
 pub fn load(path: &Path, format: LogFormat, limit: usize) -> Result<Vec<LoggedScan>> {
-    let reader = open_log(format, path).with_context(|| format!("opening {}", path.display()))?;
+    let reader = open_log(format, path, ReorderConfig::default())
+        .with_context(|| format!("opening {}", path.display()))?;
     let mut covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut odometry: Option<OdometryInput> = None;
     let mut scans = Vec::new();

@@ -1,0 +1,48 @@
+//! The front end's registration of a scan: how the robot moved since the previous one.
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+use super::pose::Pose2;
+
+/// The front end's motion estimate for one scan: the scan registered against a local map of
+/// the recent ones and fused with the odometry (docs/CONVENTIONS.md, "Front end").
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("slam::ScanMotion::v1")]
+pub struct ScanMotion {
+    /// The robot's pose in the front end's own frame (the identity at its first scan).
+    pub pose: Pose2,
+    /// The motion since the previous scan, in the previous robot frame.
+    pub increment: Pose2,
+    /// Row-major covariance of `increment` over `(x, y, yaw)`.
+    pub increment_covariance: [f64; 9],
+    /// How the scan was registered: one of the `MATCH_*` values.
+    pub match_status: u32,
+    /// What became of the odometry: one of the `ODOMETRY_*` values.
+    pub odometry_status: u32,
+    /// Points used for the registration, and those that found the map.
+    pub points: u32,
+    pub inliers: u32,
+}
+
+impl ScanMotion {
+    /// The first scan: it starts the front end's map.
+    pub const MATCH_FIRST: u32 = 1;
+    /// Registered; the scan fixes every direction.
+    pub const MATCH_OK: u32 = 2;
+    /// Registered, but a direction is left to the prior (a corridor's length).
+    pub const MATCH_DEGENERATE: u32 = 3;
+    /// Not registered: the motion is the prior's (odometry or constant velocity).
+    pub const MATCH_FAILED: u32 = 4;
+
+    /// No odometry with this scan.
+    pub const ODOMETRY_ABSENT: u32 = 0;
+    /// The first reading: nothing to take a step from yet.
+    pub const ODOMETRY_STARTED: u32 = 1;
+    /// The odometry step was used.
+    pub const ODOMETRY_USED: u32 = 2;
+    /// The odometry step was not believed (not finite, implausible, or contradicted by the
+    /// scan).
+    pub const ODOMETRY_REJECTED: u32 = 3;
+}
