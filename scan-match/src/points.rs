@@ -6,8 +6,12 @@ use nalgebra::{Matrix2, Vector2};
 use crate::cell_hash::{CellSet, cell_key};
 use crate::input::BeamGeometry;
 
-/// Neighbouring beams on each side that a normal is fitted over.
+/// Fewest neighbouring beams on each side that a normal is fitted over.
 const NORMAL_HALF_WINDOW: usize = 3;
+/// Most neighbouring beams on each side that a normal is fitted over.
+const MAX_NORMAL_HALF_WINDOW: usize = 12;
+/// Half the length of wall, metres, a normal is fitted over when the beams are dense.
+const NORMAL_EXTENT: f64 = 0.1;
 
 /// A scan point in the robot frame with the unit normal of its surface, pointing towards
 /// the sensor.
@@ -52,16 +56,19 @@ pub fn extract(
         let (beam, p, r) = raw[k];
         // Neighbours on one surface are a few beam spacings apart at this range (more on
         // an oblique wall); a larger gap is a depth jump to another surface.
-        let radius = (4.0 * NORMAL_HALF_WINDOW as f64 * r * step).clamp(2.0 * voxel, 1.0);
-        let lo = k.saturating_sub(NORMAL_HALF_WINDOW);
-        let hi = (k + NORMAL_HALF_WINDOW).min(raw.len() - 1);
+        // The window spans at least NORMAL_EXTENT of wall: over a few centimetres, range
+        // noise tilts a normal by tenths of a radian, and a wall seen by a dense scanner
+        // close by would seem to fix the motion along itself.
+        let half_window = ((NORMAL_EXTENT / (r * step)).ceil() as usize)
+            .clamp(NORMAL_HALF_WINDOW, MAX_NORMAL_HALF_WINDOW);
+        let radius = (4.0 * half_window as f64 * r * step).clamp(2.0 * voxel, 1.0);
+        let lo = k.saturating_sub(half_window);
+        let hi = (k + half_window).min(raw.len() - 1);
         let mut n = 0.0;
         let mut sum = Vector2::zeros();
         let mut sum_sq = Matrix2::zeros();
         for &(other_beam, q, _) in &raw[lo..=hi] {
-            if other_beam.abs_diff(beam) > NORMAL_HALF_WINDOW
-                || (q - p).norm_squared() > radius * radius
-            {
+            if other_beam.abs_diff(beam) > half_window || (q - p).norm_squared() > radius * radius {
                 continue;
             }
             n += 1.0;
@@ -150,5 +157,37 @@ mod tests {
             assert!((p.point.x - 2.0).abs() < 1e-5);
             assert!((p.normal - Vector2::new(-1.0, 0.0)).norm() < 1e-4);
         }
+    }
+
+    #[test]
+    fn a_dense_scan_of_a_near_wall_gives_normals_that_do_not_tilt() {
+        // A UTM-30LX (0.25 degree steps) 1.25 m from a corridor wall along x, with 1 cm of
+        // range noise from a fixed sequence: over the few centimetres seven beams span, the
+        // noise would tilt the normals by tenths of a radian, and the wall would seem to fix
+        // the motion along itself.
+        let geometry = BeamGeometry {
+            angle_min: 0.3,
+            angle_increment: PI / 720.0,
+            range_min: 0.1,
+            range_max: 30.0,
+        };
+        let n = ((PI - 0.6) / geometry.angle_increment) as usize;
+        let mut state = 12345_u64;
+        let ranges: Vec<f32> = (0..n)
+            .map(|i| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let noise = ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.035;
+                let bearing = geometry.angle_min + i as f64 * geometry.angle_increment;
+                (1.25 / bearing.sin() + noise) as f32
+            })
+            .collect();
+        let scan = extract(&geometry, &ranges, 0.01, 0.05);
+        assert!(scan.points.len() > 50);
+        // What the normals say about motion along the wall, against across it.
+        let along: f64 = scan.points.iter().map(|p| p.normal.x * p.normal.x).sum();
+        let across: f64 = scan.points.iter().map(|p| p.normal.y * p.normal.y).sum();
+        assert!(along < 0.01 * across, "along {along}, across {across}");
     }
 }

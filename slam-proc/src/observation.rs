@@ -59,6 +59,10 @@ pub struct OdometryInput {
 pub struct MeasuredMotion {
     pub increment: Pose2,
     pub covariance: Matrix3<f64>,
+    /// Whether the scan fixed every direction of the step. A step the front end left partly
+    /// to its prior (a corridor's length) or could not register is refined with the scan's
+    /// corners and lines, the front end's step as their prior.
+    pub constrained: bool,
 }
 
 impl MeasuredMotion {

@@ -32,6 +32,8 @@ pub struct FastSlam {
     scans: u64,
     particles: Vec<Particle>,
     motion: MotionEstimator,
+    /// The front end's measured steps integrated, with their covariance in its frame.
+    measured_track: OdometryInput,
     dead_reckoning: Pose2,
     /// The particle with the highest weight at the last scan (after resampling, one of
     /// its copies).
@@ -44,6 +46,12 @@ pub struct FastSlam {
     lines: Vec<LineObservation>,
     /// One set of update buffers per chunk of `PARTICLES_PER_TASK` particles.
     scratch: Vec<Scratch>,
+}
+
+/// The rotation by `yaw` acting on `(x, y)`, leaving yaw as it is.
+fn rotation3(yaw: f64) -> nalgebra::Matrix3<f64> {
+    let (s, c) = yaw.sin_cos();
+    nalgebra::Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 }
 
 /// Where a scan's motion comes from.
@@ -95,6 +103,10 @@ impl FastSlam {
             scans: 0,
             particles: vec![Particle::new(map); config.particles],
             motion: MotionEstimator::new(&config),
+            measured_track: OdometryInput {
+                pose: Pose2::IDENTITY,
+                covariance: nalgebra::Matrix3::zeros(),
+            },
             dead_reckoning: Pose2::IDENTITY,
             best: 0,
             gates: Gates::new(config.association_probability),
@@ -206,12 +218,35 @@ impl FastSlam {
                 self.motion
                     .estimate(stamp_ns, &prepared, &self.lines, odometry, config)
             }
-            StepMotion::Measured(measured) => Motion {
-                delta: measured.increment,
-                covariance: measured.covariance,
-                source: MotionSource::Measured,
-                inliers: 0,
-            },
+            StepMotion::Measured(measured) => {
+                // The front end's track, as odometry for the corner fit: the covariance
+                // of each step turned into the track's frame and summed, as an odometry
+                // publisher integrates it (docs/CONVENTIONS.md, "Odometry").
+                let before = self.measured_track;
+                let turn = rotation3(before.pose.yaw);
+                self.measured_track = OdometryInput {
+                    pose: before.pose.compose(&measured.increment),
+                    covariance: before.covariance + turn * measured.covariance * turn.transpose(),
+                };
+                // Estimated every scan, so the fit's last corners stay the last scan's.
+                let refined = self.motion.estimate(
+                    stamp_ns,
+                    &prepared,
+                    &self.lines,
+                    Some(&self.measured_track),
+                    config,
+                );
+                if measured.constrained {
+                    Motion {
+                        delta: measured.increment,
+                        covariance: measured.covariance,
+                        source: MotionSource::Measured,
+                        inliers: 0,
+                    }
+                } else {
+                    refined
+                }
+            }
         };
         self.dead_reckoning = self.dead_reckoning.compose(&motion.delta);
         let motion_done = Instant::now();
@@ -405,6 +440,7 @@ mod tests {
         let step = MeasuredMotion {
             increment: Pose2::new(0.1, 0.0, 0.02),
             covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-6, 1e-6, 1e-7)),
+            constrained: true,
         };
         // A front end's first scan has no motion.
         let first = MeasuredMotion {
@@ -443,6 +479,54 @@ mod tests {
         }
         let moved = last.unwrap().dead_reckoning.translation_norm();
         assert!(moved < 0.05, "moved {moved} m");
+    }
+
+    #[test]
+    fn a_step_the_front_end_left_open_is_taken_from_the_corners() {
+        // The robot advances 5 cm a scan past four corners; the front end, as in a corridor,
+        // measured no advance and says the step is not fixed.
+        let world = [
+            (3.0, 1.0, 0.5, 1.2),
+            (5.0, -2.0, 2.0, 1.6),
+            (-1.0, 4.0, -1.0, 1.9),
+        ];
+        let seen_from = |x: f64| -> Vec<Observation> {
+            world
+                .iter()
+                .map(|&(cx, cy, heading, angle)| observation(cx - x, cy, heading, angle))
+                .collect()
+        };
+        let run = |constrained: bool| {
+            let config = SlamConfig {
+                particles: 10,
+                use_measured_motion: true,
+                ..SlamConfig::default()
+            };
+            let mut slam = FastSlam::new(config, 2).unwrap();
+            // Along x the front end knows nothing: 10 cm of its prior's spread a step.
+            let stuck = MeasuredMotion {
+                increment: Pose2::IDENTITY,
+                covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-2, 1e-6, 1e-7)),
+                constrained,
+            };
+            let mut last = None;
+            for k in 0..20 {
+                let x = 0.05 * k as f64;
+                last = Some(slam.process_measured(k * 25_000_000, &seen_from(x), &[], &stuck));
+            }
+            // The motion the particles were moved by, integrated.
+            last.unwrap().dead_reckoning.x
+        };
+        let refined = run(false);
+        assert!(
+            (refined - 0.95).abs() < 0.03,
+            "refined to {refined} m, not 0.95 m"
+        );
+        let believed = run(true);
+        assert!(
+            believed.abs() < 1e-9,
+            "a fixed step is believed: {believed} m"
+        );
     }
 
     #[test]
