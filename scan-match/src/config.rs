@@ -29,7 +29,8 @@ pub struct FrontEndConfig {
     pub max_search_yaw: f64,
     /// Gauss-Newton iterations at most per scan.
     pub max_iterations: usize,
-    /// The iteration stops once a step moves every point by less than this, metres.
+    /// The iteration stops once a step moves every point by less than this, metres: a
+    /// tenth of the range noise, below which further steps change nothing measurable.
     pub convergence: f64,
     /// A new keyframe joins the local map after the robot has moved this far, metres...
     pub keyframe_distance: f64,
@@ -76,7 +77,7 @@ impl Default for FrontEndConfig {
             max_search_translation: 0.5,
             max_search_yaw: 0.6,
             max_iterations: 30,
-            convergence: 1e-4,
+            convergence: 1e-3,
             keyframe_distance: 0.3,
             keyframe_angle: 0.2,
             max_keyframes: 50,

@@ -12,7 +12,7 @@ use crate::fusion::{Prediction, disagreement, fuse, predict, robot_to_map};
 use crate::input::{OdometryInput, ScanInput};
 use crate::local_map::LocalMap;
 use crate::output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
-use crate::points::{SurfacePoint, extract};
+use crate::points::{Extractor, SurfacePoint};
 use crate::prior::{
     OdometryRejection, Step, constant_velocity_step, odometry_step, positive_definite,
 };
@@ -43,6 +43,7 @@ pub struct FrontEnd {
     config: FrontEndConfig,
     params: RegistrationParams,
     map: LocalMap,
+    extractor: Extractor,
     pose: Pose2,
     last_stamp_ns: Option<u64>,
     /// `(vx, vy, yaw rate)` in the robot frame, from the last step.
@@ -64,6 +65,7 @@ impl FrontEnd {
             },
             map: LocalMap::new(config.voxel_size, config.max_keyframes),
             config,
+            extractor: Extractor::default(),
             pose: Pose2::IDENTITY,
             last_stamp_ns: None,
             velocity: Vector3::zeros(),
@@ -96,7 +98,7 @@ impl FrontEnd {
     pub fn process(&mut self, scan: &ScanInput<'_>) -> Result<FrontEndOutput, InputError> {
         let start = Instant::now();
         scan.geometry.check()?;
-        let extracted = extract(
+        let extracted = self.extractor.extract(
             &scan.geometry,
             scan.ranges,
             self.config.range_sigma,
@@ -273,6 +275,10 @@ impl FrontEnd {
             };
             seed = search_sample(&self.map, &sample, &seed, fine, radius).0;
         }
+        // The seed is now within the search's resolution of the basin (or had most points
+        // on the map already): a gate of the coarse search's radius is wide enough, and
+        // keeps every query within the map's lookup raster.
+        let gate = gate.min(3.0 * radius);
         let found = register(&self.map, points, seed, gate, &self.params);
         if (found.inliers as f64) < self.config.min_inlier_fraction * points.len() as f64 {
             return Err(MatchFailure::TooFewInliers);

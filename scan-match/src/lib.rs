@@ -25,6 +25,7 @@
 //! degenerate and along which direction, failed; odometry used or rejected; counts; time).
 //! [`FrontEnd::stats`] counts over the run. All settings are in [`FrontEndConfig`].
 
+pub mod bearings;
 mod cell_hash;
 mod config;
 pub mod constraint;
@@ -33,6 +34,7 @@ mod front_end;
 pub mod fusion;
 mod input;
 pub mod local_map;
+mod nearest_field;
 mod output;
 pub mod points;
 pub mod prior;
