@@ -38,6 +38,7 @@ mod nearest_field;
 mod output;
 pub mod points;
 pub mod prior;
+pub mod recovery;
 pub mod registration;
 pub mod search;
 
