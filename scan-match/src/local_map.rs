@@ -326,6 +326,8 @@ mod tests {
             .map(|i| wall_point(f64::from(i) * 0.1 + 0.025))
             .collect();
         map.insert(Pose2::IDENTITY, &scan);
+        let tiles = map.field_tiles();
+        assert!(tiles > 0);
         let hit = map
             .nearest(Vector2::new(0.52, 0.9), Vector2::new(0.0, -1.0), 0.2)
             .unwrap();
@@ -346,6 +348,12 @@ mod tests {
                 .is_none()
         );
         assert_eq!(map.len(), 80);
+        // The raster's tiles around the first keyframe went with it.
+        assert!(
+            map.field_tiles() < 2 * tiles + tiles / 2,
+            "{}",
+            map.field_tiles()
+        );
         assert_eq!(map.last_keyframe(), Some(Pose2::new(20.0, 0.0, 0.0)));
     }
 
