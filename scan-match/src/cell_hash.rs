@@ -37,7 +37,15 @@ pub(crate) type CellSet = HashSet<u64, BuildHasherDefault<CellHasher>>;
 /// The key of the cell of edge `size` holding `(x, y)`; two `i32` packed into a `u64`.
 #[inline]
 pub(crate) fn cell_key(x: f64, y: f64, size: f64) -> u64 {
-    pack((x / size).floor() as i32, (y / size).floor() as i32)
+    pack(floor_i32(x / size), floor_i32(y / size))
+}
+
+/// `floor(v)` as an integer (saturating, as `as` does) without the library call the
+/// baseline x86-64 target makes of `f64::floor`.
+#[inline]
+pub(crate) fn floor_i32(v: f64) -> i32 {
+    let t = v as i32;
+    if f64::from(t) > v { t - 1 } else { t }
 }
 
 #[inline]
@@ -55,5 +63,8 @@ mod tests {
         assert_ne!(cell_key(0.0, 0.01, 0.1), cell_key(0.0, -0.01, 0.1));
         assert_eq!(cell_key(0.01, 0.02, 0.1), cell_key(0.09, 0.05, 0.1));
         assert_eq!(pack(-1, 2), cell_key(-0.05, 0.25, 0.1));
+        for v in [-2.5, -1.0, -0.5, 0.0, 0.3, 1.0, 2.7] {
+            assert_eq!(floor_i32(v), v.floor() as i32);
+        }
     }
 }

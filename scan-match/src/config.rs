@@ -27,9 +27,16 @@ pub struct FrontEndConfig {
     pub max_search_translation: f64,
     /// ...and this far in yaw, radians.
     pub max_search_yaw: f64,
+    /// When the prior allows more than that window (a gap in the data) and the fit from
+    /// it is weak, a wide search spans the prior's 3-sigma window up to this far each
+    /// way, metres...
+    pub recovery_translation: f64,
+    /// ...and this far in yaw, radians (pi: a full turn).
+    pub recovery_yaw: f64,
     /// Gauss-Newton iterations at most per scan.
     pub max_iterations: usize,
-    /// The iteration stops once a step moves every point by less than this, metres.
+    /// The iteration stops once a step moves every point by less than this, metres: a
+    /// tenth of the range noise, below which further steps change nothing measurable.
     pub convergence: f64,
     /// A new keyframe joins the local map after the robot has moved this far, metres...
     pub keyframe_distance: f64,
@@ -75,8 +82,10 @@ impl Default for FrontEndConfig {
             max_correspondence: 0.5,
             max_search_translation: 0.5,
             max_search_yaw: 0.6,
+            recovery_translation: 1.5,
+            recovery_yaw: std::f64::consts::PI,
             max_iterations: 30,
-            convergence: 1e-4,
+            convergence: 1e-3,
             keyframe_distance: 0.3,
             keyframe_angle: 0.2,
             max_keyframes: 50,
@@ -104,6 +113,8 @@ impl FrontEndConfig {
             ("convergence", self.convergence),
             ("max_search_translation", self.max_search_translation),
             ("max_search_yaw", self.max_search_yaw),
+            ("recovery_translation", self.recovery_translation),
+            ("recovery_yaw", self.recovery_yaw),
             ("keyframe_distance", self.keyframe_distance),
             ("keyframe_angle", self.keyframe_angle),
             ("degeneracy_ratio", self.degeneracy_ratio),

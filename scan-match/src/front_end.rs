@@ -12,10 +12,12 @@ use crate::fusion::{Prediction, disagreement, fuse, predict, robot_to_map};
 use crate::input::{OdometryInput, ScanInput};
 use crate::local_map::LocalMap;
 use crate::output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
-use crate::points::{SurfacePoint, extract};
+use crate::points::{Extractor, SurfacePoint};
 use crate::prior::{
-    OdometryRejection, Step, constant_velocity_step, odometry_step, positive_definite,
+    MAX_EXTRAPOLATION_S, OdometryRejection, Step, constant_velocity_step, odometry_step,
+    positive_definite,
 };
+use crate::recovery::{RecoveryWindow, rank, recover};
 use crate::registration::{Registration, RegistrationParams, register};
 use crate::search::{Window, score_sample, search_sample, subsample};
 
@@ -36,6 +38,11 @@ const WEAK_FIT_MARGIN: f64 = 0.7;
 /// is no evidence against the odometry.
 const WEAK_FIT_MIN_SCORE: f64 = 0.4;
 
+/// A recovered fit replaces the one from the prior's window only if it ranks clearly
+/// higher: the wide search sees many more poses, and one of them fitting a little better
+/// by chance is no reason to jump.
+const RECOVERY_MARGIN: f64 = 1.2;
+
 /// Registers every scan against a local map of recent keyframes, fused with odometry.
 /// Feed it every scan in order with [`FrontEnd::process`].
 #[derive(Debug, Clone)]
@@ -43,6 +50,7 @@ pub struct FrontEnd {
     config: FrontEndConfig,
     params: RegistrationParams,
     map: LocalMap,
+    extractor: Extractor,
     pose: Pose2,
     last_stamp_ns: Option<u64>,
     /// `(vx, vy, yaw rate)` in the robot frame, from the last step.
@@ -64,6 +72,7 @@ impl FrontEnd {
             },
             map: LocalMap::new(config.voxel_size, config.max_keyframes),
             config,
+            extractor: Extractor::default(),
             pose: Pose2::IDENTITY,
             last_stamp_ns: None,
             velocity: Vector3::zeros(),
@@ -96,7 +105,7 @@ impl FrontEnd {
     pub fn process(&mut self, scan: &ScanInput<'_>) -> Result<FrontEndOutput, InputError> {
         let start = Instant::now();
         scan.geometry.check()?;
-        let extracted = extract(
+        let extracted = self.extractor.extract(
             &scan.geometry,
             scan.ranges,
             self.config.range_sigma,
@@ -148,13 +157,15 @@ impl FrontEnd {
             Some(_) => {}
         }
 
+        // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
+        let gap = elapsed_s > MAX_EXTRAPOLATION_S;
         let mut prior = odometry.unwrap_or(cv);
-        let mut registration = self.register(points, &prior);
+        let mut registration = self.register(points, &prior, gap);
         if let Ok(step) = odometry {
             if registration.is_err() {
                 // The odometry may have put the scan where it finds no map: try the
                 // other prior before believing it.
-                if let Ok(other) = self.register(points, &cv) {
+                if let Ok(other) = self.register(points, &cv, gap) {
                     registration = Ok(other);
                 }
             }
@@ -162,11 +173,19 @@ impl FrontEnd {
                 let distance = disagreement(&predict(&self.pose, &step), found);
                 if distance.is_nan() || distance > self.config.odometry_gate {
                     // The odometry's seed may have led the fit astray: the scan gets a
-                    // second chance from constant velocity before the two are compared.
-                    if let Ok(other) = self.register(points, &cv) {
+                    // second chance from constant velocity, and the better of the two fits
+                    // is compared with the odometry.
+                    if let Ok(other) = self.register(points, &cv, gap)
+                        && rank(&other, &self.params) > rank(found, &self.params)
+                    {
                         registration = Ok(other);
                     }
-                    if registration
+                    let distance = registration
+                        .as_ref()
+                        .map_or(f64::NAN, |r| disagreement(&predict(&self.pose, &step), r));
+                    if distance <= self.config.odometry_gate {
+                        // The second fit agrees with the wheels.
+                    } else if registration
                         .as_ref()
                         .is_ok_and(|r| self.overrules(r, &step, points))
                     {
@@ -235,8 +254,14 @@ impl FrontEnd {
     }
 
     /// Registration seeded by `step`, judged: enough points, enough of them matched, at
-    /// least one direction constrained.
-    fn register(&self, points: &[SurfacePoint], step: &Step) -> Result<Registration, MatchFailure> {
+    /// least one direction constrained. After a `gap` in the data, or when the fit fails
+    /// outright, a prior wider than the search window gets a wide search as well.
+    fn register(
+        &self,
+        points: &[SurfacePoint],
+        step: &Step,
+        gap: bool,
+    ) -> Result<Registration, MatchFailure> {
         if points.len() < self.config.min_points {
             return Err(MatchFailure::TooFewPoints);
         }
@@ -254,10 +279,15 @@ impl FrontEnd {
         // picks the basin first (coarse, then fine around the best), so that a fast turn
         // or a no-odometry guess does not leave Gauss-Newton in the wrong one.
         let radius = 2.0 * self.config.voxel_size;
+        let prior_window = Window {
+            translation: 3.0 * (c[(0, 0)] + c[(1, 1)]).sqrt(),
+            yaw: 3.0 * c[(2, 2)].sqrt(),
+        };
         let window = Window {
-            translation: (3.0 * (c[(0, 0)] + c[(1, 1)]).sqrt())
+            translation: prior_window
+                .translation
                 .min(self.config.max_search_translation),
-            yaw: (3.0 * c[(2, 2)].sqrt()).min(self.config.max_search_yaw),
+            yaw: prior_window.yaw.min(self.config.max_search_yaw),
         };
         let mut seed = prediction.pose;
         let sample = subsample(points);
@@ -273,7 +303,38 @@ impl FrontEnd {
             };
             seed = search_sample(&self.map, &sample, &seed, fine, radius).0;
         }
-        let found = register(&self.map, points, seed, gate, &self.params);
+        // The seed is now within the search's resolution of the basin (or had most points
+        // on the map already): a gate of the coarse search's radius is wide enough, and
+        // keeps every query within the map's lookup raster.
+        let gate = gate.min(3.0 * radius);
+        let mut found = register(&self.map, points, seed, gate, &self.params);
+        let clipped =
+            prior_window.translation > window.translation || prior_window.yaw > window.yaw;
+        let n = points.len() as f64;
+        let weak = (found.inliers as f64) < self.config.strong_inlier_fraction * n;
+        let failed = (found.inliers as f64) < self.config.min_inlier_fraction * n;
+        if clipped && (failed || (gap && weak)) {
+            // The prior allowed more than the window searched (a gap in the data, a fast
+            // turn without odometry) and the fit is poor: look wider. Not for a merely
+            // weak fit between regular scans: a corridor's repeating doors would tempt
+            // the wide search along it.
+            let how = RecoveryWindow {
+                seed: prediction.pose,
+                window: Window {
+                    translation: prior_window
+                        .translation
+                        .min(self.config.recovery_translation),
+                    yaw: prior_window.yaw.min(self.config.recovery_yaw),
+                },
+                coarse_radius: 3.0 * radius,
+                fine_radius: radius,
+            };
+            if let Some(other) = recover(&self.map, points, &sample, &how, &self.params)
+                && rank(&other, &self.params) > rank(&found, &self.params) * RECOVERY_MARGIN
+            {
+                found = other;
+            }
+        }
         if (found.inliers as f64) < self.config.min_inlier_fraction * points.len() as f64 {
             return Err(MatchFailure::TooFewInliers);
         }

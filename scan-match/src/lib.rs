@@ -7,24 +7,31 @@
 //!
 //! Per scan ([`FrontEnd::process`] on a [`ScanInput`]):
 //! 1. valid beams become points with surface normals, thinned to one per voxel
-//!    ([`points`]);
+//!    ([`points`], with the beams' directions kept between scans: [`bearings`]);
 //! 2. the prior step is the odometry increment with the growth of its covariance, or
 //!    constant velocity without odometry ([`prior`]);
-//! 3. point-to-line Gauss-Newton with a Cauchy loss and a shrinking gate registers the scan
-//!    against the local map from the prior's prediction ([`registration`]); the fit's
-//!    Hessian says which directions the scan fixes and which it leaves open
-//!    ([`constraint`]: a corridor's length is left to the prior);
-//! 4. an odometry step the match contradicts (Mahalanobis), or that is not finite or
+//! 3. where the prior is too uncertain, a correlative search picks the basin ([`search`]);
+//!    after a gap in the data that outgrows its window, a wide search up to a full turn
+//!    proposes a few candidates, refined and ranked by their registered fits
+//!    ([`recovery`]);
+//! 4. point-to-line Gauss-Newton with a Cauchy loss and a shrinking gate registers the scan
+//!    against the local map from the seed ([`registration`]); the fit's Hessian says which
+//!    directions the scan fixes and which it leaves open ([`constraint`]: a corridor's
+//!    length is left to the prior);
+//! 5. an odometry step the match contradicts (Mahalanobis), or that is not finite or
 //!    faster than a robot, is rejected and counted; otherwise the two are fused by their
 //!    information ([`fusion`]);
-//! 5. the scan joins the local map when the robot has moved or turned enough
-//!    ([`local_map`]).
+//! 6. the scan joins the local map when the robot has moved or turned enough
+//!    ([`local_map`]). Queries go through a lookup raster over the map (the nearest point
+//!    per cell and normal direction), stamped only where a keyframe adds voxels, so a
+//!    query costs a table lookup rather than a grid search.
 //!
 //! The result ([`FrontEndOutput`]) is the pose in the front end's own frame (the identity
 //! at the first scan), the increment with its covariance, and what happened (matched,
 //! degenerate and along which direction, failed; odometry used or rejected; counts; time).
 //! [`FrontEnd::stats`] counts over the run. All settings are in [`FrontEndConfig`].
 
+pub mod bearings;
 mod cell_hash;
 mod config;
 pub mod constraint;
@@ -33,9 +40,11 @@ mod front_end;
 pub mod fusion;
 mod input;
 pub mod local_map;
+mod nearest_field;
 mod output;
 pub mod points;
 pub mod prior;
+pub mod recovery;
 pub mod registration;
 pub mod search;
 

@@ -1,18 +1,30 @@
 //! The local map: the surface points of the last few keyframes in the front end's frame,
-//! thinned to one point per voxel, with a grid for nearest-neighbour queries.
+//! thinned to one point per voxel, with a grid for exact nearest-neighbour queries and a
+//! lookup raster ([`crate::nearest_field`]) that answers the usual ones in one step.
 
 use std::collections::VecDeque;
 
 use nalgebra::Vector2;
 use slam_geom::Pose2;
 
-use crate::cell_hash::{CellMap, cell_key, pack};
+use crate::cell_hash::{CellMap, cell_key, floor_i32, pack};
+use crate::nearest_field::{Lookup, NearestField, SlabPoint, same_sector};
 use crate::points::SurfacePoint;
 
 /// Cells of the neighbour grid are this many voxels wide: a query within the usual gates
 /// (a few voxels) looks at one to 2 x 2 cells. A hash lookup costs more than the few extra
 /// points a wider cell holds (measured: 2, 4, 6 and 8 voxels; 6 was fastest on both logs).
 const GRID_CELL_VOXELS: f64 = 6.0;
+
+/// Cells of the lookup raster are this many voxels wide: a point's map neighbour is
+/// picked as the one nearest the query's cell centre, so the raster's choice differs from
+/// the exact one only between points a voxel apart, which lie on one line.
+const FIELD_CELL_VOXELS: f64 = 1.0;
+
+/// Map points stamp raster cells this many voxels around them: the raster answers gates
+/// up to this less half a cell (the correlative search's widest radius, 6 voxels, and
+/// every settled registration gate); wider ones go to the grid.
+const FIELD_REACH_VOXELS: f64 = 7.0;
 
 /// Below this cosine between a scan normal and a map normal two points are not on the
 /// same surface seen from the same side (60 degrees: any plausible turn between
@@ -27,11 +39,13 @@ struct Keyframe {
     cells: Vec<u64>,
 }
 
-/// A map point with the voxel it stands for and the keyframe it came from.
+/// A map point with the voxel it stands for, the keyframe it came from and its place in
+/// the slab (which the raster names it by).
 #[derive(Debug, Clone, Copy)]
 struct Entry {
     voxel: u64,
     keyframe: u64,
+    slot: u32,
     point: SurfacePoint,
 }
 
@@ -55,6 +69,10 @@ pub struct LocalMap {
     keyframes: VecDeque<Keyframe>,
     cells: CellMap<Vec<Entry>>,
     len: usize,
+    /// Every map point by a stable id; dead ones wait in `free` for reuse.
+    slab: Vec<SlabPoint>,
+    free: Vec<u32>,
+    field: NearestField,
 }
 
 impl LocalMap {
@@ -67,6 +85,38 @@ impl LocalMap {
             keyframes: VecDeque::new(),
             cells: CellMap::default(),
             len: 0,
+            slab: Vec::new(),
+            free: Vec::new(),
+            field: NearestField::new(FIELD_CELL_VOXELS * voxel, FIELD_REACH_VOXELS * voxel),
+        }
+    }
+
+    /// A slab place for `point`, alive.
+    fn allocate(&mut self, point: SurfacePoint) -> u32 {
+        match self.free.pop() {
+            Some(id) => {
+                let slot = &mut self.slab[id as usize];
+                slot.point = point;
+                slot.alive = true;
+                id
+            }
+            None => {
+                self.slab.push(SlabPoint {
+                    point,
+                    generation: 0,
+                    alive: true,
+                });
+                (self.slab.len() - 1) as u32
+            }
+        }
+    }
+
+    /// The point leaves the map: raster slots naming it become stale.
+    fn kill(&mut self, id: u32) {
+        if let Some(slot) = self.slab.get_mut(id as usize) {
+            slot.alive = false;
+            slot.generation = slot.generation.wrapping_add(1);
+            self.free.push(id);
         }
     }
 
@@ -97,18 +147,55 @@ impl LocalMap {
                 point: pose.transform(p.point),
                 normal: rotation * p.normal,
             };
-            let entry = Entry {
-                voxel: cell_key(point.point.x, point.point.y, self.voxel),
-                keyframe: id,
-                point,
-            };
+            let voxel = cell_key(point.point.x, point.point.y, self.voxel);
             let cell = cell_key(point.point.x, point.point.y, self.cell);
             let entries = self.cells.entry(cell).or_default();
-            match entries.iter_mut().find(|e| e.voxel == entry.voxel) {
-                Some(existing) => *existing = entry,
+            let existing = entries.iter_mut().find(|e| e.voxel == voxel);
+            match existing {
+                Some(existing) if same_sector(&existing.point.normal, &point.normal) => {
+                    // The new point takes over the old one's slab place, and with it the
+                    // raster cells that named it: they are at most a voxel off, the
+                    // raster's resolution, and need no restamping.
+                    existing.keyframe = id;
+                    existing.point = point;
+                    let slot = existing.slot;
+                    if let Some(place) = self.slab.get_mut(slot as usize) {
+                        place.point = point;
+                    }
+                    self.field.touch(point.point, id);
+                }
+                Some(existing) => {
+                    // Another surface (the other wall of a corner): its raster cells are
+                    // another sector's, so the old point dies and the new one is stamped.
+                    let old = existing.slot;
+                    let slot = self.allocate(point);
+                    if let Some(existing) = self
+                        .cells
+                        .get_mut(&cell)
+                        .and_then(|entries| entries.iter_mut().find(|e| e.voxel == voxel))
+                    {
+                        *existing = Entry {
+                            voxel,
+                            keyframe: id,
+                            slot,
+                            point,
+                        };
+                    }
+                    self.kill(old);
+                    self.field.stamp(&self.slab, slot, id);
+                }
                 None => {
-                    entries.push(entry);
+                    let slot = self.allocate(point);
+                    if let Some(entries) = self.cells.get_mut(&cell) {
+                        entries.push(Entry {
+                            voxel,
+                            keyframe: id,
+                            slot,
+                            point,
+                        });
+                    }
                     self.len += 1;
+                    self.field.stamp(&self.slab, slot, id);
                 }
             }
             cells.push(cell);
@@ -119,33 +206,81 @@ impl LocalMap {
                 self.remove(&old);
             }
         }
+        if let Some(oldest) = self.keyframes.front() {
+            self.field.evict_before(oldest.id);
+        }
     }
 
     fn remove(&mut self, keyframe: &Keyframe) {
+        let mut dead = Vec::new();
         for cell in &keyframe.cells {
             if let Some(entries) = self.cells.get_mut(cell) {
                 let before = entries.len();
-                entries.retain(|e| e.keyframe != keyframe.id);
+                entries.retain(|e| {
+                    let stays = e.keyframe != keyframe.id;
+                    if !stays {
+                        dead.push(e.slot);
+                    }
+                    stays
+                });
                 self.len -= before - entries.len();
                 if entries.is_empty() {
                     self.cells.remove(cell);
                 }
             }
         }
+        for id in dead {
+            self.kill(id);
+        }
     }
 
-    /// The nearest map point to `query` within `radius` whose normal agrees with `normal`.
+    /// The nearest map point to `query` within `radius` whose normal agrees with `normal`
+    /// (the one nearest the query's raster cell centre where the raster reaches that far).
+    #[inline]
     pub fn nearest(
         &self,
         query: Vector2<f64>,
         normal: Vector2<f64>,
         radius: f64,
     ) -> Option<Neighbour> {
+        if radius <= self.field.max_gate() {
+            match self
+                .field
+                .lookup(&self.slab, query, normal, radius, MIN_NORMAL_COSINE)
+            {
+                Lookup::Found(id, distance_squared) => {
+                    let p = self.slab.get(id as usize)?.point;
+                    return Some(Neighbour {
+                        point: p.point,
+                        normal: p.normal,
+                        distance_squared,
+                    });
+                }
+                Lookup::Nothing => return None,
+                Lookup::Stale => {}
+            }
+        }
+        self.nearest_exact(query, normal, radius)
+    }
+
+    /// Raster tiles allocated (for tests of its upkeep).
+    pub fn field_tiles(&self) -> usize {
+        self.field.tiles()
+    }
+
+    /// The nearest map point to `query` within `radius` whose normal agrees with `normal`,
+    /// searched through the grid.
+    pub fn nearest_exact(
+        &self,
+        query: Vector2<f64>,
+        normal: Vector2<f64>,
+        radius: f64,
+    ) -> Option<Neighbour> {
         let r2 = radius * radius;
-        let x0 = ((query.x - radius) / self.cell).floor() as i32;
-        let x1 = ((query.x + radius) / self.cell).floor() as i32;
-        let y0 = ((query.y - radius) / self.cell).floor() as i32;
-        let y1 = ((query.y + radius) / self.cell).floor() as i32;
+        let x0 = floor_i32((query.x - radius) / self.cell);
+        let x1 = floor_i32((query.x + radius) / self.cell);
+        let y0 = floor_i32((query.y - radius) / self.cell);
+        let y1 = floor_i32((query.y + radius) / self.cell);
         let mut best: Option<Neighbour> = None;
         for ix in x0..=x1 {
             for iy in y0..=y1 {
@@ -191,6 +326,8 @@ mod tests {
             .map(|i| wall_point(f64::from(i) * 0.1 + 0.025))
             .collect();
         map.insert(Pose2::IDENTITY, &scan);
+        let tiles = map.field_tiles();
+        assert!(tiles > 0);
         let hit = map
             .nearest(Vector2::new(0.52, 0.9), Vector2::new(0.0, -1.0), 0.2)
             .unwrap();
@@ -211,6 +348,105 @@ mod tests {
                 .is_none()
         );
         assert_eq!(map.len(), 80);
+        // The raster's tiles around the first keyframe went with it.
+        assert!(
+            map.field_tiles() < 2 * tiles + tiles / 2,
+            "{}",
+            map.field_tiles()
+        );
         assert_eq!(map.last_keyframe(), Some(Pose2::new(20.0, 0.0, 0.0)));
+    }
+
+    /// The walls of a 6 x 4 m room with a 1 m pillar (both faces of its walls), as points
+    /// every `spacing` with normals into the room (out of the pillar).
+    fn room_points(spacing: f64) -> Vec<SurfacePoint> {
+        let mut points = Vec::new();
+        let mut wall = |a: (f64, f64), b: (f64, f64), normal: (f64, f64)| {
+            let length = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+            let n = (length / spacing) as usize;
+            for i in 0..n {
+                let t = (i as f64 + 0.5) / n as f64;
+                points.push(SurfacePoint {
+                    point: Vector2::new(a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)),
+                    normal: Vector2::new(normal.0, normal.1),
+                });
+            }
+        };
+        wall((-3.0, -2.0), (3.0, -2.0), (0.0, 1.0));
+        wall((3.0, -2.0), (3.0, 2.0), (-1.0, 0.0));
+        wall((3.0, 2.0), (-3.0, 2.0), (0.0, -1.0));
+        wall((-3.0, 2.0), (-3.0, -2.0), (1.0, 0.0));
+        wall((0.0, 0.0), (1.0, 0.0), (0.0, -1.0));
+        wall((1.0, 0.0), (1.0, 1.0), (1.0, 0.0));
+        wall((1.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        wall((0.0, 1.0), (0.0, 0.0), (-1.0, 0.0));
+        points
+    }
+
+    #[test]
+    fn the_raster_finds_the_exact_searchs_line_within_its_resolution() {
+        let voxel = 0.05;
+        let mut map = LocalMap::new(voxel, 2);
+        let room = room_points(0.02);
+        // Three views: the second replaces most of the first's voxels, the third pushes
+        // the first out, so stale and reused slab places are both exercised.
+        for shift in [0.0, 0.013, 0.031] {
+            let pose = Pose2::new(shift, -0.5 * shift, 0.0);
+            let seen: Vec<SurfacePoint> = room
+                .iter()
+                .map(|p| SurfacePoint {
+                    point: pose.inverse().transform(p.point),
+                    normal: p.normal,
+                })
+                .collect();
+            map.insert(pose, &seen);
+        }
+        let gate = 0.2;
+        let mut state = 12345_u64;
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut compared, mut other_line) = (0, 0);
+        for _ in 0..5000 {
+            // Near a wall, facing roughly as it does: where registration asks.
+            let near = room[(uniform() * room.len() as f64) as usize % room.len()];
+            let query = near.point + Vector2::new(0.5 * uniform() - 0.25, 0.5 * uniform() - 0.25);
+            let turn = 2.4 * uniform() - 1.2;
+            let normal = Pose2::new(0.0, 0.0, turn).rotation() * near.normal;
+            let exact = map.nearest_exact(query, normal, gate);
+            let fast = map.nearest(query, normal, gate);
+            match (exact, fast) {
+                (Some(e), Some(f)) => {
+                    compared += 1;
+                    // Nearest to the query's cell centre rather than to the query, from a
+                    // point up to a voxel from where it was stamped.
+                    let slack = 3.0 * std::f64::consts::SQRT_2 * voxel;
+                    assert!(
+                        f.distance_squared.sqrt() <= e.distance_squared.sqrt() + slack,
+                        "{query:?}: {f:?} vs {e:?}"
+                    );
+                    assert!(f.normal.dot(&normal) >= MIN_NORMAL_COSINE);
+                    let residual = |n: &Neighbour| n.normal.dot(&(query - n.point));
+                    if (residual(&f) - residual(&e)).abs() > 1e-3 {
+                        other_line += 1;
+                    }
+                }
+                (None, None) => {}
+                (Some(e), None) => assert!(
+                    e.distance_squared.sqrt() > gate - 0.1,
+                    "{query:?} {normal:?} {e:?} {:?}",
+                    map.field
+                        .lookup(&map.slab, query, normal, gate, MIN_NORMAL_COSINE)
+                ),
+                (None, Some(f)) => assert!(f.distance_squared.sqrt() <= gate),
+            }
+        }
+        assert!(compared > 1000, "{compared}");
+        // Only near corners may the two pick different walls.
+        assert!(other_line * 50 < compared, "{other_line} of {compared}");
+        assert!(map.field_tiles() > 0);
     }
 }

@@ -3,6 +3,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 
+use crate::bearings::Bearings;
 use crate::cell_hash::{CellSet, cell_key};
 use crate::input::BeamGeometry;
 
@@ -38,22 +39,61 @@ pub fn extract(
     range_sigma: f64,
     voxel: f64,
 ) -> ScanPoints {
-    let step = geometry.angle_increment.abs();
-    let mut raw: Vec<(usize, Vector2<f64>, f64)> = Vec::with_capacity(ranges.len());
-    for (i, &r) in ranges.iter().enumerate() {
-        let r = f64::from(r);
-        if !r.is_finite() || r < geometry.range_min || r > geometry.range_max || r <= 0.0 {
-            continue;
+    Extractor::default().extract(geometry, ranges, range_sigma, voxel)
+}
+
+/// [`extract`] with its bearings and buffers kept from one scan to the next.
+#[derive(Debug, Clone, Default)]
+pub struct Extractor {
+    bearings: Bearings,
+    raw: Vec<(usize, Vector2<f64>, f64)>,
+    taken: CellSet,
+}
+
+impl Extractor {
+    /// See [`extract`].
+    pub fn extract(
+        &mut self,
+        geometry: &BeamGeometry,
+        ranges: &[f32],
+        range_sigma: f64,
+        voxel: f64,
+    ) -> ScanPoints {
+        let directions = self.bearings.directions(geometry, ranges.len());
+        let raw = &mut self.raw;
+        raw.clear();
+        for (i, (&r, direction)) in ranges.iter().zip(directions).enumerate() {
+            let r = f64::from(r);
+            if !r.is_finite() || r < geometry.range_min || r > geometry.range_max || r <= 0.0 {
+                continue;
+            }
+            raw.push((i, direction * r, r));
         }
-        let bearing = geometry.angle_min + i as f64 * geometry.angle_increment;
-        let (s, c) = bearing.sin_cos();
-        raw.push((i, Vector2::new(r * c, r * s), r));
+        let taken = &mut self.taken;
+        taken.clear();
+        thin(geometry, raw, taken, range_sigma, voxel)
     }
+}
+
+/// Normals for the valid beams `raw` (beam index, point, range), one point per voxel.
+fn thin(
+    geometry: &BeamGeometry,
+    raw: &[(usize, Vector2<f64>, f64)],
+    taken: &mut CellSet,
+    range_sigma: f64,
+    voxel: f64,
+) -> ScanPoints {
+    let step = geometry.angle_increment.abs();
     let valid_beams = raw.len();
-    let mut taken = CellSet::default();
     let mut points = Vec::with_capacity(raw.len());
     for k in 0..raw.len() {
         let (beam, p, r) = raw[k];
+        // Only the first point of a voxel with a normal is kept: a voxel already taken
+        // needs no fit.
+        let voxel_key = cell_key(p.x, p.y, voxel);
+        if taken.contains(&voxel_key) {
+            continue;
+        }
         // Neighbours on one surface are a few beam spacings apart at this range (more on
         // an oblique wall); a larger gap is a depth jump to another surface.
         // The window spans at least NORMAL_EXTENT of wall: over a few centimetres, range
@@ -83,9 +123,7 @@ pub fn extract(
         let Some(normal) = line_normal(&cov, range_sigma) else {
             continue;
         };
-        if !taken.insert(cell_key(p.x, p.y, voxel)) {
-            continue;
-        }
+        taken.insert(voxel_key);
         // Towards the sensor, so the two faces of a thin wall never pair up.
         let normal = if normal.dot(&p) > 0.0 {
             -normal

@@ -8,7 +8,7 @@ use crate::config::FrontEndConfig;
 use crate::input::OdometryInput;
 
 /// Constant velocity is extrapolated over at most this long a step, seconds.
-const MAX_EXTRAPOLATION_S: f64 = 1.0;
+pub const MAX_EXTRAPOLATION_S: f64 = 1.0;
 
 /// An increment in the previous robot frame and its covariance over `(x, y, yaw)`.
 #[derive(Debug, Clone, Copy, PartialEq)]

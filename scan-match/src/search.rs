@@ -137,3 +137,131 @@ pub fn search_sample(
     }
     best
 }
+
+/// The `keep` best poses of a wide grid around `seed` (no prior: after a gap in the data
+/// the prior says little), each the best of its neighbourhood, best first. Translation
+/// steps of `radius`, yaw steps that move the scan's RMS point by `radius`, at most
+/// `max_yaw_steps` of them.
+pub fn search_candidates(
+    map: &LocalMap,
+    sample: &[SurfacePoint],
+    seed: &Pose2,
+    window: Window,
+    radius: f64,
+    keep: usize,
+    max_yaw_steps: usize,
+) -> Vec<(Pose2, f64)> {
+    let spread = (sample.iter().map(|p| p.point.norm_squared()).sum::<f64>()
+        / sample.len().max(1) as f64)
+        .sqrt()
+        .max(1.0);
+    let mut yaw_step = radius / spread;
+    let mut yaw_half_steps = (window.yaw / yaw_step).ceil() as usize;
+    if 2 * yaw_half_steps + 1 > max_yaw_steps {
+        yaw_half_steps = max_yaw_steps / 2;
+        yaw_step = window.yaw / yaw_half_steps.max(1) as f64;
+    }
+    let half = (window.translation / radius).round() as i32;
+    // Two candidates closer than this in every coordinate share a basin: the weaker is
+    // not kept.
+    let near = |a: &Pose2, b: &Pose2| {
+        (a.x - b.x).abs() <= 2.0 * radius
+            && (a.y - b.y).abs() <= 2.0 * radius
+            && wrap_angle(a.yaw - b.yaw).abs() <= 2.0 * yaw_step
+    };
+    let mut best: Vec<(Pose2, f64)> = Vec::with_capacity(keep + 1);
+    let yaw_half = yaw_half_steps as i64;
+    for k in -yaw_half..=yaw_half {
+        let yaw = wrap_angle(seed.yaw + k as f64 * yaw_step);
+        for i in -half..=half {
+            for j in -half..=half {
+                let pose = Pose2::new(
+                    seed.x + f64::from(i) * radius,
+                    seed.y + f64::from(j) * radius,
+                    yaw,
+                );
+                let floor = if best.len() < keep {
+                    0.0
+                } else {
+                    best.last().map_or(0.0, |b| b.1)
+                };
+                let s = score_bounded(map, sample, &pose, radius, floor);
+                if s <= floor {
+                    continue;
+                }
+                match best.iter().position(|b| near(&b.0, &pose)) {
+                    Some(index) if best[index].1 >= s => continue,
+                    Some(index) => {
+                        best.remove(index);
+                    }
+                    None => {}
+                }
+                let at = best.partition_point(|b| b.1 >= s);
+                best.insert(at, (pose, s));
+                best.truncate(keep);
+            }
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector2;
+
+    use super::*;
+
+    #[test]
+    fn the_wide_search_finds_a_half_turn() {
+        // An L of two walls and a post: no symmetry a half turn could mistake.
+        let mut map_points = Vec::new();
+        for i in 0..80 {
+            let t = f64::from(i) * 0.05;
+            map_points.push(SurfacePoint {
+                point: Vector2::new(t - 1.0, -1.0),
+                normal: Vector2::new(0.0, 1.0),
+            });
+            if i < 50 {
+                map_points.push(SurfacePoint {
+                    point: Vector2::new(-1.0, t - 1.0),
+                    normal: Vector2::new(1.0, 0.0),
+                });
+            }
+        }
+        for i in 0..8 {
+            map_points.push(SurfacePoint {
+                point: Vector2::new(1.5 + f64::from(i) * 0.05, 0.8),
+                normal: Vector2::new(0.0, -1.0),
+            });
+        }
+        let mut map = LocalMap::new(0.05, 5);
+        map.insert(Pose2::IDENTITY, &map_points);
+        let truth = Pose2::new(0.2, -0.1, 2.5);
+        let scan: Vec<SurfacePoint> = map_points
+            .iter()
+            .map(|p| SurfacePoint {
+                point: truth.inverse().transform(p.point),
+                normal: truth.inverse().rotation() * p.normal,
+            })
+            .collect();
+        let window = Window {
+            translation: 0.6,
+            yaw: std::f64::consts::PI,
+        };
+        let found = search_candidates(
+            &map,
+            &subsample(&scan),
+            &Pose2::IDENTITY,
+            window,
+            0.3,
+            4,
+            181,
+        );
+        assert!(!found.is_empty() && found.len() <= 4);
+        let (best, score) = found[0];
+        assert!(score > 0.5, "{found:?}");
+        assert!((best.x - truth.x).abs() < 0.31 && (best.y - truth.y).abs() < 0.31);
+        assert!(wrap_angle(best.yaw - truth.yaw).abs() < 0.1, "{found:?}");
+        assert!(found.windows(2).all(|w| w[0].1 >= w[1].1));
+    }
+}

@@ -256,3 +256,47 @@ fn without_odometry_or_points_the_motion_is_constant_velocity() {
     assert_close(&before.compose(&step), &out.odom_from_robot, 0.003, 0.001);
     assert_eq!(front_end.stats().failed_matches, 1);
 }
+
+#[test]
+fn a_turn_during_a_gap_in_the_data_is_recovered_without_odometry() {
+    for (geometry, beams) in [(SICK, 361), (HOKUYO, 1081)] {
+        let walls = room();
+        let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+        let step = Pose2::new(0.05, 0.0, 0.02);
+        let mut truth = Pose2::new(0.5, 0.2, 0.1);
+        for k in 0..5 {
+            let ranges = raycast(&walls, &truth, &geometry, beams, 0.005);
+            front_end
+                .process(&scan(k, &ranges, geometry, None))
+                .unwrap();
+            truth = truth.compose(&step);
+        }
+        // Three seconds without scans, in which the robot turned far beyond the search
+        // window of a regular step and moved a little.
+        let turn = Pose2::new(0.25, -0.1, -1.4);
+        let before = front_end.pose();
+        truth = truth.compose(&turn);
+        let ranges = raycast(&walls, &truth, &geometry, beams, 0.005);
+        let out = front_end
+            .process(&scan(4 + 30, &ranges, geometry, None))
+            .unwrap();
+        assert!(
+            matches!(out.status, MatchStatus::Matched),
+            "{beams} beams: {out:?}"
+        );
+        assert_close(
+            &before.between(&out.odom_from_robot),
+            &step.compose(&turn),
+            0.02,
+            0.01,
+        );
+        // And the matching goes on from there.
+        truth = truth.compose(&step);
+        let ranges = raycast(&walls, &truth, &geometry, beams, 0.005);
+        let out = front_end
+            .process(&scan(4 + 31, &ranges, geometry, None))
+            .unwrap();
+        assert_eq!(out.status, MatchStatus::Matched, "{out:?}");
+        assert_close(&out.increment, &step, 0.01, 0.005);
+    }
+}
