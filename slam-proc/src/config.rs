@@ -68,8 +68,7 @@ pub struct SlamConfig {
     /// Move the particles by the front end's measured motion when the features bring one
     /// (scan matching fused with odometry), instead of estimating the motion from the
     /// scan's corners and lines (a step the front end left partly open is still refined
-    /// with them). Off until that holds its course in a corridor without odometry, where the
-    /// front end's constant-velocity prior, started at rest, never learns the robot moves.
+    /// with them). Off until the filter on it beats the front end alone.
     pub use_measured_motion: bool,
     /// A measured step spreads the particles by this multiple of the front end's standard
     /// deviations (floored like a fitted step).

@@ -244,6 +244,7 @@ fn to_motion(motion: &ScanMotion) -> MeasuredMotion {
             motion.match_status,
             ScanMotion::MATCH_OK | ScanMotion::MATCH_FIRST
         ),
+        on_odometry: motion.odometry_status == ScanMotion::ODOMETRY_USED,
     }
 }
 

@@ -228,14 +228,15 @@ impl FastSlam {
                     pose: before.pose.compose(&measured.increment),
                     covariance: before.covariance + turn * measured.covariance * turn.transpose(),
                 };
-                // Estimated every scan, so the fit's last corners stay the last scan's.
-                let refined = self.motion.estimate(
-                    stamp_ns,
-                    &prepared,
-                    &self.lines,
-                    Some(&self.measured_track),
-                    config,
-                );
+                // Estimated every scan, so the fit's last corners stay the last scan's. The
+                // prior of a step the front end left open: its own step when that rests on
+                // odometry, else the filter's constant velocity, which follows the
+                // particles' steps (see `MeasuredMotion::on_odometry`).
+                let prior =
+                    (measured.constrained || measured.on_odometry).then_some(&self.measured_track);
+                let refined = self
+                    .motion
+                    .estimate(stamp_ns, &prepared, &self.lines, prior, config);
                 if measured.constrained {
                     Motion {
                         delta: measured.increment,
@@ -441,6 +442,7 @@ mod tests {
             increment: Pose2::new(0.1, 0.0, 0.02),
             covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-6, 1e-6, 1e-7)),
             constrained: true,
+            on_odometry: false,
         };
         // A front end's first scan has no motion.
         let first = MeasuredMotion {
@@ -508,6 +510,7 @@ mod tests {
                 increment: Pose2::IDENTITY,
                 covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-2, 1e-6, 1e-7)),
                 constrained,
+                on_odometry: true,
             };
             let mut last = None;
             for k in 0..20 {
