@@ -38,6 +38,11 @@ const WEAK_FIT_MARGIN: f64 = 0.7;
 /// is no evidence against the odometry.
 const WEAK_FIT_MIN_SCORE: f64 = 0.4;
 
+/// Share of its information a degenerate direction of the fit contributes when the prior
+/// is constant velocity: a tenth, since a direction this weakly constrained is easily
+/// misled by a few wrong correspondences.
+const WEAK_SHARE: f64 = 0.1;
+
 /// A recovered fit replaces the one from the prior's window only if it ranks clearly
 /// higher: the wide search sees many more poses, and one of them fitting a little better
 /// by chance is no reason to jump.
@@ -216,7 +221,11 @@ impl FrontEnd {
                         count: 1 + open.count() as u8,
                     },
                 };
-                fuse(&prediction, found)
+                // Without odometry the velocity guess is all there is along a corridor: the
+                // scan's weak evidence there (a door frame, the far end) is better than
+                // none, and tells a robot that stopped from one that goes on.
+                let weak_share = if odometry.is_ok() { 0.0 } else { WEAK_SHARE };
+                fuse(&prediction, found, weak_share)
             }
             Err(failure) => {
                 output.status = MatchStatus::Failed(*failure);
