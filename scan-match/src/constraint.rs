@@ -69,10 +69,11 @@ impl Constraint {
         })
     }
 
-    /// The Gauss-Newton step `-H^+ g` over the constrained directions; along the degenerate
-    /// ones a step damped by a share of the strongest direction's information, so they
-    /// move only as far as their own evidence clearly says rather than drift on noise.
-    pub fn step(&self, gradient: &Vector3<f64>) -> Vector3<f64> {
+    /// The Gauss-Newton step `-H^+ g` over the constrained directions; the degenerate ones
+    /// stay where the prior put them rather than drift on noise, or, with `weak_steps`,
+    /// take a step damped by a share of the strongest direction's information, so they
+    /// move only as far as their own evidence clearly says.
+    pub fn step(&self, gradient: &Vector3<f64>, weak_steps: bool) -> Vector3<f64> {
         // Gradients transform with the inverse of the coordinates.
         let from_scaled = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1.0 / self.length));
         let g = from_scaled * gradient;
@@ -81,7 +82,7 @@ impl Constraint {
         for i in 0..3 {
             let v = self.vectors.column(i);
             if self.degenerate[i] {
-                if self.values[i] > 0.0 {
+                if weak_steps && self.values[i] > 0.0 {
                     step -= v * (v.dot(&g) / (self.values[i] + damping));
                 }
                 continue;
@@ -153,7 +154,8 @@ mod tests {
         assert!(open[0].x.abs() > 0.999);
         // A gradient along x as small as its information allows (|g_x| <= sqrt(H_xx) x the
         // residuals' norm): the undamped step would be 10 m; the damped one is millimetres.
-        let step = c.step(&Vector3::new(0.01, 2.0, 0.0));
+        assert_eq!(c.step(&Vector3::new(0.01, 2.0, 0.0), false).x, 0.0);
+        let step = c.step(&Vector3::new(0.01, 2.0, 0.0), true);
         assert!(step.x < 0.0 && step.x.abs() < 0.01, "{step:?}");
         assert!(step.y < 0.0);
         let info = c.information(1.0, 0.0);

@@ -74,6 +74,7 @@ impl FrontEnd {
                 max_iterations: config.max_iterations,
                 convergence: config.convergence,
                 degeneracy_ratio: config.degeneracy_ratio,
+                weak_steps: false,
             },
             map: LocalMap::new(config.voxel_size, config.max_keyframes),
             config,
@@ -165,12 +166,12 @@ impl FrontEnd {
         // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
         let gap = elapsed_s > MAX_EXTRAPOLATION_S;
         let mut prior = odometry.unwrap_or(cv);
-        let mut registration = self.register(points, &prior, gap);
+        let mut registration = self.register(points, &prior, gap, odometry.is_ok());
         if let Ok(step) = odometry {
             if registration.is_err() {
                 // The odometry may have put the scan where it finds no map: try the
                 // other prior before believing it.
-                if let Ok(other) = self.register(points, &cv, gap) {
+                if let Ok(other) = self.register(points, &cv, gap, false) {
                     registration = Ok(other);
                 }
             }
@@ -180,7 +181,7 @@ impl FrontEnd {
                     // The odometry's seed may have led the fit astray: the scan gets a
                     // second chance from constant velocity, and the better of the two fits
                     // is compared with the odometry.
-                    if let Ok(other) = self.register(points, &cv, gap)
+                    if let Ok(other) = self.register(points, &cv, gap, false)
                         && rank(&other, &self.params) > rank(found, &self.params)
                     {
                         registration = Ok(other);
@@ -270,7 +271,12 @@ impl FrontEnd {
         points: &[SurfacePoint],
         step: &Step,
         gap: bool,
+        from_odometry: bool,
     ) -> Result<Registration, MatchFailure> {
+        let params = RegistrationParams {
+            weak_steps: !from_odometry,
+            ..self.params
+        };
         if points.len() < self.config.min_points {
             return Err(MatchFailure::TooFewPoints);
         }
@@ -316,7 +322,7 @@ impl FrontEnd {
         // on the map already): a gate of the coarse search's radius is wide enough, and
         // keeps every query within the map's lookup raster.
         let gate = gate.min(3.0 * radius);
-        let mut found = register(&self.map, points, seed, gate, &self.params);
+        let mut found = register(&self.map, points, seed, gate, &params);
         let clipped =
             prior_window.translation > window.translation || prior_window.yaw > window.yaw;
         let n = points.len() as f64;
@@ -338,8 +344,8 @@ impl FrontEnd {
                 coarse_radius: 3.0 * radius,
                 fine_radius: radius,
             };
-            if let Some(other) = recover(&self.map, points, &sample, &how, &self.params)
-                && rank(&other, &self.params) > rank(&found, &self.params) * RECOVERY_MARGIN
+            if let Some(other) = recover(&self.map, points, &sample, &how, &params)
+                && rank(&other, &params) > rank(&found, &params) * RECOVERY_MARGIN
             {
                 found = other;
             }
