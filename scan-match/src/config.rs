@@ -20,7 +20,9 @@ pub struct FrontEndConfig {
     /// A scan with fewer usable points (valid, with a surface normal) is not matched.
     pub min_points: usize,
     /// Widest gate between a scan point and its map neighbour, metres. Wider than any
-    /// prior's plausible error at this rate; matches beyond it are clutter.
+    /// prior's plausible error at this rate; matches beyond it are clutter. Registration
+    /// itself starts from a seed the correlative search has placed, and gates at six
+    /// voxels at most (the search's coarse radius).
     pub max_correspondence: f64,
     /// The correlative search before registration spans the prior's 3-sigma window, but
     /// at most this far each way, metres...

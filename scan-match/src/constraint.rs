@@ -6,6 +6,11 @@
 
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
+/// Levenberg damping of the degenerate directions' steps, as a share of the strongest
+/// direction's information: a weak direction moves a little on real evidence, a void one
+/// not at all.
+const DAMPING_SHARE: f64 = 0.02;
+
 /// The scan's constraint on a pose `(x, y, yaw)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Constraint {
@@ -43,6 +48,10 @@ impl Constraint {
         }
     }
 
+    fn damping(&self) -> f64 {
+        self.values.max().max(0.0) * DAMPING_SHARE
+    }
+
     fn scaling(&self) -> Matrix3<f64> {
         Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, self.length))
     }
@@ -60,32 +69,38 @@ impl Constraint {
         })
     }
 
-    /// The Gauss-Newton step `-H^+ g` over the constrained directions only: the degenerate
-    /// ones stay where the prior put them rather than drift on noise.
-    pub fn step(&self, gradient: &Vector3<f64>) -> Vector3<f64> {
+    /// The Gauss-Newton step `-H^+ g` over the constrained directions; the degenerate ones
+    /// stay where the prior put them rather than drift on noise, or, with `weak_steps`,
+    /// take a step damped by a share of the strongest direction's information, so they
+    /// move only as far as their own evidence clearly says.
+    pub fn step(&self, gradient: &Vector3<f64>, weak_steps: bool) -> Vector3<f64> {
         // Gradients transform with the inverse of the coordinates.
         let from_scaled = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1.0 / self.length));
         let g = from_scaled * gradient;
         let mut step = Vector3::zeros();
+        let damping = self.damping();
         for i in 0..3 {
+            let v = self.vectors.column(i);
             if self.degenerate[i] {
+                if weak_steps && self.values[i] > 0.0 {
+                    step -= v * (v.dot(&g) / (self.values[i] + damping));
+                }
                 continue;
             }
-            let v = self.vectors.column(i);
             step -= v * (v.dot(&g) / self.values[i]);
         }
         from_scaled * step
     }
 
-    /// The information over `(x, y, yaw)` of the constrained directions for residual
-    /// variance `variance`; zero along the degenerate ones.
-    pub fn information(&self, variance: f64) -> Matrix3<f64> {
+    /// The information over `(x, y, yaw)` for residual variance `variance`: in full along
+    /// the constrained directions, `weak_share` of it along the degenerate ones (zero: the
+    /// prior alone decides them).
+    pub fn information(&self, variance: f64, weak_share: f64) -> Matrix3<f64> {
         let mut scaled = Matrix3::zeros();
         for i in 0..3 {
-            if !self.degenerate[i] {
-                let v = self.vectors.column(i);
-                scaled += v * v.transpose() * (self.values[i] / variance);
-            }
+            let v = self.vectors.column(i);
+            let share = if self.degenerate[i] { weak_share } else { 1.0 };
+            scaled += v * v.transpose() * (share * self.values[i].max(0.0) / variance);
         }
         let to_scaled = self.scaling();
         to_scaled * scaled * to_scaled
@@ -137,11 +152,17 @@ mod tests {
         let open: Vec<_> = c.degenerate_directions().collect();
         assert_eq!(open.len(), 1);
         assert!(open[0].x.abs() > 0.999);
-        let step = c.step(&Vector3::new(5.0, 2.0, 0.0));
-        assert_eq!(step.x, 0.0);
+        // A gradient along x as small as its information allows (|g_x| <= sqrt(H_xx) x the
+        // residuals' norm): the undamped step would be 10 m; the damped one is millimetres.
+        assert_eq!(c.step(&Vector3::new(0.01, 2.0, 0.0), false).x, 0.0);
+        let step = c.step(&Vector3::new(0.01, 2.0, 0.0), true);
+        assert!(step.x < 0.0 && step.x.abs() < 0.01, "{step:?}");
         assert!(step.y < 0.0);
-        let info = c.information(1.0);
+        let info = c.information(1.0, 0.0);
         assert!(info[(0, 0)].abs() < 1e-9 && info[(1, 1)] > 100.0);
+        let weak = c.information(1.0, 0.1);
+        assert!((weak[(0, 0)] - 1e-4).abs() < 1e-9);
+        assert!((weak[(1, 1)] - info[(1, 1)]).abs() < 1e-9);
         // A disagreement along the corridor is no evidence against the other estimate.
         let far_along =
             c.mahalanobis_squared(&Vector3::new(100.0, 0.0, 0.0), &Matrix3::identity(), 1.0);

@@ -38,6 +38,11 @@ const WEAK_FIT_MARGIN: f64 = 0.7;
 /// is no evidence against the odometry.
 const WEAK_FIT_MIN_SCORE: f64 = 0.4;
 
+/// Share of its information a degenerate direction of the fit contributes when the prior
+/// is constant velocity: a tenth, since a direction this weakly constrained is easily
+/// misled by a few wrong correspondences.
+const WEAK_SHARE: f64 = 0.1;
+
 /// A recovered fit replaces the one from the prior's window only if it ranks clearly
 /// higher: the wide search sees many more poses, and one of them fitting a little better
 /// by chance is no reason to jump.
@@ -69,6 +74,7 @@ impl FrontEnd {
                 max_iterations: config.max_iterations,
                 convergence: config.convergence,
                 degeneracy_ratio: config.degeneracy_ratio,
+                weak_steps: false,
             },
             map: LocalMap::new(config.voxel_size, config.max_keyframes),
             config,
@@ -160,12 +166,12 @@ impl FrontEnd {
         // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
         let gap = elapsed_s > MAX_EXTRAPOLATION_S;
         let mut prior = odometry.unwrap_or(cv);
-        let mut registration = self.register(points, &prior, gap);
+        let mut registration = self.register(points, &prior, gap, odometry.is_ok());
         if let Ok(step) = odometry {
             if registration.is_err() {
                 // The odometry may have put the scan where it finds no map: try the
                 // other prior before believing it.
-                if let Ok(other) = self.register(points, &cv, gap) {
+                if let Ok(other) = self.register(points, &cv, gap, false) {
                     registration = Ok(other);
                 }
             }
@@ -175,7 +181,7 @@ impl FrontEnd {
                     // The odometry's seed may have led the fit astray: the scan gets a
                     // second chance from constant velocity, and the better of the two fits
                     // is compared with the odometry.
-                    if let Ok(other) = self.register(points, &cv, gap)
+                    if let Ok(other) = self.register(points, &cv, gap, false)
                         && rank(&other, &self.params) > rank(found, &self.params)
                     {
                         registration = Ok(other);
@@ -216,7 +222,11 @@ impl FrontEnd {
                         count: 1 + open.count() as u8,
                     },
                 };
-                fuse(&prediction, found)
+                // Without odometry the velocity guess is all there is along a corridor: the
+                // scan's weak evidence there (a door frame, the far end) is better than
+                // none, and tells a robot that stopped from one that goes on.
+                let weak_share = if odometry.is_ok() { 0.0 } else { WEAK_SHARE };
+                fuse(&prediction, found, weak_share)
             }
             Err(failure) => {
                 output.status = MatchStatus::Failed(*failure);
@@ -261,7 +271,12 @@ impl FrontEnd {
         points: &[SurfacePoint],
         step: &Step,
         gap: bool,
+        from_odometry: bool,
     ) -> Result<Registration, MatchFailure> {
+        let params = RegistrationParams {
+            weak_steps: !from_odometry,
+            ..self.params
+        };
         if points.len() < self.config.min_points {
             return Err(MatchFailure::TooFewPoints);
         }
@@ -307,7 +322,7 @@ impl FrontEnd {
         // on the map already): a gate of the coarse search's radius is wide enough, and
         // keeps every query within the map's lookup raster.
         let gate = gate.min(3.0 * radius);
-        let mut found = register(&self.map, points, seed, gate, &self.params);
+        let mut found = register(&self.map, points, seed, gate, &params);
         let clipped =
             prior_window.translation > window.translation || prior_window.yaw > window.yaw;
         let n = points.len() as f64;
@@ -329,8 +344,8 @@ impl FrontEnd {
                 coarse_radius: 3.0 * radius,
                 fine_radius: radius,
             };
-            if let Some(other) = recover(&self.map, points, &sample, &how, &self.params)
-                && rank(&other, &self.params) > rank(&found, &self.params) * RECOVERY_MARGIN
+            if let Some(other) = recover(&self.map, points, &sample, &how, &params)
+                && rank(&other, &params) > rank(&found, &params) * RECOVERY_MARGIN
             {
                 found = other;
             }

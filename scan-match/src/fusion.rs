@@ -52,10 +52,17 @@ pub fn disagreement(prediction: &Prediction, registration: &Registration) -> f64
 }
 
 /// The information-weighted combination: along the directions the scan constrains the
-/// more certain of the two wins, along the degenerate ones the prediction alone counts.
+/// more certain of the two wins, along the degenerate ones the prediction counts with
+/// `weak_share` of the scan's little information (see [`crate::constraint::Constraint::information`]).
 /// Returns the pose and its covariance in the map frame.
-pub fn fuse(prediction: &Prediction, registration: &Registration) -> (Pose2, Matrix3<f64>) {
-    let scan_information = registration.constraint.information(registration.variance);
+pub fn fuse(
+    prediction: &Prediction,
+    registration: &Registration,
+    weak_share: f64,
+) -> (Pose2, Matrix3<f64>) {
+    let scan_information = registration
+        .constraint
+        .information(registration.variance, weak_share);
     let Some(prior_information) = prediction.covariance.try_inverse() else {
         return (prediction.pose, prediction.covariance);
     };

@@ -27,6 +27,9 @@ pub struct RegistrationParams {
     pub max_iterations: usize,
     pub convergence: f64,
     pub degeneracy_ratio: f64,
+    /// Whether degenerate directions take damped steps (see [`Constraint::step`]): where
+    /// the prior is only a velocity guess; an odometry prior decides them better.
+    pub weak_steps: bool,
 }
 
 /// The outcome of registering one scan.
@@ -83,7 +86,7 @@ pub fn register(
             if last.matched < 3 || constraint.is_void() {
                 break;
             }
-            let step = constraint.step(&last.gradient);
+            let step = constraint.step(&last.gradient, params.weak_steps);
             pose = Pose2::new(
                 pose.x + step.x,
                 pose.y + step.y,

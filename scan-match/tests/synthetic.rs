@@ -300,3 +300,36 @@ fn a_turn_during_a_gap_in_the_data_is_recovered_without_odometry() {
         assert_close(&out.increment, &step, 0.01, 0.005);
     }
 }
+
+#[test]
+fn without_odometry_a_corridors_weak_evidence_says_when_the_robot_moves_and_stops() {
+    // A corridor whose only feature along its length is a shallow recess: the scan says
+    // little about the motion along it, but not nothing.
+    let walls = vec![
+        ((-100.0, -1.0), (100.0, -1.0)),
+        ((-100.0, 1.0), (2.0, 1.0)),
+        ((2.0, 1.0), (2.0, 1.06)),
+        ((2.0, 1.06), (2.6, 1.06)),
+        ((2.6, 1.06), (2.6, 1.0)),
+        ((2.6, 1.0), (100.0, 1.0)),
+    ];
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let step = Pose2::new(0.1, 0.0, 0.0);
+    let mut truth = Pose2::IDENTITY;
+    let mut degenerate = 0;
+    for k in 0..40 {
+        let ranges = raycast(&walls, &truth, &SICK, 361, 0.005);
+        let out = front_end.process(&scan(k, &ranges, SICK, None)).unwrap();
+        if matches!(out.status, MatchStatus::Degenerate { .. }) {
+            degenerate += 1;
+        }
+        if k < 10 {
+            truth = truth.compose(&step);
+        }
+    }
+    assert!(degenerate > 20, "{degenerate}");
+    // A metre driven from standing (the velocity guess says: standing), then thirty scans
+    // standing still (the velocity guess says: 3 m on).
+    let drift = front_end.pose().x - truth.x;
+    assert!(drift.abs() < 0.5, "{:?} vs {truth:?}", front_end.pose());
+}
