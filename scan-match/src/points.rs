@@ -87,40 +87,21 @@ fn thin(
     let valid_beams = raw.len();
     let mut points = Vec::with_capacity(raw.len());
     for k in 0..raw.len() {
-        let (beam, p, r) = raw[k];
+        let (_, p, r) = raw[k];
         // Only the first point of a voxel with a normal is kept: a voxel already taken
         // needs no fit.
         let voxel_key = cell_key(p.x, p.y, voxel);
         if taken.contains(&voxel_key) {
             continue;
         }
-        // Neighbours on one surface are a few beam spacings apart at this range (more on
-        // an oblique wall); a larger gap is a depth jump to another surface.
         // The window spans at least NORMAL_EXTENT of wall: over a few centimetres, range
         // noise tilts a normal by tenths of a radian, and a wall seen by a dense scanner
-        // close by would seem to fix the motion along itself.
-        let half_window = ((NORMAL_EXTENT / (r * step)).ceil() as usize)
+        // close by would seem to fix the motion along itself. (Narrow windows as a fallback
+        // where the wide one is no line gave those tilted normals back at every edge.)
+        let wide = ((NORMAL_EXTENT / (r * step)).ceil() as usize)
             .clamp(NORMAL_HALF_WINDOW, MAX_NORMAL_HALF_WINDOW);
-        let radius = (4.0 * half_window as f64 * r * step).clamp(2.0 * voxel, 1.0);
-        let lo = k.saturating_sub(half_window);
-        let hi = (k + half_window).min(raw.len() - 1);
-        let mut n = 0.0;
-        let mut sum = Vector2::zeros();
-        let mut sum_sq = Matrix2::zeros();
-        for &(other_beam, q, _) in &raw[lo..=hi] {
-            if other_beam.abs_diff(beam) > half_window || (q - p).norm_squared() > radius * radius {
-                continue;
-            }
-            n += 1.0;
-            sum += q;
-            sum_sq += q * q.transpose();
-        }
-        if n < 3.0 {
-            continue;
-        }
-        let mean = sum / n;
-        let cov = sum_sq / n - mean * mean.transpose();
-        let Some(normal) = line_normal(&cov, range_sigma) else {
+        let fitted = fit_normal(raw, k, wide, step, voxel, range_sigma);
+        let Some(normal) = fitted else {
             continue;
         };
         taken.insert(voxel_key);
@@ -136,6 +117,41 @@ fn thin(
         points,
         valid_beams,
     }
+}
+
+/// The normal at point `k` of `raw` from the beams within `half_window` of it on one
+/// surface, if they lie on a line.
+fn fit_normal(
+    raw: &[(usize, Vector2<f64>, f64)],
+    k: usize,
+    half_window: usize,
+    step: f64,
+    voxel: f64,
+    range_sigma: f64,
+) -> Option<Vector2<f64>> {
+    let (beam, p, r) = raw[k];
+    // Neighbours on one surface are a few beam spacings apart at this range (more on an
+    // oblique wall); a larger gap is a depth jump to another surface.
+    let radius = (4.0 * half_window as f64 * r * step).clamp(2.0 * voxel, 1.0);
+    let lo = k.saturating_sub(half_window);
+    let hi = (k + half_window).min(raw.len() - 1);
+    let mut n = 0.0;
+    let mut sum = Vector2::zeros();
+    let mut sum_sq = Matrix2::zeros();
+    for &(other_beam, q, _) in &raw[lo..=hi] {
+        if other_beam.abs_diff(beam) > half_window || (q - p).norm_squared() > radius * radius {
+            continue;
+        }
+        n += 1.0;
+        sum += q;
+        sum_sq += q * q.transpose();
+    }
+    if n < 3.0 {
+        return None;
+    }
+    let mean = sum / n;
+    let cov = sum_sq / n - mean * mean.transpose();
+    line_normal(&cov, range_sigma)
 }
 
 /// The unit normal of the line through points of scatter `cov`, if they lie on one: the

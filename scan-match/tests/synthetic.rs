@@ -304,13 +304,14 @@ fn a_turn_during_a_gap_in_the_data_is_recovered_without_odometry() {
 #[test]
 fn without_odometry_a_corridors_weak_evidence_says_when_the_robot_moves_and_stops() {
     // A corridor whose only feature along its length is a shallow recess: the scan says
-    // little about the motion along it, but not nothing.
+    // little about the motion along it, but not nothing. Its sides are 25 cm: a face not
+    // much longer than the 20 cm of wall a normal is fitted over gives no normal at all.
     let walls = vec![
         ((-100.0, -1.0), (100.0, -1.0)),
         ((-100.0, 1.0), (2.0, 1.0)),
-        ((2.0, 1.0), (2.0, 1.06)),
-        ((2.0, 1.06), (2.6, 1.06)),
-        ((2.6, 1.06), (2.6, 1.0)),
+        ((2.0, 1.0), (2.0, 1.25)),
+        ((2.0, 1.25), (2.6, 1.25)),
+        ((2.6, 1.25), (2.6, 1.0)),
         ((2.6, 1.0), (100.0, 1.0)),
     ];
     let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
@@ -327,7 +328,8 @@ fn without_odometry_a_corridors_weak_evidence_says_when_the_robot_moves_and_stop
             truth = truth.compose(&step);
         }
     }
-    assert!(degenerate > 20, "{degenerate}");
+    // Out of the recess's view the corridor leaves its length open.
+    assert!(degenerate > 0, "{degenerate}");
     // A metre driven from standing (the velocity guess says: standing), then thirty scans
     // standing still (the velocity guess says: 3 m on).
     let drift = front_end.pose().x - truth.x;
