@@ -132,16 +132,47 @@ fn receive(domain: &Domain, with_odometry: bool) -> Received {
 }
 
 /// The summary block that ends the replay's stderr: its head and the indented lines after.
+/// iceoryx2's own log lines (`0 [W] "origin"` and its `| ...` continuation) may come at any
+/// time, the end included, and are not the replay's: they are left out.
 fn summary_block(stderr: &str) -> String {
-    let start = stderr
+    let own: String = stderr
+        .lines()
+        .filter(|line| !is_iceoryx2_log(line))
+        .map(|line| format!("{line}\n"))
+        .collect();
+    let start = own
         .rfind(lidar_replay::SUMMARY_HEAD)
         .unwrap_or_else(|| panic!("no summary: {stderr}"));
-    let block = &stderr[start..];
+    let block = &own[start..];
     assert!(
         block.lines().skip(1).all(|line| line.starts_with("  ")),
         "the summary is one block at the end: {block}"
     );
     block.to_owned()
+}
+
+/// A line of iceoryx2's logger: `<n> [<level>] "<origin>"`, `| <message>`, or the blank line
+/// that ends an entry.
+fn is_iceoryx2_log(line: &str) -> bool {
+    let entry_head = line
+        .split_once(" [")
+        .is_some_and(|(n, rest)| n.parse::<u64>().is_ok() && rest.get(1..3) == Some("] "));
+    entry_head || line.starts_with("| ") || line.trim().is_empty()
+}
+
+#[test]
+fn iceoryx2_log_lines_are_told_from_the_replays_own() {
+    assert!(is_iceoryx2_log("0 [W] \"Config::global_config()\" "));
+    assert!(is_iceoryx2_log(
+        "| No config file was loaded, a config with default values will be used. "
+    ));
+    assert!(is_iceoryx2_log(""));
+    assert!(!is_iceoryx2_log(
+        "  published:       5 scans, 5 odometry poses"
+    ));
+    assert!(!is_iceoryx2_log(
+        "lidar-replay: summary of a.clf (7 lines read)"
+    ));
 }
 
 #[test]
