@@ -194,29 +194,22 @@ struct Counts {
 impl Counts {
     fn summary(&self) -> String {
         let mut text = format!("{} scans, {} skipped", self.processed, self.skipped);
-        if self.odometry_not_finite > 0 {
-            text.push_str(&format!(
-                ", {} non-finite odometry readings refused",
-                self.odometry_not_finite
-            ));
-        }
-        if self.odometry_out_of_order > 0 {
-            text.push_str(&format!(
-                ", {} odometry readings not after the one before them refused",
-                self.odometry_out_of_order
-            ));
-        }
-        if self.unregistered > 0 {
-            text.push_str(&format!(
-                ", {} scans the front end could not register",
-                self.unregistered
-            ));
-        }
-        if self.without_odometry > 0 {
-            text.push_str(&format!(
-                ", {} scans without odometry",
-                self.without_odometry
-            ));
+        let notes = [
+            (
+                self.odometry_not_finite,
+                "non-finite odometry readings refused",
+            ),
+            (
+                self.odometry_out_of_order,
+                "odometry readings not after the one before them refused",
+            ),
+            (self.unregistered, "scans the front end could not register"),
+            (self.without_odometry, "scans without odometry"),
+        ];
+        for (count, what) in notes {
+            if count > 0 {
+                text.push_str(&format!(", {count} {what}"));
+            }
         }
         text
     }

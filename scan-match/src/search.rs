@@ -90,16 +90,7 @@ pub fn search_sample(
     window: Window,
     radius: f64,
 ) -> (Pose2, f64) {
-    let spread = (sample.iter().map(|p| p.point.norm_squared()).sum::<f64>()
-        / sample.len().max(1) as f64)
-        .sqrt()
-        .max(1.0);
-    let mut yaw_step = radius / spread;
-    let mut yaw_half_steps = (window.yaw / yaw_step).ceil() as usize;
-    if 2 * yaw_half_steps + 1 > MAX_YAW_STEPS {
-        yaw_half_steps = MAX_YAW_STEPS / 2;
-        yaw_step = window.yaw / yaw_half_steps as f64;
-    }
+    let (yaw_step, yaw_half_steps) = yaw_grid(sample, window.yaw, radius, MAX_YAW_STEPS);
     let half = ((window.translation / radius).round() as i32).clamp(0, MAX_HALF_STEPS);
     let step = if half > 0 {
         (window.translation / f64::from(half)).min(radius * 1.5)
@@ -151,16 +142,7 @@ pub fn search_candidates(
     keep: usize,
     max_yaw_steps: usize,
 ) -> Vec<(Pose2, f64)> {
-    let spread = (sample.iter().map(|p| p.point.norm_squared()).sum::<f64>()
-        / sample.len().max(1) as f64)
-        .sqrt()
-        .max(1.0);
-    let mut yaw_step = radius / spread;
-    let mut yaw_half_steps = (window.yaw / yaw_step).ceil() as usize;
-    if 2 * yaw_half_steps + 1 > max_yaw_steps {
-        yaw_half_steps = max_yaw_steps / 2;
-        yaw_step = window.yaw / yaw_half_steps.max(1) as f64;
-    }
+    let (yaw_step, yaw_half_steps) = yaw_grid(sample, window.yaw, radius, max_yaw_steps);
     let half = (window.translation / radius).round() as i32;
     // Two candidates closer than this in every coordinate share a basin: the weaker is
     // not kept.
@@ -203,6 +185,29 @@ pub fn search_candidates(
         }
     }
     best
+}
+
+/// The yaw step and the steps each side of the seed that search `half_window` radians: a
+/// step turns the scan's points by about `radius` at their RMS range, and no more than
+/// `max_steps` are taken in all (the step then widens).
+fn yaw_grid(
+    sample: &[SurfacePoint],
+    half_window: f64,
+    radius: f64,
+    max_steps: usize,
+) -> (f64, usize) {
+    let spread = (sample.iter().map(|p| p.point.norm_squared()).sum::<f64>()
+        / sample.len().max(1) as f64)
+        .sqrt()
+        .max(1.0);
+    let step = radius / spread;
+    let half_steps = (half_window / step).ceil() as usize;
+    if 2 * half_steps + 1 > max_steps {
+        let half_steps = (max_steps / 2).max(1);
+        (half_window / half_steps as f64, half_steps)
+    } else {
+        (step, half_steps)
+    }
 }
 
 #[cfg(test)]
