@@ -92,6 +92,8 @@ fn run() -> Result<()> {
 
     let mut track = OdometryTrack::new();
     let mut pending: VecDeque<PendingScan> = VecDeque::new();
+    // The held scans' range buffers, kept for the next scans: no allocation per scan.
+    let mut spare_ranges: Vec<Vec<f32>> = Vec::new();
     let mut end_of_scans: Option<(u64, u64)> = None;
     let mut counts = Counts::default();
     let mut last_odometry_probe = Instant::now();
@@ -125,7 +127,8 @@ fn run() -> Result<()> {
             if scan.header.is_end_of_stream() {
                 end_of_scans = Some((scan.header.seq, scan.header.stamp_ns));
             } else {
-                pending.push_back(PendingScan::copy(&scan));
+                let buffer = spare_ranges.pop().unwrap_or_default();
+                pending.push_back(PendingScan::copy(&scan, buffer));
             }
         }
         if let Some(inlet) = &odometry {
@@ -164,6 +167,7 @@ fn run() -> Result<()> {
                 counts: &mut counts,
             };
             publish_features(&features, work, &scan, paired, motion)?;
+            spare_ranges.push(scan.ranges);
         }
         if let Some((seq, stamp_ns)) = end_of_scans
             && pending.is_empty()
@@ -228,14 +232,17 @@ struct PendingScan {
 }
 
 impl PendingScan {
-    fn copy(scan: &LaserScan) -> Self {
+    /// Copies `scan`, its ranges into `buffer`.
+    fn copy(scan: &LaserScan, mut buffer: Vec<f32>) -> Self {
+        buffer.clear();
+        buffer.extend_from_slice(scan.ranges());
         Self {
             header: scan.header,
             angle_min: scan.angle_min,
             angle_increment: scan.angle_increment,
             range_min: scan.range_min,
             range_max: scan.range_max,
-            ranges: scan.ranges().to_vec(),
+            ranges: buffer,
             arrived: Instant::now(),
         }
     }
