@@ -173,9 +173,10 @@ impl FastSlam {
 
     /// Updates the filter with one scan whose motion a front end measured (scan matching
     /// fused with odometry, [`MeasuredMotion`]): the particles move by it, spread by its
-    /// covariance, and the corners then weight them and correct their poses. The filter's
-    /// own estimate from corners and lines is not made. A motion that is not usable (not
-    /// finite), or `use_measured_motion = false`, falls back to that estimate.
+    /// covariance, and the corners then weight them and correct their poses. A step the
+    /// front end left partly open (`MeasuredMotion::constrained` false) is the filter's own
+    /// corner and line fit instead. A motion that is not usable (not finite), or
+    /// `use_measured_motion = false`, falls back to that fit alone.
     pub fn process_measured(
         &mut self,
         stamp_ns: u64,
