@@ -67,12 +67,46 @@ pub struct SlamConfig {
     pub noise_fit_scale: f64,
     /// Move the particles by the front end's measured motion when the features bring one
     /// (scan matching fused with odometry), instead of estimating the motion from the
-    /// scan's corners and lines (a step the front end left partly open is still refined
-    /// with them). Off until the filter on it beats the front end alone.
+    /// scan's corners and lines. A step the front end left partly open is refined with
+    /// them when it does not rest on odometry (a corridor without wheels).
     pub use_measured_motion: bool,
-    /// A measured step spreads the particles by this multiple of the front end's standard
-    /// deviations (floored like a fitted step).
-    pub measured_noise_scale: f64,
+    /// A measured step spreads the particles by the front end's drift, which grows with
+    /// the path rather than with the scan count (it registers against keyframes, so a
+    /// robot standing still does not drift): translation variance per metre travelled,
+    /// m^2/m.
+    pub measured_xy_variance_per_metre: f64,
+    /// Translation variance per radian turned, m^2/rad.
+    pub measured_xy_variance_per_radian: f64,
+    /// Rotation variance per metre travelled, rad^2/m.
+    pub measured_yaw_variance_per_metre: f64,
+    /// Rotation variance per radian turned, rad^2/rad.
+    pub measured_yaw_variance_per_radian: f64,
+    /// With measured motion, the corners update the particles only once the robot has
+    /// moved this far since the last update, metres (0: every scan). Scans a few
+    /// centimetres apart see a corner from one viewpoint with one error, which counted
+    /// again at every scan would make the weights and the map overconfident.
+    pub update_min_distance: f64,
+    /// Or turned this far, radians.
+    pub update_min_rotation: f64,
+    /// A revisit: map corners last seen at least `revisit_min_distance` of path ago are
+    /// searched for within this radius of each observation, metres (0: no revisits).
+    /// Their association allows for the drift since then, so a loop longer than the
+    /// particles' spread still closes.
+    pub revisit_search_radius: f64,
+    /// Path length after which a corner not seen again counts as old, metres.
+    pub revisit_min_distance: f64,
+    /// Old corners a revisit must pair, at least (and at least as many as the usual
+    /// association paired with any corners).
+    pub revisit_min_corners: usize,
+    /// The drift a revisit allows for: translation standard deviation per metre of path
+    /// since the oldest corner was seen.
+    pub revisit_sigma_xy_per_metre: f64,
+    /// Rotation standard deviation per metre of path, rad/m.
+    pub revisit_sigma_yaw_per_metre: f64,
+    /// The largest translation standard deviation a revisit allows for, metres.
+    pub revisit_max_sigma_xy: f64,
+    /// The largest rotation standard deviation a revisit allows for, radians.
+    pub revisit_max_sigma_yaw: f64,
     /// Smallest translation noise of a fitted step, metres: particles must stay diverse.
     pub noise_xy_floor: f64,
     /// Smallest rotation noise of a fitted step, radians.
@@ -144,8 +178,20 @@ impl Default for SlamConfig {
             noise_yaw_per_radian: 0.05,
             noise_yaw_per_metre: 0.01,
             noise_fit_scale: 2.0,
-            use_measured_motion: false,
-            measured_noise_scale: 1.0,
+            use_measured_motion: true,
+            measured_xy_variance_per_metre: 2.5e-5,
+            measured_xy_variance_per_radian: 2.5e-5,
+            measured_yaw_variance_per_metre: 2.5e-6,
+            measured_yaw_variance_per_radian: 2.5e-5,
+            update_min_distance: 0.5,
+            update_min_rotation: 0.25,
+            revisit_search_radius: 6.0,
+            revisit_min_distance: 10.0,
+            revisit_min_corners: 2,
+            revisit_sigma_xy_per_metre: 0.02,
+            revisit_sigma_yaw_per_metre: 0.002,
+            revisit_max_sigma_xy: 3.0,
+            revisit_max_sigma_yaw: 0.2,
             noise_xy_floor: 0.002,
             noise_yaw_floor: 0.0005,
             fallback_noise_scale: 3.0,
@@ -212,7 +258,6 @@ impl SlamConfig {
             ("noise_xy_base", self.noise_xy_base),
             ("noise_yaw_base", self.noise_yaw_base),
             ("noise_fit_scale", self.noise_fit_scale),
-            ("measured_noise_scale", self.measured_noise_scale),
             ("noise_xy_floor", self.noise_xy_floor),
             ("noise_yaw_floor", self.noise_yaw_floor),
             ("search_radius", self.search_radius),
@@ -243,6 +288,36 @@ impl SlamConfig {
             ),
             ("duplicate_radius", self.duplicate_radius),
             ("duplicate_heading", self.duplicate_heading),
+            (
+                "measured_xy_variance_per_metre",
+                self.measured_xy_variance_per_metre,
+            ),
+            (
+                "measured_xy_variance_per_radian",
+                self.measured_xy_variance_per_radian,
+            ),
+            (
+                "measured_yaw_variance_per_metre",
+                self.measured_yaw_variance_per_metre,
+            ),
+            (
+                "measured_yaw_variance_per_radian",
+                self.measured_yaw_variance_per_radian,
+            ),
+            ("update_min_distance", self.update_min_distance),
+            ("update_min_rotation", self.update_min_rotation),
+            ("revisit_search_radius", self.revisit_search_radius),
+            ("revisit_min_distance", self.revisit_min_distance),
+            (
+                "revisit_sigma_xy_per_metre",
+                self.revisit_sigma_xy_per_metre,
+            ),
+            (
+                "revisit_sigma_yaw_per_metre",
+                self.revisit_sigma_yaw_per_metre,
+            ),
+            ("revisit_max_sigma_xy", self.revisit_max_sigma_xy),
+            ("revisit_max_sigma_yaw", self.revisit_max_sigma_yaw),
         ];
         for (field, value) in non_negative {
             check(

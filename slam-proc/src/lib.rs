@@ -38,6 +38,7 @@ mod angle;
 mod chi2;
 mod config;
 mod corner_model;
+mod drift;
 mod estimate;
 mod grid;
 mod jcbb;

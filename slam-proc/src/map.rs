@@ -31,6 +31,8 @@ pub(crate) struct CornerState {
     pub mean: Vector4<f64>,
     pub covariance: Matrix4<f64>,
     pub observations: u32,
+    /// The scan (counted from 0) that last observed it.
+    pub last_seen: u64,
 }
 
 impl CornerState {
@@ -103,6 +105,7 @@ impl CornerMap {
         &mut self,
         id: u32,
         confirm_at: u32,
+        scan: u64,
         estimate: impl FnOnce(&CornerState) -> (Vector4<f64>, Matrix4<f64>),
     ) {
         let Some(state) = self.corners.get_mut(id as usize).as_mut() else {
@@ -111,6 +114,7 @@ impl CornerMap {
         let from = (state.mean.x, state.mean.y);
         (state.mean, state.covariance) = estimate(state);
         state.observations = state.observations.saturating_add(1);
+        state.last_seen = scan;
         let confirmed_now = state.observations == confirm_at;
         let to = (state.mean.x, state.mean.y);
         self.grid.relocate(id, from, to);
@@ -217,6 +221,7 @@ mod tests {
             mean: Vector4::new(x, y, 0.0, 1.5),
             covariance: Matrix4::identity() * 1e-4,
             observations: 1,
+            last_seen: 0,
         }
     }
 
@@ -233,7 +238,7 @@ mod tests {
             Vector4::new(1.01, 0.0, 0.0, 1.5),
             Matrix4::identity() * 5e-5,
         );
-        map.update(kept, 2, |_| updated);
+        map.update(kept, 2, 0, |_| updated);
         assert_eq!((map.confirmed_count(), map.tentative_count()), (1, 2));
         map.age_tentative(&[], near, 2);
         // Two misses in view: gone. Out of view: kept, however long.

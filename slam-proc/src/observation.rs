@@ -61,12 +61,12 @@ pub struct MeasuredMotion {
     pub covariance: Matrix3<f64>,
     /// Whether the scan fixed every direction of the step. A step the front end left partly
     /// to its prior (a corridor's length) or could not register is refined with the scan's
-    /// corners and lines.
+    /// corners and lines when it does not rest on odometry.
     pub constrained: bool,
-    /// Whether the front end's step rests on odometry. A step it left open is refined with
-    /// the front end's step as the prior when so, with the filter's own constant velocity
-    /// when not: without odometry the front end's prior is only its own constant velocity,
-    /// which in a corridor never learns that the robot moves.
+    /// Whether the front end's step rests on odometry. A step it left open is kept when so
+    /// (the wheels filled the open direction), and refined on the filter's own constant
+    /// velocity when not: without odometry the front end's prior is only its own constant
+    /// velocity, which in a corridor never learns that the robot moves.
     pub on_odometry: bool,
 }
 

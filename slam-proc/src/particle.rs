@@ -11,6 +11,7 @@ use crate::angle::wrap_angle;
 use crate::chi2::Gates;
 use crate::config::SlamConfig;
 use crate::corner_model::{Frame, WorldObservation};
+use crate::drift::revisit_covariance;
 use crate::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
 use crate::kalman;
 use crate::linalg::sample_information_form3;
@@ -48,6 +49,25 @@ pub(crate) struct ScanContext<'a> {
     pub draw_pose: bool,
     /// `cos(view_fov / 2)`, for the field-of-view test of tentative corners.
     pub cos_half_fov: f64,
+    /// This scan's number, counted from 0.
+    pub scan: u64,
+    /// The path length of the motion at each scan so far, this one last, metres.
+    pub path_length: &'a [f64],
+}
+
+impl ScanContext<'_> {
+    /// The path length when `corner` was last seen, metres.
+    fn seen_at(&self, corner: &CornerState) -> Option<f64> {
+        let scan = usize::try_from(corner.last_seen).ok()?;
+        self.path_length.get(scan).copied()
+    }
+
+    /// Whether `corner` is confirmed and was last seen where the path was at most
+    /// `before` metres long.
+    fn is_old(&self, corner: &CornerState, before: f64) -> bool {
+        corner.observations >= self.config.confirm_observations
+            && self.seen_at(corner).is_some_and(|seen| seen <= before)
+    }
 }
 
 /// Buffers of one worker, reused across particles so the update does not allocate once
@@ -89,70 +109,44 @@ impl Particle {
         rng: &mut impl Rng,
     ) -> f64 {
         let config = context.config;
-        let gate = context.gates.individual();
         scratch.world.clear();
         let mut frame = Frame::new(&self.pose);
         scratch
             .world
             .extend(context.observations.iter().map(|o| frame.to_world(o)));
 
-        scratch.pairings.clear();
-        scratch.lists.clear();
-        scratch.near.clear();
-        scratch.near_lists.clear();
-        let radius_squared = config.search_radius * config.search_radius;
-        for observation in &scratch.world {
-            let start = scratch.pairings.len();
-            let near_start = scratch.near.len();
-            scratch.ids.clear();
-            self.map.near(
-                observation.z.x,
-                observation.z.y,
-                config.search_radius,
-                &mut scratch.ids,
-            );
-            for &id in &scratch.ids {
-                let Some(corner) = self.map.get(id) else {
-                    continue;
-                };
-                let (dx, dy) = (
-                    corner.mean.x - observation.z.x,
-                    corner.mean.y - observation.z.y,
-                );
-                if dx * dx + dy * dy > radius_squared {
-                    continue;
-                }
-                scratch.near.push(id);
-                if let Some(pairing) = Pairing::new(observation, id, corner, &context.pose, gate) {
-                    scratch.pairings.push(pairing);
-                }
-            }
-            // Ties broken by id: the grid's order must not decide anything.
-            scratch.pairings[start..].sort_by(|a, b| {
-                a.distance
-                    .total_cmp(&b.distance)
-                    .then(a.corner.cmp(&b.corner))
-            });
-            scratch.lists.push(start..scratch.pairings.len());
-            scratch.near_lists.push(near_start..scratch.near.len());
-        }
-
-        let association = scratch.jcbb.solve(
-            &scratch.pairings,
-            &scratch.lists,
-            &context.pose,
-            context.gates.joint(),
-            config.jcbb_max_nodes,
-        );
         // The weight is the likelihood of the scan under the predicted pose, its
-        // uncertainty included: the same whether or not the pose is then corrected.
+        // uncertainty included, from the usual association: the same whether or not a
+        // revisit then corrects the pose, so particles are compared on one footing.
+        let mut pose = context.pose;
+        let mut association = self.associate(context, scratch, &pose, config.search_radius, None);
         let unexplained = scratch.world.len() - association.pairings;
         let log_likelihood =
             association.log_likelihood + unexplained as f64 * config.new_corner_log_likelihood;
+        if let Some((revisit, old)) = self.revisit(context, scratch) {
+            // Old corners alone, under the drift since they were seen: a loop closing. It
+            // is taken when it explains at least as many observations as the usual
+            // association did with the corners mapped since (a loop's second visit maps
+            // its corners again before it recognises them; a symmetric building offers a
+            // few old corners that fit a wrong offset, fewer than the ones in view).
+            let wide = self.associate(
+                context,
+                scratch,
+                &revisit,
+                config.revisit_search_radius,
+                Some(old),
+            );
+            if wide.pairings >= config.revisit_min_corners.max(association.pairings) {
+                association = wide;
+                pose = revisit;
+            } else {
+                association = self.associate(context, scratch, &pose, config.search_radius, None);
+            }
+        }
 
         if context.draw_pose
             && association.pairings > 0
-            && let Some(corrected) = self.corrected_pose(context, &association, rng)
+            && let Some(corrected) = self.corrected_pose(&pose, &association, rng)
         {
             let predicted = self.pose;
             self.pose = corrected;
@@ -186,8 +180,11 @@ impl Particle {
                     // The gain comes from `(P + R)^-1` at the predicted pose; after a pose
                     // correction `R` has turned by a fraction of a degree. The Joseph form
                     // gives the right covariance for any gain, so it stays consistent.
-                    self.map
-                        .update(pairing.corner, config.confirm_observations, |corner| {
+                    self.map.update(
+                        pairing.corner,
+                        config.confirm_observations,
+                        context.scan,
+                        |corner| {
                             kalman::update_with_inverse(
                                 &corner.mean,
                                 &corner.covariance,
@@ -195,7 +192,8 @@ impl Particle {
                                 &observation.covariance,
                                 &pairing.d_inverse,
                             )
-                        });
+                        },
+                    );
                     let near = &scratch.near[scratch.near_lists[i].clone()];
                     self.drop_duplicate_of(pairing.corner, near, config);
                 }
@@ -209,6 +207,7 @@ impl Particle {
                             mean: observation.z,
                             covariance: observation.covariance,
                             observations: 1,
+                            last_seen: context.scan,
                         };
                         scratch
                             .observed
@@ -231,17 +230,140 @@ impl Particle {
         log_likelihood
     }
 
+    /// Pairs the scan's observations (already in `scratch.world`) with the map corners
+    /// within `radius` that pass the individual gate under `pose`, and solves for the
+    /// joint hypothesis (JCBB). With `seen_before`, only confirmed corners last seen where
+    /// the path was at most that long are candidates. Leaves the candidate lists in
+    /// `scratch` for the update.
+    fn associate(
+        &self,
+        context: &ScanContext<'_>,
+        scratch: &mut Scratch,
+        pose: &PoseUncertainty,
+        radius: f64,
+        seen_before: Option<f64>,
+    ) -> Association {
+        let gate = context.gates.individual();
+        scratch.pairings.clear();
+        scratch.lists.clear();
+        scratch.near.clear();
+        scratch.near_lists.clear();
+        let radius_squared = radius * radius;
+        for observation in &scratch.world {
+            let start = scratch.pairings.len();
+            let near_start = scratch.near.len();
+            scratch.ids.clear();
+            self.map
+                .near(observation.z.x, observation.z.y, radius, &mut scratch.ids);
+            for &id in &scratch.ids {
+                let Some(corner) = self.map.get(id) else {
+                    continue;
+                };
+                let (dx, dy) = (
+                    corner.mean.x - observation.z.x,
+                    corner.mean.y - observation.z.y,
+                );
+                if dx * dx + dy * dy > radius_squared {
+                    continue;
+                }
+                if let Some(before) = seen_before
+                    && !context.is_old(corner, before)
+                {
+                    continue;
+                }
+                scratch.near.push(id);
+                if let Some(pairing) = Pairing::new(observation, id, corner, pose, gate) {
+                    scratch.pairings.push(pairing);
+                }
+            }
+            // Ties broken by id: the grid's order must not decide anything.
+            scratch.pairings[start..].sort_by(|a, b| {
+                a.distance
+                    .total_cmp(&b.distance)
+                    .then(a.corner.cmp(&b.corner))
+            });
+            scratch.lists.push(start..scratch.pairings.len());
+            scratch.near_lists.push(near_start..scratch.near.len());
+        }
+        scratch.jcbb.solve(
+            &scratch.pairings,
+            &scratch.lists,
+            pose,
+            context.gates.joint(),
+            context.config.jcbb_max_nodes,
+        )
+    }
+
+    /// A revisit, when one is due: at least `revisit_min_corners` observations have an
+    /// old corner (last seen `revisit_min_distance` of path ago or more) within the revisit
+    /// radius, and the usual association paired fewer old corners than that (else the loop
+    /// is closed already). Returns the pose uncertainty that allows for the drift since the
+    /// oldest of them was seen, and the path length before which a corner is old.
+    fn revisit(
+        &self,
+        context: &ScanContext<'_>,
+        scratch: &mut Scratch,
+    ) -> Option<(PoseUncertainty, f64)> {
+        let config = context.config;
+        let now = *context.path_length.last()?;
+        if config.revisit_search_radius <= 0.0 {
+            return None;
+        }
+        let before = now - config.revisit_min_distance;
+        let paired_old = scratch
+            .jcbb
+            .assignment()
+            .iter()
+            .flatten()
+            .filter_map(|&index| self.map.get(scratch.pairings[index].corner))
+            .filter(|corner| context.is_old(corner, before))
+            .count();
+        if paired_old >= config.revisit_min_corners {
+            return None;
+        }
+        let mut oldest = f64::INFINITY;
+        let mut revisiting = 0;
+        for observation in &scratch.world {
+            scratch.ids.clear();
+            self.map.near(
+                observation.z.x,
+                observation.z.y,
+                config.revisit_search_radius,
+                &mut scratch.ids,
+            );
+            let seen = scratch
+                .ids
+                .iter()
+                .filter_map(|&id| self.map.get(id))
+                .filter(|corner| context.is_old(corner, before))
+                .filter_map(|corner| context.seen_at(corner))
+                .fold(f64::INFINITY, f64::min);
+            if seen.is_finite() {
+                revisiting += 1;
+                oldest = oldest.min(seen);
+            }
+        }
+        if revisiting < config.revisit_min_corners {
+            return None;
+        }
+        let p = context.pose.covariance + revisit_covariance(now - oldest, config);
+        Some((
+            PoseUncertainty::from_variances(p[(0, 0)], p[(1, 1)], p[(2, 2)]),
+            before,
+        ))
+    }
+
     /// A draw from the pose posterior given the associated corners: the Gaussian with
     /// information `P^-1 + A` and mean `predicted - (P^-1 + A)^-1 b` (one Gauss-Newton step
     /// of the linearised observations from the predicted pose). `None` when the
     /// information is not positive definite, which leaves the prediction in place.
     fn corrected_pose(
         &self,
-        context: &ScanContext<'_>,
+        pose: &PoseUncertainty,
         association: &Association,
         rng: &mut impl Rng,
     ) -> Option<Pose2> {
-        let information = context.pose.information + association.pose_information;
+        let information = pose.information + association.pose_information;
         let normal = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
         let step = sample_information_form3(&information, &association.pose_gradient, &normal)?;
         let pose = Pose2::new(
@@ -336,6 +458,7 @@ mod tests {
                     mean: Vector4::new(x, y, heading, 1.5),
                     covariance: Matrix4::identity() * 1e-6,
                     observations: 10,
+                    last_seen: 0,
                 },
                 2,
             );
@@ -361,9 +484,30 @@ mod tests {
         observations: &[Prepared],
         draw_pose: bool,
         predicted: Pose2,
-        (sigma_xy, sigma_yaw): (f64, f64),
+        noise: (f64, f64),
     ) -> Particle {
-        let config = SlamConfig::default();
+        update_after(
+            map,
+            observations,
+            draw_pose,
+            predicted,
+            noise,
+            &SlamConfig::default(),
+            0.1,
+        )
+    }
+
+    /// The update of a particle at `predicted` whose path is `path_length` metres long, its
+    /// map's corners last seen at the start of it.
+    fn update_after(
+        map: CornerMap,
+        observations: &[Prepared],
+        draw_pose: bool,
+        predicted: Pose2,
+        (sigma_xy, sigma_yaw): (f64, f64),
+        config: &SlamConfig,
+        path_length: f64,
+    ) -> Particle {
         let mut gates = Gates::new(config.association_probability);
         gates.ensure(observations.len());
         let context = ScanContext {
@@ -374,9 +518,11 @@ mod tests {
                 sigma_yaw * sigma_yaw,
             ),
             gates: &gates,
-            config: &config,
+            config,
             draw_pose,
             cos_half_fov: (0.5 * config.view_fov).cos(),
+            scan: 1,
+            path_length: &[0.0, path_length],
         };
         let mut particle = Particle {
             pose: predicted,
@@ -419,6 +565,54 @@ mod tests {
     }
 
     #[test]
+    fn a_revisit_closes_a_loop_wider_than_the_step_noise() {
+        // Back at four corners last seen 50 m of path ago, 0.6 m and 3 degrees off: far
+        // outside this step's noise, within the drift 50 m allow for (1 m, 0.1 rad).
+        let truth = Pose2::new(0.5, 0.2, 0.3);
+        let predicted = Pose2::new(1.0, -0.15, 0.35);
+        let config = SlamConfig::default();
+        let (map, observations) = scene(&truth);
+        let closed = update_after(
+            map,
+            &observations,
+            true,
+            predicted,
+            PREDICTION,
+            &config,
+            50.0,
+        );
+        let error = (closed.pose.x - truth.x).hypot(closed.pose.y - truth.y);
+        assert!(error < 0.02, "{:?}", closed.pose);
+        assert!(wrap_angle(closed.pose.yaw - truth.yaw).abs() < 0.01);
+        // The old corners were seen again: no longer old.
+        assert!(closed.map.get(0).is_some_and(|c| c.last_seen == 1));
+
+        // Without revisits, or with the corners seen only 5 m ago, the particle stays off.
+        for (config, path) in [
+            (
+                SlamConfig {
+                    revisit_search_radius: 0.0,
+                    ..SlamConfig::default()
+                },
+                50.0,
+            ),
+            (SlamConfig::default(), 5.0),
+        ] {
+            let (map, observations) = scene(&truth);
+            let kept = update_after(
+                map,
+                &observations,
+                true,
+                predicted,
+                PREDICTION,
+                &config,
+                path,
+            );
+            assert_eq!(kept.pose, predicted);
+        }
+    }
+
+    #[test]
     fn a_correction_beyond_the_step_noise_is_not_taken_for_motion() {
         // The prediction is 3.8 sigma off (1 cm noise): the pose is corrected all the way,
         // but only three sigma of it count as the step's motion.
@@ -446,6 +640,7 @@ mod tests {
                 mean: Vector4::new(3.2, 1.15, 0.7, 1.5),
                 covariance: Matrix4::identity() * 1e-6,
                 observations: 3,
+                last_seen: 0,
             },
             2,
         );

@@ -68,16 +68,17 @@ impl MotionNoise {
                     sigma_yaw,
                 }
             }
-            // A front end registers the whole scan against a local map: its covariance is
-            // that of independent beams, tighter than its errors, which the beams share;
-            // the particles spread by a multiple of it, no tighter than the floors.
-            MotionSource::Measured => {
-                let (xy, yaw) = fit_sigmas(&motion.covariance);
-                Self {
-                    sigma_xy: (config.measured_noise_scale * xy).max(config.noise_xy_floor),
-                    sigma_yaw: (config.measured_noise_scale * yaw).max(config.noise_yaw_floor),
-                }
-            }
+            // A front end registers each scan against keyframes: its error grows with the
+            // path, not with the scan count, and its covariance (that of independent beams)
+            // says little about it. The particles spread by that drift.
+            MotionSource::Measured => Self {
+                sigma_xy: (config.measured_xy_variance_per_metre * t
+                    + config.measured_xy_variance_per_radian * r)
+                    .sqrt(),
+                sigma_yaw: (config.measured_yaw_variance_per_metre * t
+                    + config.measured_yaw_variance_per_radian * r)
+                    .sqrt(),
+            },
             MotionSource::ConstantVelocity => Self {
                 sigma_xy: config.fallback_noise_scale * model.sigma_xy,
                 sigma_yaw: config.fallback_noise_scale * model.sigma_yaw,

@@ -46,6 +46,10 @@ pub struct FastSlam {
     lines: Vec<LineObservation>,
     /// One set of update buffers per chunk of `PARTICLES_PER_TASK` particles.
     scratch: Vec<Scratch>,
+    /// Motion (translation, rotation) and noise variance since the last corner update.
+    since_update: (f64, f64, nalgebra::Matrix3<f64>),
+    /// The path length of the motion at each scan, metres.
+    path_length: Vec<f64>,
 }
 
 /// The rotation by `yaw` acting on `(x, y)`, leaving yaw as it is.
@@ -88,6 +92,7 @@ impl FastSlam {
                 mean: nalgebra::Vector4::new(corner.x, corner.y, corner.heading, corner.angle),
                 covariance: corner.covariance,
                 observations: corner.observations.max(config.confirm_observations),
+                last_seen: 0,
             };
             if state
                 .mean
@@ -115,6 +120,8 @@ impl FastSlam {
             parents: Vec::new(),
             lines: Vec::new(),
             scratch: Vec::new(),
+            since_update: (0.0, 0.0, nalgebra::Matrix3::zeros()),
+            path_length: Vec::new(),
             config,
         })
     }
@@ -172,11 +179,13 @@ impl FastSlam {
     }
 
     /// Updates the filter with one scan whose motion a front end measured (scan matching
-    /// fused with odometry, [`MeasuredMotion`]): the particles move by it, spread by its
-    /// covariance, and the corners then weight them and correct their poses. A step the
-    /// front end left partly open (`MeasuredMotion::constrained` false) is the filter's own
-    /// corner and line fit instead. A motion that is not usable (not finite), or
-    /// `use_measured_motion = false`, falls back to that fit alone.
+    /// fused with odometry, [`MeasuredMotion`]): the particles move by it, spread by the
+    /// front end's drift, and the corners then weight them and correct their poses. A step
+    /// the front end left partly open (`MeasuredMotion::constrained` false) without
+    /// odometry is the filter's own corner and line fit instead; on odometry the front end
+    /// has already taken the open direction from the wheels, and keeps its step. A motion
+    /// that is not usable (not finite), or `use_measured_motion = false`, falls back to
+    /// that fit alone.
     pub fn process_measured(
         &mut self,
         stamp_ns: u64,
@@ -229,16 +238,18 @@ impl FastSlam {
                     pose: before.pose.compose(&measured.increment),
                     covariance: before.covariance + turn * measured.covariance * turn.transpose(),
                 };
-                // Estimated every scan, so the fit's last corners stay the last scan's. The
-                // prior of a step the front end left open: its own step when that rests on
-                // odometry, else the filter's constant velocity, which follows the
-                // particles' steps (see `MeasuredMotion::on_odometry`).
-                let prior =
-                    (measured.constrained || measured.on_odometry).then_some(&self.measured_track);
+                // Estimated every scan, so the fit's last corners stay the last scan's. A
+                // step the front end left open without odometry is the fit's, on the
+                // filter's own constant velocity, which follows the particles' steps (see
+                // `MeasuredMotion::on_odometry`). On odometry the front end fused the wheels
+                // into the open direction and kept the directions the scan fixed, which a
+                // corner fit would replace with its own, far noisier ones.
+                let believed = measured.constrained || measured.on_odometry;
+                let prior = believed.then_some(&self.measured_track);
                 let refined = self
                     .motion
                     .estimate(stamp_ns, &prepared, &self.lines, prior, config);
-                if measured.constrained {
+                if believed {
                     Motion {
                         delta: measured.increment,
                         covariance: measured.covariance,
@@ -272,8 +283,58 @@ impl FastSlam {
         }
         let predict_done = Instant::now();
 
+        let length = self.path_length.last().copied().unwrap_or(0.0);
+        self.path_length
+            .push(length + motion.delta.translation_norm());
+        self.since_update.0 += motion.delta.translation_norm();
+        self.since_update.1 += motion.delta.yaw.abs();
+        self.since_update.2 += noise.covariance();
+        let skip = matches!(step, StepMotion::Measured(_))
+            && self.scans > 0
+            && config.update_min_distance > 0.0
+            && self.since_update.0 < config.update_min_distance
+            && self.since_update.1 < config.update_min_rotation;
+        if skip {
+            for particle in &mut self.particles {
+                particle.path.push(PathPose {
+                    stamp_ns,
+                    pose: particle.pose,
+                });
+            }
+            let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
+            let map_size = self
+                .particles
+                .get(self.best)
+                .map_or(0, |p| p.map.confirmed_count());
+            self.scans += 1;
+            let end = Instant::now();
+            let ns = |from: Instant, to: Instant| {
+                u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX)
+            };
+            return Estimate {
+                best,
+                mean,
+                covariance,
+                effective_particles,
+                particle_count: self.particles.len(),
+                dead_reckoning: self.dead_reckoning,
+                map_size,
+                timing: StageTiming {
+                    motion_ns: ns(start, motion_done),
+                    predict_ns: ns(motion_done, predict_done),
+                    update_ns: 0,
+                    resample_ns: ns(predict_done, end),
+                    total_ns: ns(start, end),
+                },
+            };
+        }
+        let variance = if config.update_min_distance > 0.0 && self.scans > 0 {
+            self.since_update.2
+        } else {
+            noise.covariance()
+        };
+        self.since_update = (0.0, 0.0, nalgebra::Matrix3::zeros());
         self.gates.ensure(prepared.len());
-        let variance = noise.covariance();
         let context = ScanContext {
             observations: &prepared,
             pose: PoseUncertainty::from_variances(
@@ -286,6 +347,8 @@ impl FastSlam {
             // The first pose is the map frame: nothing to draw.
             draw_pose: config.observation_proposal && self.scans > 0,
             cos_half_fov: (0.5 * config.view_fov).cos(),
+            scan: self.scans,
+            path_length: &self.path_length,
         };
         let (streams, scan) = (&self.streams, self.scans);
         // Fixed chunks, each with its own scratch kept across scans: the buffers grow once,
@@ -473,6 +536,7 @@ mod tests {
         // 0.4 m the steps measured.
         let off = SlamConfig {
             particles: 20,
+            use_measured_motion: false,
             ..SlamConfig::default()
         };
         let mut slam = FastSlam::new(off, 5).unwrap();
@@ -486,8 +550,8 @@ mod tests {
 
     #[test]
     fn a_step_the_front_end_left_open_is_taken_from_the_corners() {
-        // The robot advances 5 cm a scan past four corners; the front end, as in a corridor,
-        // measured no advance and says the step is not fixed.
+        // The robot advances 5 cm a scan past four corners; the front end, as in a corridor
+        // without odometry, measured no advance and says the step is not fixed.
         let world = [
             (3.0, 1.0, 0.5, 1.2),
             (5.0, -2.0, 2.0, 1.6),
@@ -511,7 +575,7 @@ mod tests {
                 increment: Pose2::IDENTITY,
                 covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-2, 1e-6, 1e-7)),
                 constrained,
-                on_odometry: true,
+                on_odometry: false,
             };
             let mut last = None;
             for k in 0..20 {
@@ -573,7 +637,7 @@ mod tests {
         let mut changed = slam.particles[0].map.clone();
         let id = 0;
         let corner = *changed.get(id).unwrap();
-        changed.update(id, 2, |c| (c.mean.add_scalar(0.5), c.covariance));
+        changed.update(id, 2, 0, |c| (c.mean.add_scalar(0.5), c.covariance));
         slam.particles[0].map = changed;
         assert_eq!(slam.particles[1].map.confirmed(2), before);
         assert!(
