@@ -17,7 +17,7 @@ use crate::kalman;
 use crate::linalg::sample_information_form3;
 use crate::map::{CornerMap, CornerState};
 use crate::observation::Prepared;
-use crate::path::Path;
+use crate::path::{Closure, Path};
 use slam_geom::Pose2;
 
 #[derive(Debug, Clone)]
@@ -34,6 +34,8 @@ pub(crate) struct Particle {
     pub map: CornerMap,
     /// Every pose so far, shared with the copies of its ancestors.
     pub path: Path,
+    /// The loop this scan's update closed, for the path to keep with the pose.
+    pub closure: Option<Closure>,
 }
 
 /// What every particle's update reads, the same for all particles of a scan.
@@ -94,6 +96,7 @@ impl Particle {
             increment: Pose2::IDENTITY,
             map,
             path: Path::default(),
+            closure: None,
         }
     }
 
@@ -119,6 +122,7 @@ impl Particle {
         // uncertainty included, from the usual association: the same whether or not a
         // revisit then corrects the pose, so particles are compared on one footing.
         let mut pose = context.pose;
+        let mut revisit_from = None;
         let mut association = self.associate(context, scratch, &pose, config.search_radius, None);
         let unexplained = scratch.world.len() - association.pairings;
         let log_likelihood =
@@ -139,6 +143,14 @@ impl Particle {
             if wide.pairings >= config.revisit_min_corners.max(association.pairings) {
                 association = wide;
                 pose = revisit;
+                revisit_from = scratch
+                    .jcbb
+                    .assignment()
+                    .iter()
+                    .flatten()
+                    .filter_map(|&index| self.map.get(scratch.pairings[index].corner))
+                    .map(|corner| corner.last_seen)
+                    .min();
             } else {
                 association = self.associate(context, scratch, &pose, config.search_radius, None);
             }
@@ -150,6 +162,12 @@ impl Particle {
         {
             let predicted = self.pose;
             self.pose = corrected;
+            self.closure = revisit_from
+                .and_then(|scan| usize::try_from(scan).ok())
+                .map(|from| Closure {
+                    from,
+                    drifted: predicted,
+                });
             // The step the next constant-velocity prior repeats takes the correction only
             // up to three sigma of the step's noise (see `increment`). The correction in
             // the predicted frame: `frame` is still the predicted pose's.

@@ -5,10 +5,16 @@
 //! the particles never sees again. Particles append one pose per scan; a resampled copy
 //! shares its parent's path up to the split, so the storage is the particles' family tree,
 //! whose branches die out with the particles that are not resampled.
+//!
+//! A particle that closes a loop by a revisit jumps back onto its old map; the poses since it
+//! last saw that part of the map carry the drift the jump undoes. Each such jump is kept with
+//! the path, and [`Path::smoothed`] spreads it back over those poses in proportion to the
+//! path length, as the drift grew: the rotation first, then what is left of the
+//! translation. The map stays as it was built; the smoothed path is the trajectory.
 
 use std::sync::Arc;
 
-use slam_geom::Pose2;
+use slam_geom::{Pose2, wrap_angle};
 
 /// One pose of a path: the scan's stamp and the particle's pose after that scan's update.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -17,9 +23,20 @@ pub struct PathPose {
     pub pose: Pose2,
 }
 
+/// A loop closed at a pose: the pose the particle had drifted to before the jump, and the
+/// first pose of the drift it undoes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Closure {
+    /// Index in the path of the last pose that saw the old part of the map.
+    pub from: usize,
+    /// The pose before the jump.
+    pub drifted: Pose2,
+}
+
 #[derive(Debug)]
 struct Node {
     pose: PathPose,
+    closure: Option<Closure>,
     previous: Option<Arc<Node>>,
 }
 
@@ -45,22 +62,92 @@ pub(crate) struct Path {
 }
 
 impl Path {
-    pub fn push(&mut self, pose: PathPose) {
+    pub fn push(&mut self, pose: PathPose, closure: Option<Closure>) {
         let previous = self.last.take();
-        self.last = Some(Arc::new(Node { pose, previous }));
+        self.last = Some(Arc::new(Node {
+            pose,
+            closure,
+            previous,
+        }));
         self.len += 1;
     }
 
-    /// The poses from the first scan to the last.
+    /// The poses from the first scan to the last, as the particle moved.
+    #[cfg(test)]
     pub fn poses(&self) -> Vec<PathPose> {
+        self.nodes().0
+    }
+
+    /// The poses from the first scan to the last, each loop closure's jump spread back over
+    /// the drift it undid (in the order the loops closed).
+    pub fn smoothed(&self) -> Vec<PathPose> {
+        let (mut poses, closures) = self.nodes();
+        for (at, closure) in closures {
+            spread(&mut poses, at, &closure);
+        }
+        poses
+    }
+
+    /// The poses in order, and the closures with the index of their pose, in order.
+    fn nodes(&self) -> (Vec<PathPose>, Vec<(usize, Closure)>) {
         let mut poses = Vec::with_capacity(self.len);
+        let mut closures = Vec::new();
         let mut node = self.last.as_deref();
         while let Some(n) = node {
+            if let Some(closure) = n.closure {
+                closures.push((self.len - 1 - poses.len(), closure));
+            }
             poses.push(n.pose);
             node = n.previous.as_deref();
         }
         poses.reverse();
-        poses
+        closures.reverse();
+        (poses, closures)
+    }
+}
+
+/// Spreads the jump at `poses[at]` (from `closure.drifted` to where it landed) over the poses
+/// from `closure.from` on: each step turns by its share of the rotation (its share of the
+/// path length), then each pose moves by its share of the translation left at the end.
+fn spread(poses: &mut [PathPose], at: usize, closure: &Closure) {
+    let from = closure.from;
+    if from >= at || at >= poses.len() {
+        return;
+    }
+    let target = poses[at].pose;
+    // The chain from `from` to the drifted pose, and its cumulative length.
+    let chain: Vec<Pose2> = poses[from..at]
+        .iter()
+        .map(|p| p.pose)
+        .chain(std::iter::once(closure.drifted))
+        .collect();
+    let mut lengths = Vec::with_capacity(chain.len());
+    let mut total = 0.0;
+    lengths.push(0.0);
+    for pair in chain.windows(2) {
+        total += pair[0].between(&pair[1]).translation_norm();
+        lengths.push(total);
+    }
+    let steps = chain.len() - 1;
+    let share = |i: usize| {
+        if total > 0.0 {
+            lengths[i] / total
+        } else {
+            i as f64 / steps as f64
+        }
+    };
+    let turn = wrap_angle(target.yaw - closure.drifted.yaw);
+    let mut turned = Vec::with_capacity(chain.len());
+    turned.push(chain[0]);
+    for i in 0..steps {
+        let step = chain[i].between(&chain[i + 1]);
+        let step = Pose2::new(step.x, step.y, step.yaw + (share(i + 1) - share(i)) * turn);
+        turned.push(turned[i].compose(&step));
+    }
+    let (dx, dy) = (target.x - turned[steps].x, target.y - turned[steps].y);
+    for (i, pose) in turned.iter().enumerate().take(steps).skip(1) {
+        let t = share(i);
+        poses[from + i].pose = Pose2::new(pose.x + t * dx, pose.y + t * dy, pose.yaw);
     }
 }
 
@@ -79,11 +166,11 @@ mod tests {
     fn copies_share_the_past_and_keep_their_own_future() {
         let mut parent = Path::default();
         for seq in 0..3 {
-            parent.push(pose(seq));
+            parent.push(pose(seq), None);
         }
         let mut child = parent.clone();
-        child.push(pose(10));
-        parent.push(pose(3));
+        child.push(pose(10), None);
+        parent.push(pose(3), None);
         let seqs = |p: &Path| {
             p.poses()
                 .iter()
@@ -104,10 +191,61 @@ mod tests {
     }
 
     #[test]
+    fn a_loop_closure_is_spread_back_over_the_drift() {
+        // A square loop of 4 x 10 steps of 1 m whose heading drifted by 0.01 rad a step; at
+        // step 40 a revisit put the particle back at the start, where the true loop ends.
+        let truth = |i: usize| {
+            let side = (i / 10).min(3);
+            let along = (i - side * 10) as f64;
+            let corners = [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)];
+            let (cx, cy) = corners[side];
+            let yaw = side as f64 * std::f64::consts::FRAC_PI_2;
+            Pose2::new(cx + along * yaw.cos(), cy + along * yaw.sin(), wrap_angle(yaw))
+        };
+        let mut drifted = vec![truth(0)];
+        for i in 1..=40 {
+            let step = truth(i - 1).between(&truth(i));
+            let bias = 0.01;
+            let last = drifted[i - 1];
+            drifted.push(last.compose(&Pose2::new(step.x, step.y, step.yaw + bias)));
+        }
+        let mut path = Path::default();
+        for (i, pose) in drifted.iter().enumerate().take(40) {
+            path.push(PathPose { stamp_ns: i as u64, pose: *pose }, None);
+        }
+        let end = truth(40);
+        path.push(
+            PathPose { stamp_ns: 40, pose: end },
+            Some(Closure { from: 0, drifted: drifted[40] }),
+        );
+        let raw = path.poses();
+        let smoothed = path.smoothed();
+        assert_eq!(smoothed.len(), 41);
+        assert_eq!(smoothed[0].pose, raw[0].pose);
+        assert_eq!(smoothed[40].pose, end);
+        let error = |poses: &[PathPose]| {
+            poses
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.pose.x - truth(i).x).hypot(p.pose.y - truth(i).y))
+                .fold(0.0, f64::max)
+        };
+        // The drift reached metres; spread back, centimetres.
+        assert!(error(&raw) > 2.0, "{}", error(&raw));
+        assert!(error(&smoothed) < 0.05, "{} {}", error(&smoothed), error(&raw));
+        // The consecutive poses stay a step apart: no jump left.
+        assert!(
+            smoothed
+                .windows(2)
+                .all(|w| (w[0].pose.between(&w[1].pose).translation_norm() - 1.0).abs() < 0.05)
+        );
+    }
+
+    #[test]
     fn a_very_long_path_drops_without_recursion() {
         let mut path = Path::default();
         for seq in 0..1_000_000 {
-            path.push(pose(seq));
+            path.push(pose(seq), None);
         }
         let copy = path.clone();
         drop(path);

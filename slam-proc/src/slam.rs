@@ -146,7 +146,7 @@ impl FastSlam {
     pub fn best_path(&self) -> Vec<PathPose> {
         self.particles
             .get(self.best)
-            .map(|p| p.path.poses())
+            .map(|p| p.path.smoothed())
             .unwrap_or_default()
     }
 
@@ -296,10 +296,13 @@ impl FastSlam {
             && self.since_update.1 < config.update_min_rotation;
         if skip {
             for particle in &mut self.particles {
-                particle.path.push(PathPose {
-                    stamp_ns,
-                    pose: particle.pose,
-                });
+                particle.path.push(
+                    PathPose {
+                        stamp_ns,
+                        pose: particle.pose,
+                    },
+                    particle.closure.take(),
+                );
             }
             let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
             let map_size = self
@@ -359,10 +362,13 @@ impl FastSlam {
             for (k, particle) in particles.iter_mut().enumerate() {
                 let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
                 particle.log_weight += particle.update(&context, scratch, &mut rng);
-                particle.path.push(PathPose {
-                    stamp_ns,
-                    pose: particle.pose,
-                });
+                particle.path.push(
+                    PathPose {
+                        stamp_ns,
+                        pose: particle.pose,
+                    },
+                    particle.closure.take(),
+                );
             }
         };
         if rayon::current_num_threads() > 1 {
