@@ -588,45 +588,42 @@ mod tests {
         // outside this step's noise, within the drift 50 m allow for (1 m, 0.1 rad).
         let truth = Pose2::new(0.5, 0.2, 0.3);
         let predicted = Pose2::new(1.0, -0.15, 0.35);
-        let config = SlamConfig::default();
-        let (map, observations) = scene(&truth);
-        let closed = update_after(
-            map,
-            &observations,
-            true,
-            predicted,
-            PREDICTION,
-            &config,
-            50.0,
-        );
-        let error = (closed.pose.x - truth.x).hypot(closed.pose.y - truth.y);
-        assert!(error < 0.02, "{:?}", closed.pose);
-        assert!(wrap_angle(closed.pose.yaw - truth.yaw).abs() < 0.01);
-        // The old corners were seen again: no longer old.
-        assert!(closed.map.get(0).is_some_and(|c| c.last_seen == 1));
-
-        // Without revisits, or with the corners seen only 5 m ago, the particle stays off.
-        for (config, path) in [
-            (
-                SlamConfig {
-                    revisit_search_radius: 0.0,
-                    ..SlamConfig::default()
-                },
-                50.0,
-            ),
-            (SlamConfig::default(), 5.0),
-        ] {
+        let run = |config: &SlamConfig, path_length: f64| {
             let (map, observations) = scene(&truth);
-            let kept = update_after(
+            update_after(
                 map,
                 &observations,
                 true,
                 predicted,
                 PREDICTION,
-                &config,
-                path,
-            );
+                config,
+                path_length,
+            )
+        };
+        let closed = run(&SlamConfig::default(), 50.0);
+        let error = (closed.pose.x - truth.x).hypot(closed.pose.y - truth.y);
+        assert!(error < 0.02, "{:?}", closed.pose);
+        assert!(wrap_angle(closed.pose.yaw - truth.yaw).abs() < 0.01);
+        // The old corners were seen again: no longer old. The jump is kept for the path,
+        // back to the scan that last saw them.
+        assert!(closed.map.get(0).is_some_and(|c| c.last_seen == 1));
+        assert_eq!(
+            closed.closure,
+            Some(Closure {
+                from: 0,
+                drifted: predicted
+            })
+        );
+
+        // Without revisits, or with the corners seen only 5 m ago, the particle stays off.
+        let no_revisits = SlamConfig {
+            revisit_search_radius: 0.0,
+            ..SlamConfig::default()
+        };
+        for (config, path_length) in [(no_revisits, 50.0), (SlamConfig::default(), 5.0)] {
+            let kept = run(&config, path_length);
             assert_eq!(kept.pose, predicted);
+            assert_eq!(kept.closure, None);
         }
     }
 

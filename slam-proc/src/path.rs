@@ -200,7 +200,11 @@ mod tests {
             let corners = [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)];
             let (cx, cy) = corners[side];
             let yaw = side as f64 * std::f64::consts::FRAC_PI_2;
-            Pose2::new(cx + along * yaw.cos(), cy + along * yaw.sin(), wrap_angle(yaw))
+            Pose2::new(
+                cx + along * yaw.cos(),
+                cy + along * yaw.sin(),
+                wrap_angle(yaw),
+            )
         };
         let mut drifted = vec![truth(0)];
         for i in 1..=40 {
@@ -211,12 +215,24 @@ mod tests {
         }
         let mut path = Path::default();
         for (i, pose) in drifted.iter().enumerate().take(40) {
-            path.push(PathPose { stamp_ns: i as u64, pose: *pose }, None);
+            path.push(
+                PathPose {
+                    stamp_ns: i as u64,
+                    pose: *pose,
+                },
+                None,
+            );
         }
         let end = truth(40);
         path.push(
-            PathPose { stamp_ns: 40, pose: end },
-            Some(Closure { from: 0, drifted: drifted[40] }),
+            PathPose {
+                stamp_ns: 40,
+                pose: end,
+            },
+            Some(Closure {
+                from: 0,
+                drifted: drifted[40],
+            }),
         );
         let raw = path.poses();
         let smoothed = path.smoothed();
@@ -232,7 +248,12 @@ mod tests {
         };
         // The drift reached metres; spread back, centimetres.
         assert!(error(&raw) > 2.0, "{}", error(&raw));
-        assert!(error(&smoothed) < 0.05, "{} {}", error(&smoothed), error(&raw));
+        assert!(
+            error(&smoothed) < 0.05,
+            "{} {}",
+            error(&smoothed),
+            error(&raw)
+        );
         // The consecutive poses stay a step apart: no jump left.
         assert!(
             smoothed

@@ -46,10 +46,21 @@ pub struct FastSlam {
     lines: Vec<LineObservation>,
     /// One set of update buffers per chunk of `PARTICLES_PER_TASK` particles.
     scratch: Vec<Scratch>,
-    /// Motion (translation, rotation) and noise variance since the last corner update.
-    since_update: (f64, f64, nalgebra::Matrix3<f64>),
+    /// The motion since the corners last updated the particles.
+    since_update: SinceUpdate,
     /// The path length of the motion at each scan, metres.
     path_length: Vec<f64>,
+}
+
+/// The motion since the corners last updated the particles.
+#[derive(Debug, Clone, Copy, Default)]
+struct SinceUpdate {
+    /// Path length, metres.
+    distance: f64,
+    /// Rotation, radians, summed in absolute value.
+    rotation: f64,
+    /// The particles' motion noise, summed.
+    noise: nalgebra::Matrix3<f64>,
 }
 
 /// The rotation by `yaw` acting on `(x, y)`, leaving yaw as it is.
@@ -120,7 +131,7 @@ impl FastSlam {
             parents: Vec::new(),
             lines: Vec::new(),
             scratch: Vec::new(),
-            since_update: (0.0, 0.0, nalgebra::Matrix3::zeros()),
+            since_update: SinceUpdate::default(),
             path_length: Vec::new(),
             config,
         })
@@ -286,14 +297,17 @@ impl FastSlam {
         let length = self.path_length.last().copied().unwrap_or(0.0);
         self.path_length
             .push(length + motion.delta.translation_norm());
-        self.since_update.0 += motion.delta.translation_norm();
-        self.since_update.1 += motion.delta.yaw.abs();
-        self.since_update.2 += noise.covariance();
+        // With measured motion the corners wait until the robot has moved (see
+        // `SlamConfig::update_min_distance`); the particles' uncertainty relative to their
+        // maps is then the noise of every step since.
+        self.since_update.distance += motion.delta.translation_norm();
+        self.since_update.rotation += motion.delta.yaw.abs();
+        self.since_update.noise += noise.covariance();
         let skip = matches!(step, StepMotion::Measured(_))
             && self.scans > 0
             && config.update_min_distance > 0.0
-            && self.since_update.0 < config.update_min_distance
-            && self.since_update.1 < config.update_min_rotation;
+            && self.since_update.distance < config.update_min_distance
+            && self.since_update.rotation < config.update_min_rotation;
         if skip {
             for particle in &mut self.particles {
                 particle.path.push(
@@ -304,39 +318,9 @@ impl FastSlam {
                     particle.closure.take(),
                 );
             }
-            let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
-            let map_size = self
-                .particles
-                .get(self.best)
-                .map_or(0, |p| p.map.confirmed_count());
-            self.scans += 1;
-            let end = Instant::now();
-            let ns = |from: Instant, to: Instant| {
-                u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX)
-            };
-            return Estimate {
-                best,
-                mean,
-                covariance,
-                effective_particles,
-                particle_count: self.particles.len(),
-                dead_reckoning: self.dead_reckoning,
-                map_size,
-                timing: StageTiming {
-                    motion_ns: ns(start, motion_done),
-                    predict_ns: ns(motion_done, predict_done),
-                    update_ns: 0,
-                    resample_ns: ns(predict_done, end),
-                    total_ns: ns(start, end),
-                },
-            };
+            return self.finish([start, motion_done, predict_done, predict_done]);
         }
-        let variance = if config.update_min_distance > 0.0 && self.scans > 0 {
-            self.since_update.2
-        } else {
-            noise.covariance()
-        };
-        self.since_update = (0.0, 0.0, nalgebra::Matrix3::zeros());
+        let variance = std::mem::take(&mut self.since_update).noise;
         self.gates.ensure(prepared.len());
         let context = ScanContext {
             observations: &prepared,
@@ -387,7 +371,13 @@ impl FastSlam {
                 .for_each(|(chunk, work)| update_chunk(chunk, work));
         }
         let update_done = Instant::now();
+        self.finish([start, motion_done, predict_done, update_done])
+    }
 
+    /// Weighs and resamples, counts the scan and reports it; `times` are the step's start
+    /// and the ends of its motion estimate, prediction and update.
+    fn finish(&mut self, times: [Instant; 4]) -> Estimate {
+        let [start, motion_done, predict_done, update_done] = times;
         let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
         let map_size = self
             .particles
@@ -555,9 +545,9 @@ mod tests {
     }
 
     #[test]
-    fn a_step_the_front_end_left_open_is_taken_from_the_corners() {
-        // The robot advances 5 cm a scan past four corners; the front end, as in a corridor
-        // without odometry, measured no advance and says the step is not fixed.
+    fn a_step_the_front_end_left_open_without_odometry_is_taken_from_the_corners() {
+        // The robot advances 5 cm a scan past four corners; the front end, as in a corridor,
+        // measured no advance and says the step is not fixed.
         let world = [
             (3.0, 1.0, 0.5, 1.2),
             (5.0, -2.0, 2.0, 1.6),
@@ -569,7 +559,7 @@ mod tests {
                 .map(|&(cx, cy, heading, angle)| observation(cx - x, cy, heading, angle))
                 .collect()
         };
-        let run = |constrained: bool| {
+        let run = |constrained: bool, on_odometry: bool| {
             let config = SlamConfig {
                 particles: 10,
                 use_measured_motion: true,
@@ -581,7 +571,7 @@ mod tests {
                 increment: Pose2::IDENTITY,
                 covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-2, 1e-6, 1e-7)),
                 constrained,
-                on_odometry: false,
+                on_odometry,
             };
             let mut last = None;
             for k in 0..20 {
@@ -591,16 +581,67 @@ mod tests {
             // The motion the particles were moved by, integrated.
             last.unwrap().dead_reckoning.x
         };
-        let refined = run(false);
+        let refined = run(false, false);
         assert!(
             (refined - 0.95).abs() < 0.03,
             "refined to {refined} m, not 0.95 m"
         );
-        let believed = run(true);
+        let believed = run(true, false);
         assert!(
             believed.abs() < 1e-9,
             "a fixed step is believed: {believed} m"
         );
+        // On odometry the front end filled the open direction from the wheels (here: they
+        // say the robot stands still), and its step is kept.
+        let on_wheels = run(false, true);
+        assert!(
+            on_wheels.abs() < 1e-9,
+            "a step on odometry is refined: {on_wheels} m"
+        );
+    }
+
+    #[test]
+    fn corners_update_the_particles_once_the_robot_has_moved_half_a_metre() {
+        // 40 scans 5 cm apart (2 m) in front of the same corners: updates at the first
+        // scan and then every 0.5 m, not at every scan.
+        let world = [
+            (3.0, 1.0, 0.5, 1.2),
+            (5.0, -2.0, 2.0, 1.6),
+            (4.0, 4.0, -1.0, 1.9),
+        ];
+        let step = MeasuredMotion {
+            increment: Pose2::new(0.05, 0.0, 0.0),
+            covariance: Matrix3::identity() * 1e-6,
+            constrained: true,
+            on_odometry: true,
+        };
+        let observed = |update_min_distance: f64| {
+            let config = SlamConfig {
+                particles: 10,
+                update_min_distance,
+                ..SlamConfig::default()
+            };
+            let mut slam = FastSlam::new(config, 4).unwrap();
+            for k in 0..40u32 {
+                let x = 0.05 * f64::from(k);
+                let scan: Vec<Observation> = world
+                    .iter()
+                    .map(|&(cx, cy, heading, angle)| observation(cx - x, cy, heading, angle))
+                    .collect();
+                slam.process_measured(u64::from(k) * 25_000_000, &scan, &[], &step);
+            }
+            slam.best_map()
+                .iter()
+                .map(|c| c.observations)
+                .collect::<Vec<_>>()
+        };
+        // The first scan starts them; then one update per 0.5 m of the 1.95 m travelled
+        // (the distance summed in floating point may cross a threshold one scan late).
+        let gated = observed(0.5);
+        assert_eq!(gated.len(), 3, "{gated:?}");
+        assert!(gated.iter().all(|&n| n == 4 || n == 5), "{gated:?}");
+        let every_scan = observed(0.0);
+        assert_eq!(every_scan, [40, 40, 40]);
     }
 
     #[test]
