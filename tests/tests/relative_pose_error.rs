@@ -4,10 +4,10 @@
 use tests::*;
 
 /// Bound on the mean translational relative-pose error over the first 400 scans of
-/// mit-csail (seed 1, 100 particles). Measured today: 0.086 m (seeds 1-5: 0.086-0.112 m;
-/// the whole log: 0.58 m). The margin is for noise, not for a regression: tighten it as
-/// the pipeline improves.
-const MIT_CSAIL_400_MAX_TRANSLATION_M: f64 = 0.25;
+/// mit-csail (seed 1, 100 particles): about twice what the defaults give (README, "The
+/// benchmark"), so a regression of the filter or the front end fails it and a change of a
+/// few millimetres does not. Tighten it as the pipeline improves.
+const MIT_CSAIL_400_MAX_TRANSLATION_M: f64 = 0.05;
 /// Scans replayed: the first fifth of the log, with its first loop.
 const FRAMES: &str = "400";
 
