@@ -63,5 +63,5 @@ pub use estimate::{Estimate, StageTiming};
 pub use map::MapCorner;
 pub use observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
 pub use path::PathPose;
-pub use slam::FastSlam;
+pub use slam::{FastSlam, FilterStats};
 pub use slam_geom::Pose2;

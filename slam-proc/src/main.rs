@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
 use slam_proc::{
-    FastSlam, LineObservation, MeasuredMotion, Observation, OdometryInput, SlamConfig,
+    FastSlam, FilterStats, LineObservation, MeasuredMotion, Observation, OdometryInput, SlamConfig,
 };
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
@@ -93,7 +93,7 @@ fn run() -> Result<()> {
                 publish_map(&maps, &slam, last_header)?;
                 publish_path(&path, &slam, last_header)?;
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
-                eprintln!("slam-proc: {processed} scans");
+                eprintln!("{}", summary(&slam.stats()));
                 return Ok(());
             }
             observations.clear();
@@ -152,7 +152,20 @@ fn run() -> Result<()> {
     publish_map(&maps, &slam, last_header)?;
     publish_path(&path, &slam, last_header)?;
     eprintln!("slam-proc: stopped after {processed} scans");
+    eprintln!("{}", summary(&slam.stats()));
     Ok(())
+}
+
+/// The closing summary block (launch shows it on the console at the end of a run).
+fn summary(stats: &FilterStats) -> String {
+    format!(
+        "slam-proc: summary of the filter\n  \
+         scans:           {} ({} updated the particles with their corners)\n  \
+         resamplings:     {}\n  \
+         loops closed:    {} by revisits of the best particle\n  \
+         map:             {} corners",
+        stats.scans, stats.updates, stats.resamplings, stats.loops_closed, stats.map_corners,
+    )
 }
 
 fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> Result<()> {

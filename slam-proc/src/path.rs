@@ -88,6 +88,17 @@ impl Path {
         poses
     }
 
+    /// The number of loop closures kept with the path.
+    pub fn closures(&self) -> usize {
+        let mut count = 0;
+        let mut node = self.last.as_deref();
+        while let Some(n) = node {
+            count += usize::from(n.closure.is_some());
+            node = n.previous.as_deref();
+        }
+        count
+    }
+
     /// The poses in order, and the closures with the index of their pose, in order.
     fn nodes(&self) -> (Vec<PathPose>, Vec<(usize, Closure)>) {
         let mut poses = Vec::with_capacity(self.len);

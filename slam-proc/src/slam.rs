@@ -50,6 +50,26 @@ pub struct FastSlam {
     since_update: SinceUpdate,
     /// The path length of the motion at each scan, metres.
     path_length: Vec<f64>,
+    /// Scans whose corners updated the particles.
+    updates: u64,
+    /// Resamplings so far.
+    resamplings: u64,
+}
+
+/// What the filter did over a run, for its closing summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FilterStats {
+    /// Scans processed.
+    pub scans: u64,
+    /// Scans whose corners updated the particles (with measured motion, one per
+    /// `update_min_distance` of path or `update_min_rotation` of turn).
+    pub updates: u64,
+    /// Times the particles were resampled.
+    pub resamplings: u64,
+    /// Loops the best particle closed by revisits (each spread back over its path).
+    pub loops_closed: usize,
+    /// Confirmed corners of the best particle's map.
+    pub map_corners: usize,
 }
 
 /// The motion since the corners last updated the particles.
@@ -133,6 +153,8 @@ impl FastSlam {
             scratch: Vec::new(),
             since_update: SinceUpdate::default(),
             path_length: Vec::new(),
+            updates: 0,
+            resamplings: 0,
             config,
         })
     }
@@ -159,6 +181,18 @@ impl FastSlam {
             .get(self.best)
             .map(|p| p.path.smoothed())
             .unwrap_or_default()
+    }
+
+    /// What the filter did so far.
+    pub fn stats(&self) -> FilterStats {
+        let best = self.particles.get(self.best);
+        FilterStats {
+            scans: self.scans,
+            updates: self.updates,
+            resamplings: self.resamplings,
+            loops_closed: best.map_or(0, |p| p.path.closures()),
+            map_corners: best.map_or(0, |p| p.map.confirmed_count()),
+        }
     }
 
     /// The confirmed corners of the best particle's map.
@@ -321,6 +355,7 @@ impl FastSlam {
             return self.finish([start, motion_done, predict_done, predict_done]);
         }
         let variance = std::mem::take(&mut self.since_update).noise;
+        self.updates += 1;
         self.gates.ensure(prepared.len());
         let context = ScanContext {
             observations: &prepared,
@@ -441,6 +476,7 @@ impl FastSlam {
         if effective < self.config.resample_threshold * n as f64 {
             let u = self.streams.resample(self.scans).random::<f64>();
             systematic(&self.weights, u, &mut self.parents);
+            self.resamplings += 1;
             // Cloning a particle copies its pose and three pointers of its map: the copies
             // share every corner until one of them writes.
             let resampled: Vec<Particle> = self
@@ -630,18 +666,23 @@ mod tests {
                     .collect();
                 slam.process_measured(u64::from(k) * 25_000_000, &scan, &[], &step);
             }
-            slam.best_map()
+            let stats = slam.stats();
+            assert_eq!(stats.scans, 40);
+            assert_eq!(stats.loops_closed, 0);
+            let seen = slam
+                .best_map()
                 .iter()
                 .map(|c| c.observations)
-                .collect::<Vec<_>>()
+                .collect::<Vec<_>>();
+            (seen, stats.updates)
         };
         // The first scan starts them; then one update per 0.5 m of the 1.95 m travelled
         // (the distance summed in floating point may cross a threshold one scan late).
-        let gated = observed(0.5);
+        let (gated, updates) = observed(0.5);
         assert_eq!(gated.len(), 3, "{gated:?}");
-        assert!(gated.iter().all(|&n| n == 4 || n == 5), "{gated:?}");
-        let every_scan = observed(0.0);
-        assert_eq!(every_scan, [40, 40, 40]);
+        assert!(gated.iter().all(|&n| u64::from(n) == updates), "{gated:?}");
+        assert!(updates == 4 || updates == 5, "{updates}");
+        assert_eq!(observed(0.0), (vec![40, 40, 40], 40));
     }
 
     #[test]
