@@ -17,7 +17,7 @@ use crate::kalman;
 use crate::linalg::sample_information_form3;
 use crate::map::{CornerMap, CornerState};
 use crate::observation::Prepared;
-use crate::path::{Closure, Path};
+use crate::path::{self, Closure, Path, PathPose};
 use slam_geom::Pose2;
 
 #[derive(Debug, Clone)]
@@ -168,6 +168,9 @@ impl Particle {
                     from,
                     drifted: predicted,
                 });
+            if let Some(closure) = self.closure {
+                self.reanchor_since(&closure, corrected);
+            }
             // The step the next constant-velocity prior repeats takes the correction only
             // up to three sigma of the step's noise (see `increment`). The correction in
             // the predicted frame: `frame` is still the predicted pose's.
@@ -246,6 +249,32 @@ impl Particle {
         self.map
             .age_tentative(&scratch.observed, in_view, config.tentative_max_misses);
         log_likelihood
+    }
+
+    /// After a loop closed at `landed`: moves the corners mapped since `closure.from` as
+    /// the path that mapped them will be spread (see [`crate::path`]), so the map stays the
+    /// one its path implies. Left as they were, the corners of the drifted stretch would
+    /// pull the particle back into its drift when it sees them again.
+    fn reanchor_since(&mut self, closure: &Closure, landed: Pose2) {
+        let raw = self.path.since(closure.from);
+        if raw.is_empty() {
+            return;
+        }
+        let mut spread = raw.clone();
+        spread.push(PathPose {
+            stamp_ns: 0,
+            pose: landed,
+        });
+        let jump = Closure {
+            from: 0,
+            drifted: closure.drifted,
+        };
+        path::spread(&mut spread, raw.len(), &jump);
+        let first = closure.from as u64;
+        self.map.reanchor(first..first + raw.len() as u64, |scan| {
+            let i = usize::try_from(scan - first).ok()?;
+            Some(spread.get(i)?.pose.compose(&raw.get(i)?.pose.inverse()))
+        });
     }
 
     /// Pairs the scan's observations (already in `scratch.world`) with the map corners

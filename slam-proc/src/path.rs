@@ -88,6 +88,20 @@ impl Path {
         poses
     }
 
+    /// The poses from index `from` to the last, as the particle moved.
+    pub fn since(&self, from: usize) -> Vec<PathPose> {
+        let mut poses = Vec::with_capacity(self.len.saturating_sub(from));
+        let mut node = self.last.as_deref();
+        while let Some(n) = node
+            && poses.len() + from < self.len
+        {
+            poses.push(n.pose);
+            node = n.previous.as_deref();
+        }
+        poses.reverse();
+        poses
+    }
+
     /// The number of loop closures kept with the path.
     pub fn closures(&self) -> usize {
         let mut count = 0;
@@ -120,7 +134,7 @@ impl Path {
 /// Spreads the jump at `poses[at]` (from `closure.drifted` to where it landed) over the poses
 /// from `closure.from` on: each step turns by its share of the rotation (its share of the
 /// path length), then each pose moves by its share of the translation left at the end.
-fn spread(poses: &mut [PathPose], at: usize, closure: &Closure) {
+pub(crate) fn spread(poses: &mut [PathPose], at: usize, closure: &Closure) {
     let from = closure.from;
     if from >= at || at >= poses.len() {
         return;

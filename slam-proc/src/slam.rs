@@ -557,9 +557,9 @@ mod tests {
         assert_eq!(path.len(), 50);
         assert_eq!(path[49].stamp_ns, 49 * 25_000_000);
         let end = path[49].pose;
-        // 49 steps spread by their noise floors (2 mm, 0.5 mrad a step): centimetres.
+        // 49 steps of 0.1 m spread by the drift of 4.9 m of path: millimetres.
         assert!(
-            (end.x - truth.x).hypot(end.y - truth.y) < 0.05,
+            (end.x - truth.x).hypot(end.y - truth.y) < 0.01,
             "{end:?} vs {truth:?}"
         );
 
