@@ -10,8 +10,8 @@ use clap::Parser;
 use ipc_types::prelude::*;
 use lidar_replay::reorder::{DEFAULT_REORDER_CAP, DEFAULT_REORDER_WINDOW_NS};
 use lidar_replay::{
-    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, Pacer, ReadError, Records,
-    ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log,
+    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError, Pacer, ReadError,
+    Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
 };
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
@@ -97,7 +97,15 @@ fn run() -> Result<()> {
     };
     shutdown::install().context("cannot install the Ctrl-C handler")?;
     // Refuse a file that is not of the format before anyone sees a port.
-    let mut log = open_log(args.format, &args.file, reorder)?;
+    let mut log = match open_log_until(args.format, &args.file, reorder, shutdown::requested) {
+        Ok(log) => log,
+        // Ctrl-C is how a user ends a replay, before its first scan as after it.
+        Err(e @ OpenError::Stopped { .. }) => {
+            eprintln!("lidar-replay: {e}");
+            return Ok(());
+        }
+        Err(e) => return Err(e.into()),
+    };
 
     let mut pacer = Pacer::new(args.rate);
     let delivery = if pacer.is_lockstep() {
@@ -155,6 +163,7 @@ fn run() -> Result<()> {
                 }
                 continue;
             }
+            Err(ReadError::Stopped) => break,
             Err(e @ ReadError::Io(_)) => {
                 return Err(e).with_context(|| format!("{}", args.file.display()));
             }
