@@ -49,7 +49,7 @@ pub use format::{
 };
 pub use lines::{MAX_LINE_BYTES, StopFlag};
 pub use odometry_noise::{LOG_ODOMETRY_NOISE, OdometryCovariance, OdometryNoise};
-pub use pacing::Pacer;
+pub use pacing::{Pacer, RATE_RANGE, check_rate, parse_rate};
 pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 pub use reorder::{Records, ReorderConfig, ReorderCounts};
 pub use seed_csv::SeedCsvReader;
