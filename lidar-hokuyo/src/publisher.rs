@@ -6,7 +6,10 @@
 //!   the next scan is read: the reply was read to its end, so the stream is still in step.
 //!   After `max_damaged_in_row` damaged scans in a row the connection is renewed.
 //! * a closed or silent connection, a refused command or a sensor error status: reconnect.
-//! * a stop request: `QT`, wait for its confirmation, done.
+//! * a peer that is no SCIP sensor (it talks, but never replies to the command; its lines
+//!   are too long): named so in the log, and reconnect. Every exchange has its deadline
+//!   whatever arrives meanwhile.
+//! * a stop request: `QT`, wait for its confirmation (at most [`STOP_QUIT_WAIT`]), done.
 //! * `frames` scans published: `QT`, done.
 //!
 //! Only what cannot get better by reconnecting ends the loop with an error: a window the
@@ -22,6 +25,11 @@ use crate::frame::Frame;
 use crate::geometry::{GeometryError, ScanGeometry, ScanRequest};
 use crate::ranges::ranges_m;
 use crate::sensor::{Sensor, SensorError};
+
+/// Longest wait for the confirmation of the `QT` sent on a stop: a UTM-30LX sends a scan
+/// every 25 ms and confirms after the one under way, so this is several scans' time, and
+/// short enough that a stop is done within a fraction of a second.
+pub const STOP_QUIT_WAIT: Duration = Duration::from_millis(100);
 
 /// How the driver runs.
 #[derive(Debug, Clone, PartialEq)]
@@ -115,6 +123,8 @@ enum Lost {
 impl std::fmt::Display for Lost {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            Self::Sensor(e @ SensorError::NotScip { .. }) => write!(f, "{e}"),
+            Self::Sensor(e) if e.is_not_scip() => write!(f, "not a SCIP sensor: {e}"),
             Self::Sensor(e) => write!(f, "{e}"),
             Self::TooManyDamaged(n) => write!(f, "{n} damaged scans in a row"),
         }
@@ -169,7 +179,10 @@ where
                     match self.session(stream, &mut backoff) {
                         SessionEnd::Finished(finish) => return Ok(finish),
                         SessionEnd::Fatal(e) => return Err(e),
-                        SessionEnd::Lost(lost) => lost.to_string(),
+                        // Named, so a wrong address (another service on the port) shows.
+                        SessionEnd::Lost(lost) => {
+                            format!("{}: {lost}", self.connector.describe())
+                        }
                     }
                 }
                 Err(e) => format!("cannot connect to {}: {e}", self.connector.describe()),
@@ -187,8 +200,19 @@ where
             Sensor::new(stream, self.config.reply_timeout).with_stop(self.stop.clone());
         let end = self.stream_scans(&mut sensor, backoff);
         match &end {
-            SessionEnd::Finished(_) | SessionEnd::Fatal(_) => {
-                if let Err(e) = sensor.quit() {
+            SessionEnd::Finished(finish) => {
+                // A stop must be quick: a sensor confirms QT within a scan or two, and one
+                // that does not (or a peer that is no sensor) is not waited for longer.
+                let wait = match finish {
+                    Finish::Stopped => STOP_QUIT_WAIT.min(self.config.reply_timeout),
+                    Finish::Frames => self.config.reply_timeout,
+                };
+                if let Err(e) = sensor.quit(wait) {
+                    log(&format!("the sensor did not confirm QT: {e}"));
+                }
+            }
+            SessionEnd::Fatal(_) => {
+                if let Err(e) = sensor.quit(self.config.reply_timeout) {
                     log(&format!("the sensor did not confirm QT: {e}"));
                 }
             }

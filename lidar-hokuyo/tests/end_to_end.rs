@@ -296,7 +296,7 @@ fn the_emulator_binary_serves_a_sensor_client() {
     for row in 0..3 {
         assert_eq!(sensor.next_scan().unwrap().ranges, seed_hall()[row]);
     }
-    sensor.quit().unwrap();
+    sensor.quit(Duration::from_secs(2)).unwrap();
     drop(sensor);
 
     terminate(&emulator);
