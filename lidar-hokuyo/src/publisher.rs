@@ -23,6 +23,7 @@ use crate::backoff::Backoff;
 use crate::connector::Connect;
 use crate::frame::Frame;
 use crate::geometry::{GeometryError, ScanGeometry, ScanRequest};
+use crate::notices::ConnectionNotices;
 use crate::ranges::ranges_m;
 use crate::sensor::{Sensor, SensorError};
 
@@ -120,6 +121,25 @@ enum Lost {
     TooManyDamaged(u32),
 }
 
+impl Lost {
+    /// The kind of loss, without its particulars: notices are repeated when it changes.
+    fn reason(&self) -> String {
+        match self {
+            Self::Sensor(e) => {
+                // The variant and the first word inside it: `Line Closed`, `NotScip command`.
+                let debug = format!("{e:?}");
+                let words: Vec<&str> = debug
+                    .split(|c: char| !c.is_alphanumeric())
+                    .filter(|word| !word.is_empty())
+                    .take(2)
+                    .collect();
+                words.join(" ")
+            }
+            Self::TooManyDamaged(_) => "damaged".to_owned(),
+        }
+    }
+}
+
 impl std::fmt::Display for Lost {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
@@ -157,6 +177,8 @@ pub struct Driver<'a, C, K, F> {
     /// The host clock the stamps are in, ns (CLOCK_REALTIME: [`ipc_types::now_ns`]).
     pub clock: &'a dyn Fn() -> u64,
     pub stats: DriverStats,
+    /// Failed attempts, and what the console has been told about them.
+    pub notices: ConnectionNotices,
 }
 
 impl<C, K, F> Driver<'_, C, K, F>
@@ -173,22 +195,29 @@ where
             if (self.stop)() {
                 return Ok(Finish::Stopped);
             }
-            let lost = match self.connector.connect() {
+            let (lost, reason) = match self.connector.connect() {
                 Ok(stream) => {
                     self.stats.connections += 1;
                     match self.session(stream, &mut backoff) {
                         SessionEnd::Finished(finish) => return Ok(finish),
                         SessionEnd::Fatal(e) => return Err(e),
                         // Named, so a wrong address (another service on the port) shows.
-                        SessionEnd::Lost(lost) => {
-                            format!("{}: {lost}", self.connector.describe())
-                        }
+                        SessionEnd::Lost(lost) => (
+                            format!("{}: {lost}", self.connector.describe()),
+                            lost.reason(),
+                        ),
                     }
                 }
-                Err(e) => format!("cannot connect to {}: {e}", self.connector.describe()),
+                Err(e) => (
+                    format!("cannot connect to {}: {e}", self.connector.describe()),
+                    format!("connect: {:?}", e.kind()),
+                ),
             };
             let delay = backoff.next_delay();
             log(&format!("{lost}; reconnecting in {delay:?}"));
+            if let Some(notice) = self.notices.failure(Instant::now(), &lost, &reason) {
+                console(&notice);
+            }
             if sleep_unless_stopped(delay, &self.stop) {
                 return Ok(Finish::Stopped);
             }
@@ -319,6 +348,9 @@ where
             }
             self.stats.published += 1;
             self.stats.last_stamp_ns = stamp_ns;
+            if let Some(notice) = self.notices.success(&self.connector.describe()) {
+                console(&notice);
+            }
             // The sensor works: the next loss starts the back-off afresh.
             backoff.reset();
         }
@@ -342,6 +374,14 @@ fn sleep_unless_stopped(delay: Duration, stop: &dyn Fn() -> bool) -> bool {
 
 fn log(message: &str) {
     eprintln!("lidar-hokuyo: {message}");
+}
+
+/// A line for the console: stdout, which slam-launch shows (its stderr goes to a log file).
+fn console(message: &str) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    // A console that is gone is no reason to stop publishing scans.
+    let _ = writeln!(stdout, "{message}").and_then(|()| stdout.flush());
 }
 
 #[cfg(test)]
@@ -418,6 +458,7 @@ mod tests {
             stop: || false,
             clock: &clock,
             stats: DriverStats::default(),
+            notices: ConnectionNotices::default(),
         };
         let result = driver.run();
         let stats = driver.stats;
@@ -524,6 +565,7 @@ mod tests {
             stop: move || flag.load(std::sync::atomic::Ordering::Relaxed),
             clock: &|| 0,
             stats: DriverStats::default(),
+            notices: ConnectionNotices::default(),
         };
         assert_eq!(driver.run().unwrap(), Finish::Stopped);
         assert!(started.elapsed() < Duration::from_secs(5));

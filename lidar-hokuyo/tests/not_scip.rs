@@ -134,7 +134,12 @@ fn named_retried_and_stopped(peer: &Peer, tag: &str, last_began: &str) -> String
     let stopped_in = signalled.elapsed();
     seen.extend(lines.iter());
     let log = seen.join("\n");
-    assert!(output.status.code().is_some(), "died of a signal: {log}");
+    // No scan came: the run failed, and says so.
+    assert_eq!(output.status.code(), Some(1), "{log}");
+    assert!(
+        log.contains(&format!("no scan arrived from {}", peer.addr)),
+        "{log}"
+    );
     // Reads wake every 100 ms to look at the stop flag, and the QT on the way out waits at
     // most 100 ms: well within a second. The bound leaves room for a loaded machine and
     // stays below the 2 s the exchange would otherwise still have had.
