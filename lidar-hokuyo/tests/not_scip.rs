@@ -77,6 +77,18 @@ impl Drop for Peer {
     }
 }
 
+/// A driver that is killed if the test fails before it is stopped, so none outlives it.
+struct Running(Option<Child>);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        if let Some(mut child) = self.0.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
 /// The child's stderr, line by line, as it comes.
 fn stderr_lines(child: &mut Child) -> Receiver<String> {
     let stderr = child.stderr.take().unwrap();
@@ -110,8 +122,12 @@ fn wait_for_line(lines: &Receiver<String>, seen: &mut Vec<String>, text: &str, l
 /// try, then stops it with SIGTERM during that try. Returns its stderr.
 fn named_retried_and_stopped(peer: &Peer, tag: &str, last_began: &str) -> String {
     let domain = unique_domain(tag);
-    let mut child = spawn_driver(&peer.addr, &domain, &["--subscribers", "0"]);
-    let lines = stderr_lines(&mut child);
+    let mut child = Running(Some(spawn_driver(
+        &peer.addr,
+        &domain,
+        &["--subscribers", "0"],
+    )));
+    let lines = stderr_lines(child.0.as_mut().unwrap());
     let mut seen = Vec::new();
     peer.wait_for_connection(LIMIT);
     let named = format!(
@@ -128,6 +144,7 @@ fn named_retried_and_stopped(peer: &Peer, tag: &str, last_began: &str) -> String
     );
     // Back-off, then the second try: the driver is in its first exchange again.
     peer.wait_for_connection(LIMIT);
+    let child = child.0.take().unwrap();
     terminate(&child);
     let signalled = Instant::now();
     let output = finish(child, LIMIT);
