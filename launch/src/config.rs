@@ -181,11 +181,10 @@ impl RunConfig {
 
     /// Checks what the launcher itself relies on.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        if !(self.sim.rate.is_finite() && self.sim.rate >= 0.0) {
-            return Err(ConfigError::Invalid(format!(
-                "rate must be 0 (lockstep) or a positive number of scans per second, not {}",
-                self.sim.rate
-            )));
+        // The sources' own checks, so a rate is refused here, before any process starts,
+        // exactly when the source would refuse it.
+        if let Err(e) = lidar_sim::check_rate(self.sim.rate) {
+            return Err(ConfigError::Invalid(format!("[sim] rate (--rate) {e}")));
         }
         if self.source == SourceKind::Replay {
             if self.replay.file.is_none() {
@@ -199,11 +198,8 @@ impl RunConfig {
                     self.replay.format
                 )));
             }
-            if !(self.replay.rate.is_finite() && self.replay.rate >= 0.0) {
-                return Err(ConfigError::Invalid(format!(
-                    "replay rate must be 0 (lockstep) or positive, not {}",
-                    self.replay.rate
-                )));
+            if let Err(e) = lidar_replay::check_rate(self.replay.rate) {
+                return Err(ConfigError::Invalid(format!("[replay] rate (--rate) {e}")));
             }
         }
         if self.slam.particles == 0 {
@@ -260,7 +256,26 @@ mod tests {
         let mut config = RunConfig::default();
         config.sim.rate = -1.0;
         assert!(config.validate().unwrap_err().to_string().contains("rate"));
+        // Too slow for a Duration: refused with the range, not a panic in lidar-sim.
+        config.sim.rate = 1e-20;
+        assert_eq!(
+            config.validate().unwrap_err().to_string(),
+            "[sim] rate (--rate) must be 0 (lockstep) or from 0.001 to 1000 scans per \
+             second, not 1e-20"
+        );
         config.sim.rate = 0.0;
+        config.source = SourceKind::Replay;
+        config.replay.file = Some("log.clf".into());
+        config.replay.rate = 1e-20;
+        assert!(
+            config
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("[replay] rate (--rate) must be 0 (lockstep) or a speed factor")
+        );
+        config.replay.rate = 0.001;
+        config.validate().unwrap();
         config.slam.particles = 0;
         assert!(
             config

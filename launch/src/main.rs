@@ -101,6 +101,11 @@ fn run() -> Result<ExitCode> {
     };
     apply_overrides(&mut config, &args);
     config.validate()?;
+    // An address that names nothing would be retried for ever by lidar-hokuyo.
+    if config.source == SourceKind::Hokuyo {
+        lidar_hokuyo::resolve(&config.hokuyo.addr)
+            .context("refusing to start: the Hokuyo's address")?;
+    }
     if config.relations.is_none()
         && config.source == SourceKind::Replay
         && let Some(found) = config.replay.file.as_deref().and_then(relations_beside)
@@ -184,12 +189,22 @@ fn run() -> Result<ExitCode> {
             print_summary(&out)?;
             Ok(ExitCode::SUCCESS)
         }
-        // A live sensor has no end: Ctrl-C is how its run finishes.
-        Outcome::Interrupted if config.source == SourceKind::Hokuyo => {
+        // A live sensor has no end: Ctrl-C is how its run finishes, but not a run that
+        // never got a scan (a sensor that was never reached, or is no sensor).
+        Outcome::Interrupted { source_failure } if config.source == SourceKind::Hokuyo => {
+            // lidar-hokuyo knows whether it published; it fails a run that got no scan.
+            if let Some(why) = source_failure {
+                eprintln!(
+                    "slam-launch: no scan arrived from the Hokuyo at {}: {why}",
+                    config.hokuyo.addr
+                );
+                eprintln!("logs in {}", log_dir.display());
+                return Ok(ExitCode::FAILURE);
+            }
             print_summary(&out)?;
             Ok(ExitCode::SUCCESS)
         }
-        Outcome::Interrupted => {
+        Outcome::Interrupted { .. } => {
             eprintln!("interrupted; partial results in {}", out.display());
             Ok(ExitCode::from(130))
         }

@@ -31,8 +31,9 @@ pub struct StagePlan {
 pub enum Outcome {
     /// Every stage exited 0 after the source finished.
     Finished,
-    /// Ctrl-C or SIGTERM; every stage was stopped.
-    Interrupted,
+    /// Ctrl-C or SIGTERM; every stage was stopped. `source_failure` is the source's last
+    /// line on stderr when it exited non-zero all the same (lidar-hokuyo: no scan arrived).
+    Interrupted { source_failure: Option<String> },
     /// A stage died or the pipeline stalled; the message says which and why.
     Failed(String),
 }
@@ -92,7 +93,18 @@ pub fn run(
 
         if shutdown::requested() {
             stop_all(&mut stages, domain);
-            break Outcome::Interrupted;
+            // A source may fail its run even when stopped: a live one that got no scan.
+            let source_failure = stages.get_mut(source).and_then(|stage| {
+                if stage.poll_exit().is_none_or(|status| status.success()) {
+                    return None;
+                }
+                // Its own last word: iceoryx2's log lines may come after it.
+                let own = format!("{}: ", stage.name);
+                let tail = stage.stderr_tail();
+                let last = tail.iter().rev().find(|line| line.starts_with(&own));
+                Some(last.or(tail.last()).cloned().unwrap_or_default())
+            });
+            break Outcome::Interrupted { source_failure };
         }
 
         let mut all_done = true;

@@ -1,8 +1,32 @@
 //! Opening a connection to the sensor, afresh after every loss.
 
 use std::io::{self, Read, Write};
-use std::net::{TcpStream, ToSocketAddrs};
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::Duration;
+
+/// Why an address cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[error("'{addr}' cannot be resolved to an address (HOST:PORT, e.g. 192.168.0.10:10940): {cause}")]
+pub struct AddressError {
+    pub addr: String,
+    pub cause: String,
+}
+
+/// Resolves `addr` (`HOST:PORT`) now: a typo is refused at start, not retried for ever.
+pub fn resolve(addr: &str) -> Result<Vec<SocketAddr>, AddressError> {
+    let error = |cause: String| AddressError {
+        addr: addr.to_owned(),
+        cause,
+    };
+    let addrs: Vec<SocketAddr> = addr
+        .to_socket_addrs()
+        .map_err(|e| error(e.to_string()))?
+        .collect();
+    if addrs.is_empty() {
+        return Err(error("no address".to_owned()));
+    }
+    Ok(addrs)
+}
 
 /// Something that opens a stream to the sensor.
 pub trait Connect {
@@ -86,6 +110,18 @@ mod tests {
                 .connect()
                 .is_err()
         );
+    }
+
+    #[test]
+    fn addresses_that_cannot_be_resolved_are_refused() {
+        assert_eq!(resolve("127.0.0.1:10940").unwrap().len(), 1);
+        for bad in ["notanaddr", "127.0.0.1:notaport", "127.0.0.1", ""] {
+            let error = resolve(bad).unwrap_err().to_string();
+            assert!(
+                error.starts_with(&format!("'{bad}' cannot be resolved to an address")),
+                "{error}"
+            );
+        }
     }
 
     #[test]

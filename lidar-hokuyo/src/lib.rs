@@ -12,7 +12,8 @@
 //! * [`ScanGeometry`]: the ranging command and the `LaserScan` angles and timing for an
 //!   angular window and cluster size on a given sensor.
 //! * [`ranges`]: millimetres to metres, error codes to REP 117.
-//! * [`Driver`]: the loop that publishes, reconnecting with back-off.
+//! * [`Driver`]: the loop that publishes, reconnecting with back-off; what it cannot
+//!   reach is shown on the console, rate-limited ([`ConnectionNotices`]).
 //! * [`emulator`]: the sensor emulator the tests (and `hokuyo-emulator`) use.
 
 pub mod backoff;
@@ -21,6 +22,7 @@ pub mod emulator;
 pub mod frame;
 pub mod geometry;
 pub mod lines;
+pub mod notices;
 pub mod publisher;
 pub mod ranges;
 pub mod scip;
@@ -31,9 +33,10 @@ pub mod time_sync;
 mod test_stream;
 
 pub use backoff::Backoff;
-pub use connector::{Connect, TcpConnector};
+pub use connector::{AddressError, Connect, TcpConnector, resolve};
 pub use frame::Frame;
 pub use geometry::{GeometryError, ScanGeometry, ScanRequest};
+pub use notices::ConnectionNotices;
 pub use publisher::{Driver, DriverConfig, DriverError, DriverStats, Finish, ScanSink};
 pub use sensor::{Identity, Sensor, SensorError};
 pub use time_sync::{ClockSample, SensorClock, TimeSyncError};

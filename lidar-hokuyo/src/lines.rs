@@ -39,6 +39,8 @@ pub struct LineReader<S> {
     buffer: Vec<u8>,
     consumed: usize,
     ending: Ending,
+    /// Bytes read from the stream so far.
+    received: u64,
 }
 
 impl<S: Read> LineReader<S> {
@@ -58,11 +60,16 @@ impl<S: Read> LineReader<S> {
             buffer: Vec::with_capacity(4096),
             consumed: 0,
             ending,
+            received: 0,
         }
     }
 
     /// The next line without its terminator. Waits at most `timeout` for it and gives up
-    /// early when `stop` says so (checked whenever a read times out).
+    /// early when `stop` says so.
+    ///
+    /// Both are checked before every read (the deadline from the second on), whether the
+    /// last read brought bytes or timed out: a peer that keeps sending bytes that make no
+    /// line, or lines nobody waits for, must not hold the reader past its deadline or a stop.
     pub fn read_line(
         &mut self,
         timeout: Duration,
@@ -70,6 +77,7 @@ impl<S: Read> LineReader<S> {
     ) -> Result<Vec<u8>, LineError> {
         let start = Instant::now();
         let mut chunk = [0u8; 4096];
+        let mut first_read = true;
         loop {
             if let Some(line) = self.take_line() {
                 return Ok(line);
@@ -77,29 +85,36 @@ impl<S: Read> LineReader<S> {
             if self.buffer.len() - self.consumed > MAX_LINE {
                 return Err(LineError::TooLong);
             }
+            if stop() {
+                return Err(LineError::Stopped);
+            }
+            // One read is always tried, so a zero timeout still takes what has come.
+            if !first_read && start.elapsed() >= timeout {
+                return Err(LineError::TimedOut(timeout));
+            }
+            first_read = false;
             match self.stream.read(&mut chunk) {
                 Ok(0) => return Err(LineError::Closed),
                 Ok(n) => {
                     self.compact();
                     self.buffer.extend_from_slice(&chunk[..n]);
+                    self.received += n as u64;
                 }
                 Err(e)
                     if matches!(
                         e.kind(),
-                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    if stop() {
-                        return Err(LineError::Stopped);
-                    }
-                    if start.elapsed() >= timeout {
-                        return Err(LineError::TimedOut(timeout));
-                    }
-                }
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                        io::ErrorKind::WouldBlock
+                            | io::ErrorKind::TimedOut
+                            | io::ErrorKind::Interrupted
+                    ) => {}
                 Err(e) => return Err(LineError::Io(e)),
             }
         }
+    }
+
+    /// Bytes received so far, for telling a silent peer from one that talks nonsense.
+    pub fn bytes_received(&self) -> u64 {
+        self.received
     }
 
     /// The stream, to write to it.
@@ -210,6 +225,35 @@ mod tests {
             step: 100,
         };
         let mut reader = LineReader::replies(stream);
+        assert!(matches!(
+            reader.read_line(Duration::from_secs(60), &|| true),
+            Err(LineError::Stopped)
+        ));
+    }
+
+    /// Hands out a byte at a time for ever, never a timeout: a peer that keeps talking.
+    struct Chatter(u8);
+
+    impl Read for Chatter {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            buf[0] = self.0;
+            Ok(1)
+        }
+    }
+
+    #[test]
+    fn a_peer_that_never_falls_silent_still_meets_the_deadline_and_the_stop() {
+        // Bare newlines: empty lines, one per read, never a timed-out read.
+        let mut reader = LineReader::commands(Chatter(b'\n'));
+        let started = Instant::now();
+        assert!(matches!(
+            reader.read_line(Duration::from_millis(50), NEVER),
+            Err(LineError::TimedOut(_))
+        ));
+        assert!(started.elapsed() < Duration::from_secs(5));
+        assert!(reader.bytes_received() > 0);
+        // Bytes that never end a line are caught by the length cap; a stop comes first.
+        let mut reader = LineReader::replies(Chatter(b'x'));
         assert!(matches!(
             reader.read_line(Duration::from_secs(60), &|| true),
             Err(LineError::Stopped)

@@ -8,7 +8,9 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
-use lidar_hokuyo::{Driver, DriverConfig, DriverStats, Finish, ScanRequest, TcpConnector};
+use lidar_hokuyo::{
+    ConnectionNotices, Driver, DriverConfig, DriverStats, Finish, ScanRequest, TcpConnector,
+};
 
 /// Live Hokuyo lidar (UTM-30LX-EW, UST-10LX/20LX, ...) on the shared-memory scan topic.
 #[derive(Debug, Parser)]
@@ -62,6 +64,8 @@ fn main() -> ExitCode {
 
 fn run() -> Result<()> {
     let args = Args::parse();
+    // A typo in the address would otherwise be retried for ever, quietly.
+    lidar_hokuyo::resolve(&args.addr).context("--addr")?;
     shutdown::install().context("cannot install the Ctrl-C handler")?;
     let config = DriverConfig {
         request: ScanRequest {
@@ -107,9 +111,11 @@ fn run() -> Result<()> {
         stop: shutdown::requested,
         clock: &clock,
         stats: DriverStats::default(),
+        notices: ConnectionNotices::default(),
     };
     let finish = driver.run()?;
     let stats = driver.stats;
+    let notices = driver.notices;
     // The stream ends either way, so the stages after us finish their work and write.
     if let Err(e) = scans.publish_end_of_stream(stats.published, stats.last_stamp_ns) {
         eprintln!("lidar-hokuyo: cannot publish the end of the stream: {e}");
@@ -122,5 +128,16 @@ fn run() -> Result<()> {
         "lidar-hokuyo: {how}: published {} scans, dropped {} damaged scans, {} connections",
         stats.published, stats.damaged, stats.connections
     );
+    // A live source that never delivered has failed, however it was stopped.
+    if stats.published == 0 {
+        let why = match notices.last_problem() {
+            Some(problem) => format!(
+                "{} failed attempts; the last: {problem}",
+                notices.failed_total()
+            ),
+            None => "stopped before the first".to_owned(),
+        };
+        anyhow::bail!("no scan arrived from {} ({why})", args.addr);
+    }
     Ok(())
 }

@@ -6,7 +6,10 @@
 //!   the next scan is read: the reply was read to its end, so the stream is still in step.
 //!   After `max_damaged_in_row` damaged scans in a row the connection is renewed.
 //! * a closed or silent connection, a refused command or a sensor error status: reconnect.
-//! * a stop request: `QT`, wait for its confirmation, done.
+//! * a peer that is no SCIP sensor (it talks, but never replies to the command; its lines
+//!   are too long): named so in the log, and reconnect. Every exchange has its deadline
+//!   whatever arrives meanwhile.
+//! * a stop request: `QT`, wait for its confirmation (at most [`STOP_QUIT_WAIT`]), done.
 //! * `frames` scans published: `QT`, done.
 //!
 //! Only what cannot get better by reconnecting ends the loop with an error: a window the
@@ -20,8 +23,14 @@ use crate::backoff::Backoff;
 use crate::connector::Connect;
 use crate::frame::Frame;
 use crate::geometry::{GeometryError, ScanGeometry, ScanRequest};
+use crate::notices::ConnectionNotices;
 use crate::ranges::ranges_m;
 use crate::sensor::{Sensor, SensorError};
+
+/// Longest wait for the confirmation of the `QT` sent on a stop: a UTM-30LX sends a scan
+/// every 25 ms and confirms after the one under way, so this is several scans' time, and
+/// short enough that a stop is done within a fraction of a second.
+pub const STOP_QUIT_WAIT: Duration = Duration::from_millis(100);
 
 /// How the driver runs.
 #[derive(Debug, Clone, PartialEq)]
@@ -112,9 +121,30 @@ enum Lost {
     TooManyDamaged(u32),
 }
 
+impl Lost {
+    /// The kind of loss, without its particulars: notices are repeated when it changes.
+    fn reason(&self) -> String {
+        match self {
+            Self::Sensor(e) => {
+                // The variant and the first word inside it: `Line Closed`, `NotScip command`.
+                let debug = format!("{e:?}");
+                let words: Vec<&str> = debug
+                    .split(|c: char| !c.is_alphanumeric())
+                    .filter(|word| !word.is_empty())
+                    .take(2)
+                    .collect();
+                words.join(" ")
+            }
+            Self::TooManyDamaged(_) => "damaged".to_owned(),
+        }
+    }
+}
+
 impl std::fmt::Display for Lost {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            Self::Sensor(e @ SensorError::NotScip { .. }) => write!(f, "{e}"),
+            Self::Sensor(e) if e.is_not_scip() => write!(f, "not a SCIP sensor: {e}"),
             Self::Sensor(e) => write!(f, "{e}"),
             Self::TooManyDamaged(n) => write!(f, "{n} damaged scans in a row"),
         }
@@ -147,6 +177,8 @@ pub struct Driver<'a, C, K, F> {
     /// The host clock the stamps are in, ns (CLOCK_REALTIME: [`ipc_types::now_ns`]).
     pub clock: &'a dyn Fn() -> u64,
     pub stats: DriverStats,
+    /// Failed attempts, and what the console has been told about them.
+    pub notices: ConnectionNotices,
 }
 
 impl<C, K, F> Driver<'_, C, K, F>
@@ -163,19 +195,29 @@ where
             if (self.stop)() {
                 return Ok(Finish::Stopped);
             }
-            let lost = match self.connector.connect() {
+            let (lost, reason) = match self.connector.connect() {
                 Ok(stream) => {
                     self.stats.connections += 1;
                     match self.session(stream, &mut backoff) {
                         SessionEnd::Finished(finish) => return Ok(finish),
                         SessionEnd::Fatal(e) => return Err(e),
-                        SessionEnd::Lost(lost) => lost.to_string(),
+                        // Named, so a wrong address (another service on the port) shows.
+                        SessionEnd::Lost(lost) => (
+                            format!("{}: {lost}", self.connector.describe()),
+                            lost.reason(),
+                        ),
                     }
                 }
-                Err(e) => format!("cannot connect to {}: {e}", self.connector.describe()),
+                Err(e) => (
+                    format!("cannot connect to {}: {e}", self.connector.describe()),
+                    format!("connect: {:?}", e.kind()),
+                ),
             };
             let delay = backoff.next_delay();
             log(&format!("{lost}; reconnecting in {delay:?}"));
+            if let Some(notice) = self.notices.failure(Instant::now(), &lost, &reason) {
+                console(&notice);
+            }
             if sleep_unless_stopped(delay, &self.stop) {
                 return Ok(Finish::Stopped);
             }
@@ -187,8 +229,19 @@ where
             Sensor::new(stream, self.config.reply_timeout).with_stop(self.stop.clone());
         let end = self.stream_scans(&mut sensor, backoff);
         match &end {
-            SessionEnd::Finished(_) | SessionEnd::Fatal(_) => {
-                if let Err(e) = sensor.quit() {
+            SessionEnd::Finished(finish) => {
+                // A stop must be quick: a sensor confirms QT within a scan or two, and one
+                // that does not (or a peer that is no sensor) is not waited for longer.
+                let wait = match finish {
+                    Finish::Stopped => STOP_QUIT_WAIT.min(self.config.reply_timeout),
+                    Finish::Frames => self.config.reply_timeout,
+                };
+                if let Err(e) = sensor.quit(wait) {
+                    log(&format!("the sensor did not confirm QT: {e}"));
+                }
+            }
+            SessionEnd::Fatal(_) => {
+                if let Err(e) = sensor.quit(self.config.reply_timeout) {
                     log(&format!("the sensor did not confirm QT: {e}"));
                 }
             }
@@ -295,6 +348,9 @@ where
             }
             self.stats.published += 1;
             self.stats.last_stamp_ns = stamp_ns;
+            if let Some(notice) = self.notices.success(&self.connector.describe()) {
+                console(&notice);
+            }
             // The sensor works: the next loss starts the back-off afresh.
             backoff.reset();
         }
@@ -318,6 +374,14 @@ fn sleep_unless_stopped(delay: Duration, stop: &dyn Fn() -> bool) -> bool {
 
 fn log(message: &str) {
     eprintln!("lidar-hokuyo: {message}");
+}
+
+/// A line for the console: stdout, which slam-launch shows (its stderr goes to a log file).
+fn console(message: &str) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    // A console that is gone is no reason to stop publishing scans.
+    let _ = writeln!(stdout, "{message}").and_then(|()| stdout.flush());
 }
 
 #[cfg(test)]
@@ -394,6 +458,7 @@ mod tests {
             stop: || false,
             clock: &clock,
             stats: DriverStats::default(),
+            notices: ConnectionNotices::default(),
         };
         let result = driver.run();
         let stats = driver.stats;
@@ -500,6 +565,7 @@ mod tests {
             stop: move || flag.load(std::sync::atomic::Ordering::Relaxed),
             clock: &|| 0,
             stats: DriverStats::default(),
+            notices: ConnectionNotices::default(),
         };
         assert_eq!(driver.run().unwrap(), Finish::Stopped);
         assert!(started.elapsed() < Duration::from_secs(5));

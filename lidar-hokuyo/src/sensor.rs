@@ -20,6 +20,8 @@ const MAX_REPLY_LINES: usize = 1024;
 const ALREADY: Status = Status(*b"02");
 /// `TM2` when adjustment mode is already off.
 const ALREADY_OFF: Status = Status(*b"03");
+/// Bytes of a stray reply quoted in [`SensorError::NotScip`].
+const LAST_OTHER_BYTES: usize = 40;
 
 /// Why the sensor could not be talked to.
 #[derive(Debug, thiserror::Error)]
@@ -34,6 +36,19 @@ pub enum SensorError {
     Refused { command: String, status: Status },
     #[error("no reply to {command} within {timeout:?}")]
     NoReply { command: String, timeout: Duration },
+    /// Bytes came, but no reply to the command: whatever the peer is, it is no SCIP sensor.
+    #[error(
+        "not a SCIP sensor: no reply to {command} within {timeout:?}, only {others} replies \
+         to something else (the last began {last:?})"
+    )]
+    NotScip {
+        command: String,
+        timeout: Duration,
+        /// Replies (or empty lines) that were not the awaited one.
+        others: usize,
+        /// The start of the last of them.
+        last: String,
+    },
     #[error("no ranging command is running")]
     NotRanging,
     #[error("cannot relate the sensor's clock to ours: {0}")]
@@ -44,6 +59,12 @@ impl SensorError {
     /// True when a stop was requested while waiting.
     pub fn is_stop(&self) -> bool {
         matches!(self, Self::Line(LineError::Stopped))
+    }
+
+    /// True when the peer does not speak SCIP: it sent what no sensor sends (no reply to a
+    /// command, only other lines, or lines longer than any SCIP line).
+    pub fn is_not_scip(&self) -> bool {
+        matches!(self, Self::NotScip { .. } | Self::Line(LineError::TooLong))
     }
 
     /// True for a reply that arrived whole but damaged (bad checksum, bad character, wrong
@@ -226,12 +247,15 @@ impl<S: Read + Write> Sensor<S> {
         Ok(reply.scan(ranging.kind, ranging.beams())?)
     }
 
-    /// Stops ranging (`QT`) and waits for the sensor to confirm, reading away the scans
-    /// still on their way. Ignores stop requests: this is what a stop does.
-    pub fn quit(&mut self) -> Result<(), SensorError> {
+    /// Stops ranging (`QT`) and waits at most `wait` for the sensor to confirm, reading away
+    /// the scans still on their way. Ignores stop requests: this is what a stop does; the
+    /// caller bounds it with `wait` instead.
+    pub fn quit(&mut self, wait: Duration) -> Result<(), SensorError> {
         self.ranging = None;
-        self.exchange(Command::Quit, &[Status::OK], &|| false)
-            .map(drop)
+        let reply_timeout = std::mem::replace(&mut self.reply_timeout, wait);
+        let result = self.exchange(Command::Quit, &[Status::OK], &|| false);
+        self.reply_timeout = reply_timeout;
+        result.map(drop)
     }
 
     /// Sends `QT` without waiting for the reply: for a connection about to be dropped.
@@ -267,20 +291,47 @@ impl<S: Read + Write> Sensor<S> {
         self.send(&command)?;
         let echo = command.line();
         let name = String::from_utf8_lossy(&echo).into_owned();
-        let deadline = Instant::now() + self.reply_timeout;
+        let timeout = self.reply_timeout;
+        let deadline = Instant::now() + timeout;
+        let received_before = self.reader.bytes_received();
+        // Replies to something else, and the first line of the last one, to tell a peer that
+        // does not speak SCIP from a silent one.
+        let mut others = 0usize;
+        let mut last_other = Vec::new();
+        // Bytes came and our reply did not: the peer talks, but not SCIP.
+        let no_reply = |reader: &LineReader<S>, others: usize, last_other: &[u8]| {
+            if reader.bytes_received() == received_before {
+                SensorError::NoReply {
+                    command: name.clone(),
+                    timeout,
+                }
+            } else {
+                SensorError::NotScip {
+                    command: name.clone(),
+                    timeout,
+                    others,
+                    last: String::from_utf8_lossy(last_other).into_owned(),
+                }
+            }
+        };
         loop {
+            // The deadline holds whatever arrives: replies to other commands (or empty ones)
+            // that come faster than it would otherwise be looked at included.
             let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(no_reply(&self.reader, others, &last_other));
+            }
             let lines = match read_reply_lines(&mut self.reader, left, stop) {
                 Ok(lines) => lines,
                 Err(SensorError::Line(LineError::TimedOut(_))) => {
-                    return Err(SensorError::NoReply {
-                        command: name,
-                        timeout: self.reply_timeout,
-                    });
+                    return Err(no_reply(&self.reader, others, &last_other));
                 }
                 Err(e) => return Err(e),
             };
             if lines.first() != Some(&echo) {
+                others += 1;
+                last_other = lines.first().cloned().unwrap_or_default();
+                last_other.truncate(LAST_OTHER_BYTES);
                 continue;
             }
             let reply = Reply::parse(lines)?;
@@ -401,7 +452,7 @@ mod tests {
             &[information_line("PROD", "SOKUIKI Sensor UTM-30LX")],
         ));
         let mut sensor = Sensor::new(ScriptedStream::new(script), SECOND);
-        sensor.quit().unwrap();
+        sensor.quit(SECOND).unwrap();
         let version = sensor
             .request(Command::Version, &[Status::OK])
             .unwrap()

@@ -30,7 +30,7 @@ use std::io::BufRead;
 
 use crate::angle::wrap_angle;
 use crate::error::{LineError, Malformation, ReadError};
-use crate::lines::{NumberedLines, snippet};
+use crate::lines::{NumberedLines, StopFlag, snippet};
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
 use crate::stamp::parse_stamp_ns;
@@ -74,6 +74,8 @@ pub struct CarmenReader<R> {
     skipped: BTreeMap<String, u64>,
     /// The end of the file (or a read error) has been reached: only the window is left.
     ended: bool,
+    /// A stop was requested: nothing more comes out.
+    stopped: bool,
 }
 
 impl<R: BufRead> CarmenReader<R> {
@@ -91,12 +93,25 @@ impl<R: BufRead> CarmenReader<R> {
             last_scan: None,
             skipped: BTreeMap::new(),
             ended: false,
+            stopped: false,
         }
+    }
+
+    /// Ends the reading with [`ReadError::Stopped`] once `stop` returns true (asked between
+    /// reads, so also within an endless line).
+    pub fn stop_when(mut self, stop: StopFlag) -> Self {
+        self.lines.set_stop(stop);
+        self
     }
 
     /// Number of the line read last (0 before the first).
     pub fn line_number(&self) -> u64 {
         self.lines.line_number()
+    }
+
+    /// Bytes read so far.
+    pub(crate) fn bytes_read(&self) -> u64 {
+        self.lines.bytes_read()
     }
 
     /// Record types skipped so far (`PARAM`, `SYNC`, ...) and how many lines of each.
@@ -187,6 +202,9 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
     type Item = Result<LogRecord, ReadError>;
 
     fn next(&mut self) -> Option<Self::Item> {
+        if self.stopped {
+            return None;
+        }
         loop {
             if let Some(record) = self.ready.pop_front() {
                 return Some(Ok(record));
@@ -222,11 +240,16 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
                     self.ended = true;
                     continue;
                 }
+                Err(ReadError::Stopped) => {
+                    // Stopped means stopped: what the window holds is not let out either.
+                    self.stopped = true;
+                    return Some(Err(ReadError::Stopped));
+                }
                 Err(e) => {
                     // Nothing after a read error can be trusted to be read; what the window
                     // holds still comes out after the error.
                     self.ended = true;
-                    return Some(Err(e.into()));
+                    return Some(Err(e));
                 }
             };
             match parsed {

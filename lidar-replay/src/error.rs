@@ -9,6 +9,8 @@ use crate::format::LogFormat;
 pub enum Malformation {
     /// Bytes that are not UTF-8 text.
     NotText,
+    /// A line longer than [`crate::MAX_LINE_BYTES`] (no newline in sight).
+    TooLong,
     /// A line that is no record of the format at all.
     NotARecord,
     /// The line ends before all its fields.
@@ -29,6 +31,7 @@ impl std::fmt::Display for Malformation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Self::NotText => "not UTF-8 text",
+            Self::TooLong => "line too long",
             Self::NotARecord => "not a record of the format",
             Self::MissingFields => "fields missing",
             Self::ExtraFields => "extra fields",
@@ -87,6 +90,9 @@ pub enum ReadError {
     /// The file itself cannot be read any more: stop.
     #[error("cannot read the log: {0}")]
     Io(#[from] std::io::Error),
+    /// The stop flag was raised (Ctrl-C): nothing more is read.
+    #[error("reading stopped: a stop was requested")]
+    Stopped,
 }
 
 /// Why a log cannot be replayed at all.
@@ -104,6 +110,9 @@ pub enum OpenError {
         format: LogFormat,
         reason: String,
     },
+    /// The stop flag was raised while the file was being checked.
+    #[error("stopped while checking {path}")]
+    Stopped { path: PathBuf },
 }
 
 /// Why [`crate::check_format`] refused some data.
@@ -114,4 +123,7 @@ pub enum CheckError {
     /// Not a log of the format; the text says why.
     #[error("{0}")]
     Mismatch(String),
+    /// The stop flag was raised before the check was done.
+    #[error("stopped while checking the log")]
+    Stopped,
 }

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use crate::carmen::CarmenReader;
 use crate::error::{CheckError, OpenError, ReadError};
+use crate::lines::{StopFlag, never};
 use crate::record::LogRecord;
 use crate::reorder::{ReorderConfig, ReorderCounts};
 use crate::seed_csv::SeedCsvReader;
@@ -14,6 +15,11 @@ use crate::seed_csv::SeedCsvReader;
 /// A file whose first scan is not among its first this many lines is refused: CARMEN logs
 /// open with a few hundred `PARAM` lines at most.
 pub const SNIFF_LINES: u64 = 5_000;
+
+/// ... nor among its first this many bytes: the lines may be long (up to
+/// [`crate::MAX_LINE_BYTES`] each), and a file without newlines (`/dev/zero`) has no second
+/// line at all. A real log's first scan comes within its first few hundred kilobytes.
+pub const SNIFF_BYTES: u64 = 64 << 20;
 
 /// The formats `lidar-replay` reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,6 +92,23 @@ impl<R: BufRead> LogReader<R> {
         }
     }
 
+    /// Ends the reading with [`ReadError::Stopped`] once `stop` returns true; it is asked
+    /// between reads, so even an endless line does not hold up a stop.
+    pub fn stop_when(self, stop: StopFlag) -> Self {
+        match self {
+            Self::SeedCsv(reader) => Self::SeedCsv(reader.stop_when(stop)),
+            Self::Carmen(reader) => Self::Carmen(Box::new(reader.stop_when(stop))),
+        }
+    }
+
+    /// Bytes read so far.
+    fn bytes_read(&self) -> u64 {
+        match self {
+            Self::SeedCsv(reader) => reader.bytes_read(),
+            Self::Carmen(reader) => reader.bytes_read(),
+        }
+    }
+
     /// The reordering window and what it did so far; `None` for a format read in line order.
     pub fn reordering(&self) -> Option<(ReorderConfig, ReorderCounts)> {
         match self {
@@ -127,9 +150,20 @@ impl<R: BufRead> Iterator for LogReader<R> {
 }
 
 /// Reads `reader` as `format` until its first scan. `Err` says why the data is not a log of
-/// that format: no valid scan in the first [`SNIFF_LINES`] lines or before the end.
+/// that format: no valid scan in the first [`SNIFF_LINES`] lines or [`SNIFF_BYTES`] bytes,
+/// or before the end.
 pub fn check_format<R: BufRead>(format: LogFormat, reader: R) -> Result<(), CheckError> {
-    let mut log = LogReader::new(format, reader);
+    check_format_until(format, reader, never)
+}
+
+/// [`check_format`] that gives up with [`CheckError::Stopped`] once `stop` returns true.
+pub fn check_format_until<R: BufRead>(
+    format: LogFormat,
+    reader: R,
+    stop: StopFlag,
+) -> Result<(), CheckError> {
+    // The budget in bytes ends the check as an end of file would, even within one line.
+    let mut log = LogReader::new(format, reader.take(SNIFF_BYTES)).stop_when(stop);
     let mut first_problem = None;
     while log.line_number() < SNIFF_LINES {
         match log.next() {
@@ -139,11 +173,14 @@ pub fn check_format<R: BufRead>(format: LogFormat, reader: R) -> Result<(), Chec
                 first_problem.get_or_insert(e);
             }
             Some(Err(ReadError::Io(e))) => return Err(e.into()),
+            Some(Err(ReadError::Stopped)) => return Err(CheckError::Stopped),
             None => break,
         }
     }
     let lines = log.line_number();
-    let mut reason = if lines < SNIFF_LINES {
+    let mut reason = if log.bytes_read() >= SNIFF_BYTES {
+        format!("no valid scan in its first {} MiB", SNIFF_BYTES >> 20)
+    } else if lines < SNIFF_LINES {
         format!("no valid scan in its {lines} lines")
     } else {
         format!("no valid scan in its first {SNIFF_LINES} lines")
@@ -169,6 +206,17 @@ pub fn open_log(
     path: &Path,
     reorder: ReorderConfig,
 ) -> Result<LogReader<BufReader<File>>, OpenError> {
+    open_log_until(format, path, reorder, never)
+}
+
+/// [`open_log`] whose check and reading end once `stop` returns true (Ctrl-C): the check
+/// with [`OpenError::Stopped`], the reading with [`ReadError::Stopped`].
+pub fn open_log_until(
+    format: LogFormat,
+    path: &Path,
+    reorder: ReorderConfig,
+    stop: StopFlag,
+) -> Result<LogReader<BufReader<File>>, OpenError> {
     let open = || {
         File::open(path)
             .map(BufReader::new)
@@ -177,7 +225,7 @@ pub fn open_log(
                 source,
             })
     };
-    check_format(format, open()?).map_err(|e| match e {
+    check_format_until(format, open()?, stop).map_err(|e| match e {
         CheckError::Io(source) => OpenError::Io {
             path: path.to_path_buf(),
             source,
@@ -187,9 +235,12 @@ pub fn open_log(
             format,
             reason,
         },
+        CheckError::Stopped => OpenError::Stopped {
+            path: path.to_path_buf(),
+        },
     })?;
     // Read again from the top, so the lines looked at are replayed and reported as usual.
-    Ok(LogReader::with_reorder(format, open()?, reorder))
+    Ok(LogReader::with_reorder(format, open()?, reorder).stop_when(stop))
 }
 
 #[cfg(test)]

@@ -13,6 +13,9 @@
 //!   dropped, and why.
 //! * [`open_log`] refuses a file that is not of its format ([`check_format`]) before anything
 //!   is published.
+//! * No input can fill the memory or hold up a stop: a line longer than [`MAX_LINE_BYTES`]
+//!   is refused (and reading goes on at its end), and [`open_log_until`] takes a stop flag
+//!   the reading honours between reads, even within an endless line.
 //! * Stamps are the log's own, parsed to nanoseconds exactly ([`parse_stamp_ns`]); the
 //!   seed-hall recording has none and is stamped at a nominal 10 Hz
 //!   ([`seed_csv::NOMINAL_PERIOD_NS`]).
@@ -40,9 +43,13 @@ pub use angle::wrap_angle;
 pub use carmen::CarmenReader;
 pub use error::{CheckError, LineError, Malformation, OpenError, ReadError};
 pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};
-pub use format::{LogFormat, LogReader, SNIFF_LINES, check_format, open_log};
+pub use format::{
+    LogFormat, LogReader, SNIFF_BYTES, SNIFF_LINES, check_format, check_format_until, open_log,
+    open_log_until,
+};
+pub use lines::{MAX_LINE_BYTES, StopFlag};
 pub use odometry_noise::{LOG_ODOMETRY_NOISE, OdometryCovariance, OdometryNoise};
-pub use pacing::Pacer;
+pub use pacing::{Pacer, RATE_RANGE, check_rate, parse_rate};
 pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 pub use reorder::{Records, ReorderConfig, ReorderCounts};
 pub use seed_csv::SeedCsvReader;

@@ -10,8 +10,8 @@ use clap::Parser;
 use ipc_types::prelude::*;
 use lidar_replay::reorder::{DEFAULT_REORDER_CAP, DEFAULT_REORDER_WINDOW_NS};
 use lidar_replay::{
-    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, Pacer, ReadError, Records,
-    ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log,
+    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError, Pacer, ReadError,
+    Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
 };
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
@@ -31,9 +31,10 @@ struct Args {
     /// The log file.
     #[arg(long, value_name = "FILE")]
     file: PathBuf,
-    /// Speed against the log's own timing: 1 = as recorded, 2 = twice as fast; 0 = lockstep:
-    /// each message waits until every subscriber has taken the previous one, nothing is lost.
-    #[arg(long, default_value_t = 0.0)]
+    /// Speed against the log's own timing (0.001 to 1000): 1 = as recorded, 2 = twice as
+    /// fast; 0 = lockstep: each message waits until every subscriber has taken the previous
+    /// one, nothing is lost.
+    #[arg(long, default_value_t = 0.0, value_parser = lidar_replay::parse_rate)]
     rate: f64,
     /// iceoryx2 domain of the run.
     #[arg(long, default_value = "default")]
@@ -65,8 +66,6 @@ const REAL_TIME_SUBSCRIBER_WAIT: Duration = Duration::from_secs(10);
 const ODOMETRY_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
 /// Malformed lines reported one by one; the rest are only counted.
 const REPORTED_LINES: u64 = 100;
-/// Longest single sleep while pacing, so Ctrl-C is noticed promptly.
-const SLEEP_SLICE: Duration = Duration::from_millis(50);
 
 fn main() -> ExitCode {
     match run() {
@@ -80,11 +79,6 @@ fn main() -> ExitCode {
 
 fn run() -> Result<()> {
     let args = Args::parse();
-    anyhow::ensure!(
-        args.rate.is_finite() && args.rate >= 0.0,
-        "--rate must be 0 (lockstep) or a positive speed factor, not {}",
-        args.rate
-    );
     // An hour is far beyond any log's disorder, and keeps the nanoseconds within u64.
     anyhow::ensure!(
         args.reorder_window.is_finite() && (0.0..=3600.0).contains(&args.reorder_window),
@@ -97,7 +91,15 @@ fn run() -> Result<()> {
     };
     shutdown::install().context("cannot install the Ctrl-C handler")?;
     // Refuse a file that is not of the format before anyone sees a port.
-    let mut log = open_log(args.format, &args.file, reorder)?;
+    let mut log = match open_log_until(args.format, &args.file, reorder, shutdown::requested) {
+        Ok(log) => log,
+        // Ctrl-C is how a user ends a replay, before its first scan as after it.
+        Err(e @ OpenError::Stopped { .. }) => {
+            eprintln!("lidar-replay: {e}");
+            return Ok(());
+        }
+        Err(e) => return Err(e.into()),
+    };
 
     let mut pacer = Pacer::new(args.rate);
     let delivery = if pacer.is_lockstep() {
@@ -155,6 +157,7 @@ fn run() -> Result<()> {
                 }
                 continue;
             }
+            Err(ReadError::Stopped) => break,
             Err(e @ ReadError::Io(_)) => {
                 return Err(e).with_context(|| format!("{}", args.file.display()));
             }
@@ -221,19 +224,9 @@ fn run() -> Result<()> {
 
 /// Sleeps until `due` (at once when `None` or past). Returns false when Ctrl-C came first.
 fn sleep_until(due: Option<Instant>) -> bool {
-    let Some(due) = due else {
-        return !shutdown::requested();
-    };
-    loop {
-        if shutdown::requested() {
-            return false;
-        }
-        let Some(left) = due.checked_duration_since(Instant::now()) else {
-            return true;
-        };
-        if left.is_zero() {
-            return true;
-        }
-        std::thread::sleep(left.min(SLEEP_SLICE));
+    match due {
+        // Sliced, so a long wait (a slow rate, a gap in the log) does not hold up Ctrl-C.
+        Some(due) => shutdown::sleep_until(due),
+        None => !shutdown::requested(),
     }
 }

@@ -1,6 +1,36 @@
 //! When to publish a record: at once in lockstep, or at the log's own pace scaled by a rate.
 
+use std::ops::RangeInclusive;
 use std::time::{Duration, Instant};
+
+/// Speed factors a real-time replay may have; 0 (lockstep) is allowed besides. A thousandth
+/// of the log's speed stretches a day-long log to three years, still far inside a
+/// `Duration`; a thousand times is beyond what a subscriber keeps up with, and lockstep is
+/// the way to go as fast as they can.
+pub const RATE_RANGE: RangeInclusive<f64> = 0.001..=1000.0;
+
+/// Checks a speed factor: 0 (lockstep) or within [`RATE_RANGE`]; the error says what may
+/// be given.
+pub fn check_rate(rate: f64) -> Result<f64, String> {
+    if rate == 0.0 || RATE_RANGE.contains(&rate) {
+        Ok(rate)
+    } else {
+        Err(format!(
+            "must be 0 (lockstep) or a speed factor from {} to {} (1 = as recorded), not {rate:?}",
+            RATE_RANGE.start(),
+            RATE_RANGE.end()
+        ))
+    }
+}
+
+/// `--rate`'s parser: a number that passes [`check_rate`].
+pub fn parse_rate(text: &str) -> Result<f64, String> {
+    let rate: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    check_rate(rate)
+}
 
 /// Maps log stamps to wall-clock deadlines. The first stamp asked about is published at
 /// once and anchors the rest: a record `dt` of log time later is due `dt / rate` later.
@@ -12,7 +42,9 @@ pub struct Pacer {
 }
 
 impl Pacer {
-    /// `rate` 0 = lockstep, 1 = as recorded, 2 = twice as fast. Must be finite and >= 0.
+    /// `rate` 0 = lockstep, 1 = as recorded, 2 = twice as fast; see [`check_rate`]. A rate
+    /// outside it is not refused here, but a record it would put beyond any clock is due at
+    /// the latest time the clock has rather than a panic.
     pub fn new(rate: f64) -> Self {
         Self {
             rate: (rate > 0.0).then_some(rate),
@@ -32,7 +64,10 @@ impl Pacer {
         let rate = self.rate?;
         let (origin_stamp, origin_time) = *self.origin.get_or_insert((stamp_ns, now));
         let log_elapsed = stamp_ns.saturating_sub(origin_stamp) as f64 * 1e-9;
-        Some(origin_time + Duration::from_secs_f64(log_elapsed / rate))
+        // Far enough to be never in practice, near enough for any Instant to hold.
+        const NEVER: Duration = Duration::from_secs(100 * 365 * 86_400);
+        let wait = Duration::try_from_secs_f64(log_elapsed / rate).map_or(NEVER, |w| w.min(NEVER));
+        Some(origin_time + wait)
     }
 }
 
@@ -60,6 +95,25 @@ mod tests {
             "one log second at twice the speed, from the first record's time"
         );
         assert_eq!(pacer.due(base - 1, later), Some(start));
+    }
+
+    #[test]
+    fn rates_are_lockstep_or_in_range_and_no_rate_panics() {
+        for good in ["0", "0.001", "1", "1000"] {
+            assert!(parse_rate(good).is_ok(), "{good}");
+        }
+        for bad in ["1e-20", "-1", "1001", "inf", "NaN"] {
+            let error = parse_rate(bad).unwrap_err();
+            assert!(
+                error.contains("must be 0 (lockstep) or a speed factor from 0.001 to 1000"),
+                "{bad}: {error}"
+            );
+        }
+        // A rate that passed no check still gives a time, not a panic.
+        let start = Instant::now();
+        let mut pacer = Pacer::new(1e-20);
+        pacer.due(0, start);
+        assert!(pacer.due(u64::MAX, start).unwrap() > start);
     }
 
     #[test]

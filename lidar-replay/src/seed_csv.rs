@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 use std::io::BufRead;
 
 use crate::error::{LineError, Malformation, ReadError};
-use crate::lines::{NumberedLines, snippet};
+use crate::lines::{NumberedLines, StopFlag, snippet};
 use crate::record::{LogRecord, ScanGeometry, ScanRecord};
 
 /// Beams per scan: 270 degrees in quarter degrees, both ends included.
@@ -67,9 +67,21 @@ impl<R: BufRead> SeedCsvReader<R> {
         }
     }
 
+    /// Ends the reading with [`ReadError::Stopped`] once `stop` returns true (asked between
+    /// reads, so also within an endless line).
+    pub fn stop_when(mut self, stop: StopFlag) -> Self {
+        self.lines.set_stop(stop);
+        self
+    }
+
     /// Number of the line read last (0 before the first).
     pub fn line_number(&self) -> u64 {
         self.lines.line_number()
+    }
+
+    /// Bytes read so far.
+    pub(crate) fn bytes_read(&self) -> u64 {
+        self.lines.bytes_read()
     }
 }
 
@@ -86,7 +98,7 @@ impl<R: BufRead> Iterator for SeedCsvReader<R> {
                 Ok(None) => return None,
                 Err(e) => {
                     self.failed = true;
-                    return Some(Err(e.into()));
+                    return Some(Err(e));
                 }
             };
             let text = match text {

@@ -9,6 +9,7 @@
 //! - [`Vehicle`]: a pure-pursuit follower of the path with limited yaw rate and
 //!   acceleration; [`Odometer`] integrates its motion with noise.
 //! - [`Simulation`]: ties them together into deterministic [`Frame`]s for a seed.
+//! - [`check_rate`]: the real-time rates the process accepts ([`RATE_RANGE`]).
 //!
 //! Metres, radians and seconds throughout; poses are `world_from_robot` and the sensor sits
 //! at the robot origin.
@@ -22,6 +23,7 @@ mod odometry;
 mod outline;
 mod path;
 mod pose;
+mod rate;
 mod ray_caster;
 mod sensor;
 mod sim_error;
@@ -36,6 +38,7 @@ pub use corners::TrueCorner;
 pub use lidar::LidarModel;
 pub use odometry::{Odometer, OdometryConfig};
 pub use pose::{Point2, Pose2, wrap_angle};
+pub use rate::{RATE_RANGE, check_rate, parse_rate};
 pub use ray_caster::RayCaster;
 pub use sensor::SensorConfig;
 pub use sim_error::SimError;

@@ -38,9 +38,10 @@ struct Args {
     /// Scans to publish; 0 = until the end of the path.
     #[arg(long, default_value_t = 0)]
     frames: u64,
-    /// Scans per second; 0 = lockstep: each scan is sent only when every subscriber has taken
-    /// the previous one, so nothing is lost and a run repeats exactly for its seed.
-    #[arg(long, default_value_t = 0.0)]
+    /// Scans per second (0.001 to 1000); 0 = lockstep: each scan is sent only when every
+    /// subscriber has taken the previous one, so nothing is lost and a run repeats exactly
+    /// for its seed.
+    #[arg(long, default_value_t = 0.0, value_parser = lidar_sim::parse_rate)]
     rate: f64,
     /// Seed of the sensor and odometry noise.
     #[arg(long, default_value_t = 1)]
@@ -71,11 +72,6 @@ fn main() -> ExitCode {
 
 fn run() -> Result<()> {
     let args = Args::parse();
-    anyhow::ensure!(
-        args.rate.is_finite() && args.rate >= 0.0,
-        "--rate must be 0 (lockstep) or a positive number of scans per second, not {}",
-        args.rate
-    );
     shutdown::install().context("cannot install the Ctrl-C handler")?;
     let settings = match &args.config {
         Some(path) => SimFileConfig::load(path)?,
@@ -150,9 +146,10 @@ fn run() -> Result<()> {
             break;
         };
         if let Some(period) = period {
+            // A slow rate means long waits: sliced, so Ctrl-C is not held up by them.
             let due = start + period.mul_f64(published as f64);
-            if let Some(wait) = due.checked_duration_since(Instant::now()) {
-                std::thread::sleep(wait);
+            if !shutdown::sleep_until(due) {
+                break;
             }
         }
         let header = Header::new(frame.seq, frame.stamp_ns, "laser");

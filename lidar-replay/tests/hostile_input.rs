@@ -1,0 +1,208 @@
+//! `lidar-replay` against input no log has: a file without newlines (`/dev/zero`), one huge
+//! line in the middle of a log, and a stop while reading an endless line. Each replay runs
+//! with its heap capped (RLIMIT_DATA), so a reader that held a whole line would fail here
+//! instead of filling the machine's memory.
+
+use std::io::{BufRead, BufReader, Write};
+use std::os::unix::process::CommandExt;
+use std::path::PathBuf;
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// Heap a replay may have. A replay needs a few MiB plus its longest line (1 MiB); a reader
+/// that held a 3 MiB line would get near this only with much more, and one that held
+/// `/dev/zero` would hit it within a second.
+const HEAP_LIMIT: u64 = 256 << 20;
+/// Generous for a loaded 2-core machine; a good run takes well under a second.
+const LIMIT: Duration = Duration::from_secs(60);
+
+fn fixture(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lidar-replay-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// A FLASER line of 180 beams of 2.5 m with the stamp `stamp`.
+fn flaser(stamp: f64) -> String {
+    let ranges = vec!["2.50"; 180].join(" ");
+    format!("FLASER 180 {ranges} 0 0 0 0 0 0 {stamp} robot 0.1\n")
+}
+
+/// `lidar-replay` with `args` in a domain of its own, its heap capped at [`HEAP_LIMIT`].
+fn spawn_replay(tag: &str, args: &[&str]) -> Child {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_lidar-replay"));
+    command
+        .args(args)
+        .args([
+            "--domain",
+            &format!("replay-hostile-{tag}-{}", std::process::id()),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    // SAFETY: setrlimit(2) is async-signal-safe and touches only the child.
+    unsafe {
+        command.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: HEAP_LIMIT,
+                rlim_max: HEAP_LIMIT,
+            };
+            if libc::setrlimit(libc::RLIMIT_DATA, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    command.spawn().expect("start lidar-replay")
+}
+
+/// Waits for `child` at most `limit`; kills it and fails past that.
+fn finish(mut child: Child, limit: Duration) -> Output {
+    let deadline = Instant::now() + limit;
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let output = child.wait_with_output().unwrap();
+            panic!(
+                "still running after {limit:?}; stderr:\n{}",
+                String::from_utf8_lossy(&output.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_file_without_newlines_is_refused_at_once() {
+    let child = spawn_replay("zero", &["--format", "carmen", "--file", "/dev/zero"]);
+    let output = finish(child, LIMIT);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("/dev/zero is not a carmen log: no valid scan in its first 64 MiB"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("line 1: 67108864 bytes long, over the 1048576 bytes a line may have"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_huge_line_is_skipped_and_counted_and_the_log_read_on() {
+    let path = fixture("huge-line.clf");
+    let mut file = std::fs::File::create(&path).unwrap();
+    for k in 0..3 {
+        file.write_all(flaser(100.0 + f64::from(k)).as_bytes())
+            .unwrap();
+    }
+    // Line 4: 3 MiB of digits and its newline.
+    file.write_all(&vec![b'7'; 3 << 20]).unwrap();
+    file.write_all(b"\n").unwrap();
+    for k in 3..5 {
+        file.write_all(flaser(100.0 + f64::from(k)).as_bytes())
+            .unwrap();
+    }
+    drop(file);
+    let child = spawn_replay(
+        "huge",
+        &[
+            "--format",
+            "carmen",
+            "--file",
+            path.to_str().unwrap(),
+            "--subscribers",
+            "0",
+            "--no-odometry",
+        ],
+    );
+    let output = finish(child, LIMIT);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "line 4: {} bytes long, over the 1048576 bytes a line may have (skipped)",
+            (3 << 20) + 1
+        )),
+        "{stderr}"
+    );
+    assert!(stderr.contains("(6 lines read)"), "{stderr}");
+    assert!(stderr.contains("published:       5 scans\n"), "{stderr}");
+    assert!(
+        stderr.contains("malformed lines: 1 skipped, by reason:\n    line too long: 1"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn sigterm_ends_a_replay_reading_an_endless_line() {
+    // Three scans, a malformed line that tells the test the replay is past them, then a line
+    // of zeros a terabyte long: a sparse file, so it takes no disk space.
+    let path = fixture("endless.clf");
+    let mut file = std::fs::File::create(&path).unwrap();
+    file.write_all(flaser(100.0).as_bytes()).unwrap();
+    file.write_all(flaser(101.0).as_bytes()).unwrap();
+    file.write_all(flaser(102.0).as_bytes()).unwrap();
+    file.write_all(b"FLASER oops\n").unwrap();
+    let length = file.metadata().unwrap().len();
+    file.set_len(length + (1 << 40)).unwrap();
+    drop(file);
+    let mut child = spawn_replay(
+        "endless",
+        &[
+            "--format",
+            "carmen",
+            "--file",
+            path.to_str().unwrap(),
+            "--subscribers",
+            "0",
+            "--no-odometry",
+            // Nothing held back for reordering but the newest scan: two go out before the
+            // endless line.
+            "--reorder-window",
+            "0",
+        ],
+    );
+    // Read stderr as it comes; the report of line 4 means the endless line is next.
+    let stderr = child.stderr.take().unwrap();
+    let (sender, lines) = mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if sender.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let deadline = Instant::now() + LIMIT;
+    let mut seen = Vec::new();
+    while !seen.iter().any(|l: &String| l.contains("line 4: ")) {
+        let left = deadline.saturating_duration_since(Instant::now());
+        match lines.recv_timeout(left) {
+            Ok(line) => seen.push(line),
+            Err(e) => {
+                let _ = child.kill();
+                panic!("no report of line 4 ({e}); stderr so far: {seen:?}");
+            }
+        }
+    }
+    // Reading a terabyte takes minutes: the replay is inside the endless line.
+    let pid = libc::pid_t::try_from(child.id()).unwrap();
+    // SAFETY: kill(2) on our own child process.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+    let signalled = Instant::now();
+    let output = finish(child, LIMIT);
+    let stopped_in = signalled.elapsed();
+    reader.join().unwrap();
+    seen.extend(lines.try_iter());
+    let stderr = seen.join("\n");
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("stopped early:   interrupted after 2 scans"),
+        "{stderr}"
+    );
+    // The reader asks the stop flag every few KiB: the replay ends within milliseconds. The
+    // bound leaves room for a loaded machine and stays far below the minutes of reading on.
+    assert!(stopped_in < Duration::from_secs(5), "{stopped_in:?}");
+    std::fs::remove_file(&path).unwrap();
+}
