@@ -42,7 +42,8 @@ pub(crate) struct Particle {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ScanContext<'a> {
     pub observations: &'a [Prepared],
-    /// The uncertainty of each particle's predicted pose: its motion noise.
+    /// The uncertainty of each particle's predicted pose: its motion noise since the corners
+    /// last updated it.
     pub pose: PoseUncertainty,
     pub gates: &'a Gates,
     pub config: &'a SlamConfig,
