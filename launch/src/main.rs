@@ -165,6 +165,13 @@ fn run() -> Result<ExitCode> {
     });
     let domain = Domain::new(&domain_name)?;
     domain.cleanup_dead_nodes();
+    // Two pipelines in one domain would each take the other's messages for their own.
+    let alive = domain.alive_nodes();
+    anyhow::ensure!(
+        alive == 0,
+        "refusing to start: domain '{domain_name}' has {alive} live node(s), another \
+         pipeline's; give another --domain, or none for a fresh one"
+    );
 
     let plan = plan(&config, &domain, &bin_dir, &out, &config_dir)?;
     let display = Display {
