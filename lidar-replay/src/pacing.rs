@@ -1,35 +1,24 @@
 //! When to publish a record: at once in lockstep, or at the log's own pace scaled by a rate.
 
-use std::ops::RangeInclusive;
 use std::time::{Duration, Instant};
 
-/// Speed factors a real-time replay may have; 0 (lockstep) is allowed besides. A thousandth
-/// of the log's speed stretches a day-long log to three years, still far inside a
-/// `Duration`; a thousand times is beyond what a subscriber keeps up with, and lockstep is
-/// the way to go as fast as they can.
-pub const RATE_RANGE: RangeInclusive<f64> = 0.001..=1000.0;
+pub use ipc_types::rate::RATE_RANGE;
+use ipc_types::rate::RateUnit;
 
-/// Checks a speed factor: 0 (lockstep) or within [`RATE_RANGE`]; the error says what may
-/// be given.
+/// A replay's rate is a factor of the log's own speed.
+const SPEED_FACTOR: RateUnit = RateUnit {
+    before: "a speed factor ",
+    after: " (1 = as recorded)",
+};
+
+/// Checks a speed factor: 0 (lockstep) or within [`RATE_RANGE`].
 pub fn check_rate(rate: f64) -> Result<f64, String> {
-    if rate == 0.0 || RATE_RANGE.contains(&rate) {
-        Ok(rate)
-    } else {
-        Err(format!(
-            "must be 0 (lockstep) or a speed factor from {} to {} (1 = as recorded), not {rate:?}",
-            RATE_RANGE.start(),
-            RATE_RANGE.end()
-        ))
-    }
+    ipc_types::rate::check_rate(rate, SPEED_FACTOR)
 }
 
 /// `--rate`'s parser: a number that passes [`check_rate`].
 pub fn parse_rate(text: &str) -> Result<f64, String> {
-    let rate: f64 = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{text}' is not a number"))?;
-    check_rate(rate)
+    ipc_types::rate::parse_rate(text, SPEED_FACTOR)
 }
 
 /// Maps log stamps to wall-clock deadlines. The first stamp asked about is published at

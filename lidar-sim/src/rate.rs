@@ -1,33 +1,22 @@
 //! The publishing rate `--rate` (and `[sim] rate` in slam-launch's config) may have.
 
-use std::ops::RangeInclusive;
+pub use ipc_types::rate::RATE_RANGE;
+use ipc_types::rate::RateUnit;
 
-/// Scans per second a real-time run may ask for; 0 (lockstep) is allowed besides. Slower
-/// than one scan in 1000 s is no live sensor, and a period that long is still far inside a
-/// `Duration`; faster than 1000 Hz is more than the ray caster keeps up with, and lockstep
-/// is the way to go as fast as it can.
-pub const RATE_RANGE: RangeInclusive<f64> = 0.001..=1000.0;
+/// lidar-sim's rate is in scans per second.
+const SCANS_PER_SECOND: RateUnit = RateUnit {
+    before: "",
+    after: " scans per second",
+};
 
-/// Checks a rate: 0 (lockstep) or within [`RATE_RANGE`]; the error says what may be given.
+/// Checks a rate in scans per second: 0 (lockstep) or within [`RATE_RANGE`].
 pub fn check_rate(rate: f64) -> Result<f64, String> {
-    if rate == 0.0 || RATE_RANGE.contains(&rate) {
-        Ok(rate)
-    } else {
-        Err(format!(
-            "must be 0 (lockstep) or from {} to {} scans per second, not {rate:?}",
-            RATE_RANGE.start(),
-            RATE_RANGE.end()
-        ))
-    }
+    ipc_types::rate::check_rate(rate, SCANS_PER_SECOND)
 }
 
 /// `--rate`'s parser: a number that passes [`check_rate`].
 pub fn parse_rate(text: &str) -> Result<f64, String> {
-    let rate: f64 = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{text}' is not a number"))?;
-    check_rate(rate)
+    ipc_types::rate::parse_rate(text, SCANS_PER_SECOND)
 }
 
 #[cfg(test)]
