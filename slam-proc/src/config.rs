@@ -379,6 +379,9 @@ impl SlamConfig {
         check("jcbb_max_nodes", j as f64, j >= 1, "must be >= 1")?;
         let c = self.confirm_observations;
         check("confirm_observations", f64::from(c), c >= 1, "must be >= 1")?;
+        // One corner alone fits a wrong offset too easily to close a loop on.
+        let r = self.revisit_min_corners;
+        check("revisit_min_corners", r as f64, r >= 2, "must be >= 2")?;
         let fov = self.view_fov;
         check(
             "view_fov",
@@ -423,5 +426,21 @@ mod tests {
             ..SlamConfig::default()
         };
         assert_eq!(config.validate().map_err(|e| e.field), Err("particles"));
+        let config = SlamConfig {
+            revisit_min_corners: 1,
+            ..SlamConfig::default()
+        };
+        assert_eq!(
+            config.validate().map_err(|e| e.field),
+            Err("revisit_min_corners")
+        );
+        let config = SlamConfig {
+            update_min_distance: -0.5,
+            ..SlamConfig::default()
+        };
+        assert_eq!(
+            config.validate().map_err(|e| e.field),
+            Err("update_min_distance")
+        );
     }
 }
