@@ -46,6 +46,13 @@ pub struct FrontEndConfig {
     pub keyframe_angle: f64,
     /// Keyframes in the local map at most; the oldest leaves first.
     pub max_keyframes: usize,
+    /// Without odometry, a fit that leaves a direction open adds a keyframe at least this
+    /// often, seconds, however little the robot seems to have moved: what the map lacks
+    /// along that direction (a door recess that came into view) may be in the scan, and
+    /// the open direction's estimate (constant velocity) may be the very reason the robot
+    /// seems to stand still. With odometry the wheels tell that, and keyframes by distance
+    /// suffice.
+    pub degenerate_keyframe_interval: f64,
     /// A direction (translation, or yaw scaled by the scan's spread) whose information is
     /// below this fraction of the strongest direction's is degenerate: left to the prior.
     pub degeneracy_ratio: f64,
@@ -91,6 +98,7 @@ impl Default for FrontEndConfig {
             keyframe_distance: 0.3,
             keyframe_angle: 0.2,
             max_keyframes: 50,
+            degenerate_keyframe_interval: 0.5,
             degeneracy_ratio: 0.02,
             min_inlier_fraction: 0.4,
             strong_inlier_fraction: 0.6,
@@ -119,6 +127,10 @@ impl FrontEndConfig {
             ("recovery_yaw", self.recovery_yaw),
             ("keyframe_distance", self.keyframe_distance),
             ("keyframe_angle", self.keyframe_angle),
+            (
+                "degenerate_keyframe_interval",
+                self.degenerate_keyframe_interval,
+            ),
             ("degeneracy_ratio", self.degeneracy_ratio),
             ("odometry_gate", self.odometry_gate),
             ("odometry_min_sigma_xy", self.odometry_min_sigma_xy),

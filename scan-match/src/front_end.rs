@@ -58,6 +58,8 @@ pub struct FrontEnd {
     extractor: Extractor,
     pose: Pose2,
     last_stamp_ns: Option<u64>,
+    /// Stamp of the newest keyframe.
+    keyframe_stamp_ns: u64,
     /// `(vx, vy, yaw rate)` in the robot frame, from the last step.
     velocity: Vector3<f64>,
     last_odometry: Option<OdometryInput>,
@@ -81,6 +83,7 @@ impl FrontEnd {
             extractor: Extractor::default(),
             pose: Pose2::IDENTITY,
             last_stamp_ns: None,
+            keyframe_stamp_ns: 0,
             velocity: Vector3::zeros(),
             last_odometry: None,
             stats: FrontEndStats::default(),
@@ -140,6 +143,7 @@ impl FrontEnd {
             }
             if points.len() >= self.config.min_points {
                 self.map.insert(self.pose, points);
+                self.keyframe_stamp_ns = scan.stamp_ns;
                 output.keyframe = true;
             }
             self.last_stamp_ns = Some(scan.stamp_ns);
@@ -256,8 +260,14 @@ impl FrontEnd {
             output.status,
             MatchStatus::Failed(MatchFailure::TooFewInliers)
         );
-        if points.len() >= self.config.min_points && (lost || self.keyframe_due()) {
+        // Only without odometry: the wheels tell a robot that moves from one that stands.
+        let open = matches!(output.status, MatchStatus::Degenerate { .. })
+            && !matches!(output.odometry, OdometryStatus::Used);
+        if points.len() >= self.config.min_points
+            && (lost || self.keyframe_due(scan.stamp_ns, open))
+        {
             self.map.insert(pose, points);
+            self.keyframe_stamp_ns = scan.stamp_ns;
             output.keyframe = true;
         }
         Ok(self.finish(output, start))
@@ -374,13 +384,17 @@ impl FrontEnd {
         at_fit >= WEAK_FIT_MIN_SCORE && at_odometry < WEAK_FIT_MARGIN * at_fit
     }
 
-    fn keyframe_due(&self) -> bool {
+    /// Whether the scan just registered at `stamp_ns` joins the map: after enough motion,
+    /// or, for a fit that left a direction `open`, after enough time.
+    fn keyframe_due(&self, stamp_ns: u64, open: bool) -> bool {
         match self.map.last_keyframe() {
             None => true,
             Some(keyframe) => {
                 let moved = keyframe.between(&self.pose);
+                let since = stamp_ns.saturating_sub(self.keyframe_stamp_ns) as f64 * 1e-9;
                 moved.translation_norm() > self.config.keyframe_distance
                     || moved.yaw.abs() > self.config.keyframe_angle
+                    || (open && since >= self.config.degenerate_keyframe_interval)
             }
         }
     }

@@ -335,3 +335,38 @@ fn without_odometry_a_corridors_weak_evidence_says_when_the_robot_moves_and_stop
     let drift = front_end.pose().x - truth.x;
     assert!(drift.abs() < 0.5, "{:?} vs {truth:?}", front_end.pose());
 }
+
+#[test]
+fn without_odometry_a_recess_that_comes_into_view_teaches_the_motion_along_a_corridor() {
+    // The first scan sees two bare walls; a recess 8 m ahead comes into view only after a
+    // few metres. The velocity guess starts at standing, and standing is all the bare
+    // walls can confirm: the front end learns the robot moves only if the recess reaches
+    // its map, although it has not (by its own estimate) moved a keyframe's distance.
+    let walls = vec![
+        ((-100.0, -1.0), (100.0, -1.0)),
+        ((-100.0, 1.0), (8.0, 1.0)),
+        ((8.0, 1.0), (8.0, 1.4)),
+        ((8.0, 1.4), (9.2, 1.4)),
+        ((9.2, 1.4), (9.2, 1.0)),
+        ((9.2, 1.0), (100.0, 1.0)),
+    ];
+    let run = |config: FrontEndConfig| {
+        let mut front_end = FrontEnd::new(config).unwrap();
+        let mut estimates = Vec::new();
+        for k in 0..=100u64 {
+            let truth = Pose2::new(0.1 * k as f64, 0.0, 0.0);
+            let ranges = raycast(&walls, &truth, &SICK, 361, 0.005);
+            estimates.push(front_end.process(&scan(k, &ranges, SICK, None)).unwrap());
+        }
+        // The advance the front end measured from 6 m to 9 m, with the recess in view.
+        estimates[90].odom_from_robot.x - estimates[60].odom_from_robot.x
+    };
+    let advance = run(FrontEndConfig::default());
+    assert!((advance - 3.0).abs() < 0.3, "advanced {advance} m of 3 m");
+    // Keyframes by distance alone never take the recess in: the front end stays put.
+    let by_distance = run(FrontEndConfig {
+        degenerate_keyframe_interval: 1e6,
+        ..FrontEndConfig::default()
+    });
+    assert!(by_distance.abs() < 0.3, "advanced {by_distance} m");
+}

@@ -67,8 +67,7 @@ pub struct SlamConfig {
     pub noise_fit_scale: f64,
     /// Move the particles by the front end's measured motion when the features bring one
     /// (scan matching fused with odometry), instead of estimating the motion from the
-    /// scan's corners and lines. A step the front end left partly open is refined with
-    /// them when it does not rest on odometry (a corridor without wheels).
+    /// scan's corners and lines.
     pub use_measured_motion: bool,
     /// A measured step spreads the particles by the front end's drift, which grows with
     /// the path rather than with the scan count (it registers against keyframes, so a

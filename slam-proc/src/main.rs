@@ -253,11 +253,6 @@ fn to_motion(motion: &ScanMotion) -> MeasuredMotion {
     MeasuredMotion {
         increment: motion.increment.into(),
         covariance: nalgebra::Matrix3::from_row_slice(&motion.increment_covariance),
-        constrained: matches!(
-            motion.match_status,
-            ScanMotion::MATCH_OK | ScanMotion::MATCH_FIRST
-        ),
-        on_odometry: motion.odometry_status == ScanMotion::ODOMETRY_USED,
     }
 }
 

@@ -59,15 +59,6 @@ pub struct OdometryInput {
 pub struct MeasuredMotion {
     pub increment: Pose2,
     pub covariance: Matrix3<f64>,
-    /// Whether the scan fixed every direction of the step. A step the front end left partly
-    /// to its prior (a corridor's length) or could not register is refined with the scan's
-    /// corners and lines when it does not rest on odometry.
-    pub constrained: bool,
-    /// Whether the front end's step rests on odometry. A step it left open is kept when so
-    /// (the wheels filled the open direction), and refined on the filter's own constant
-    /// velocity when not: without odometry the front end's prior is only its own constant
-    /// velocity, which in a corridor never learns that the robot moves.
-    pub on_odometry: bool,
 }
 
 impl MeasuredMotion {

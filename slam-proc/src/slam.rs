@@ -225,12 +225,9 @@ impl FastSlam {
 
     /// Updates the filter with one scan whose motion a front end measured (scan matching
     /// fused with odometry, [`MeasuredMotion`]): the particles move by it, spread by the
-    /// front end's drift, and the corners then weight them and correct their poses. A step
-    /// the front end left partly open (`MeasuredMotion::constrained` false) without
-    /// odometry is the filter's own corner and line fit instead; on odometry the front end
-    /// has already taken the open direction from the wheels, and keeps its step. A motion
+    /// front end's drift, and the corners then weight them and correct their poses. A motion
     /// that is not usable (not finite), or `use_measured_motion = false`, falls back to
-    /// that fit alone.
+    /// the filter's own corner and line fit.
     pub fn process_measured(
         &mut self,
         stamp_ns: u64,
@@ -283,26 +280,24 @@ impl FastSlam {
                     pose: before.pose.compose(&measured.increment),
                     covariance: before.covariance + turn * measured.covariance * turn.transpose(),
                 };
-                // Estimated every scan, so the fit's last corners stay the last scan's. A
-                // step the front end left open without odometry is the fit's, on the
-                // filter's own constant velocity, which follows the particles' steps (see
-                // `MeasuredMotion::on_odometry`). On odometry the front end fused the wheels
-                // into the open direction and kept the directions the scan fixed, which a
-                // corner fit would replace with its own, far noisier ones.
-                let believed = measured.constrained || measured.on_odometry;
-                let prior = believed.then_some(&self.measured_track);
-                let refined = self
-                    .motion
-                    .estimate(stamp_ns, &prepared, &self.lines, prior, config);
-                if believed {
-                    Motion {
-                        delta: measured.increment,
-                        covariance: measured.covariance,
-                        source: MotionSource::Measured,
-                        inliers: 0,
-                    }
-                } else {
-                    refined
+                // The corner fit still runs every scan, on the front end's track, so its
+                // last corners stay the last scan's for a step that comes without a
+                // usable measurement. Its result is not taken: the front end registered
+                // every beam against its keyframes (and, without odometry, learned the
+                // motion along a corridor from what came into view), which a fit of a
+                // few corners and lines only makes noisier.
+                self.motion.estimate(
+                    stamp_ns,
+                    &prepared,
+                    &self.lines,
+                    Some(&self.measured_track),
+                    config,
+                );
+                Motion {
+                    delta: measured.increment,
+                    covariance: measured.covariance,
+                    source: MotionSource::Measured,
+                    inliers: 0,
                 }
             }
         };
@@ -537,8 +532,6 @@ mod tests {
         let step = MeasuredMotion {
             increment: Pose2::new(0.1, 0.0, 0.02),
             covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-6, 1e-6, 1e-7)),
-            constrained: true,
-            on_odometry: false,
         };
         // A front end's first scan has no motion.
         let first = MeasuredMotion {
@@ -581,62 +574,6 @@ mod tests {
     }
 
     #[test]
-    fn a_step_the_front_end_left_open_without_odometry_is_taken_from_the_corners() {
-        // The robot advances 5 cm a scan past four corners; the front end, as in a corridor,
-        // measured no advance and says the step is not fixed.
-        let world = [
-            (3.0, 1.0, 0.5, 1.2),
-            (5.0, -2.0, 2.0, 1.6),
-            (-1.0, 4.0, -1.0, 1.9),
-        ];
-        let seen_from = |x: f64| -> Vec<Observation> {
-            world
-                .iter()
-                .map(|&(cx, cy, heading, angle)| observation(cx - x, cy, heading, angle))
-                .collect()
-        };
-        let run = |constrained: bool, on_odometry: bool| {
-            let config = SlamConfig {
-                particles: 10,
-                use_measured_motion: true,
-                ..SlamConfig::default()
-            };
-            let mut slam = FastSlam::new(config, 2).unwrap();
-            // Along x the front end knows nothing: 10 cm of its prior's spread a step.
-            let stuck = MeasuredMotion {
-                increment: Pose2::IDENTITY,
-                covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-2, 1e-6, 1e-7)),
-                constrained,
-                on_odometry,
-            };
-            let mut last = None;
-            for k in 0..20 {
-                let x = 0.05 * k as f64;
-                last = Some(slam.process_measured(k * 25_000_000, &seen_from(x), &[], &stuck));
-            }
-            // The motion the particles were moved by, integrated.
-            last.unwrap().dead_reckoning.x
-        };
-        let refined = run(false, false);
-        assert!(
-            (refined - 0.95).abs() < 0.03,
-            "refined to {refined} m, not 0.95 m"
-        );
-        let believed = run(true, false);
-        assert!(
-            believed.abs() < 1e-9,
-            "a fixed step is believed: {believed} m"
-        );
-        // On odometry the front end filled the open direction from the wheels (here: they
-        // say the robot stands still), and its step is kept.
-        let on_wheels = run(false, true);
-        assert!(
-            on_wheels.abs() < 1e-9,
-            "a step on odometry is refined: {on_wheels} m"
-        );
-    }
-
-    #[test]
     fn corners_update_the_particles_once_the_robot_has_moved_half_a_metre() {
         // 40 scans 5 cm apart (2 m) in front of the same corners: updates at the first
         // scan and then every 0.5 m, not at every scan.
@@ -648,8 +585,6 @@ mod tests {
         let step = MeasuredMotion {
             increment: Pose2::new(0.05, 0.0, 0.0),
             covariance: Matrix3::identity() * 1e-6,
-            constrained: true,
-            on_odometry: true,
         };
         let observed = |update_min_distance: f64| {
             let config = SlamConfig {

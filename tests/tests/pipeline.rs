@@ -98,10 +98,11 @@ fn hall_is_mapped_within_target() {
 
 #[test]
 fn the_corridor_walls_keep_the_estimate_on_course() {
-    // Between the corridor's few corners only its walls carry the heading; without them
-    // the estimate wandered off by 5.8 m (ATE). With them about 0.8 m, the advance along
-    // the corridor being constant velocity's guess. A bound, not a target.
-    run_world("corridor", 0, 100, 1.5);
+    // Without odometry, between the door recesses only the walls carry the heading and
+    // constant velocity the advance; the front end learns that advance from each recess
+    // as it comes into view (a front end that never takes one into its map stands still
+    // for 45 m, ATE over 10 m). Seeds 1-3 measure 0.17-0.40 m; a bound, not a target.
+    run_world("corridor", 0, 100, 0.6);
 }
 
 #[test]
