@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::pose_graph::GraphNoise;
+
 /// FastSLAM parameters. Metres, radians, probabilities in `(0, 1)`.
 ///
 /// Read from the `[slam]` section of a run's TOML file; every field is optional and an
@@ -242,6 +244,17 @@ fn check(
 }
 
 impl SlamConfig {
+    /// The variances the final path's smoothing gives its steps: the front end's drift, as
+    /// the particles spread by it.
+    pub(crate) fn graph_noise(&self) -> GraphNoise {
+        GraphNoise {
+            xy_per_metre: self.measured_xy_variance_per_metre,
+            xy_per_radian: self.measured_xy_variance_per_radian,
+            yaw_per_metre: self.measured_yaw_variance_per_metre,
+            yaw_per_radian: self.measured_yaw_variance_per_radian,
+        }
+    }
+
     /// Checks that every parameter is usable; [`crate::FastSlam::new`] refuses a
     /// configuration that fails this.
     pub fn validate(&self) -> Result<(), ConfigError> {

@@ -51,6 +51,7 @@ mod observation;
 mod particle;
 mod path;
 mod persistent;
+mod pose_graph;
 mod predict;
 mod resample;
 mod rigid_fit;

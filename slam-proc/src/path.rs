@@ -16,6 +16,8 @@ use std::sync::Arc;
 
 use slam_geom::{Pose2, wrap_angle};
 
+use crate::pose_graph::{self, GraphNoise};
+
 /// One pose of a path: the scan's stamp and the particle's pose after that scan's update.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PathPose {
@@ -78,13 +80,11 @@ impl Path {
         self.nodes().0
     }
 
-    /// The poses from the first scan to the last, each loop closure's jump spread back over
-    /// the drift it undid (in the order the loops closed).
-    pub fn smoothed(&self) -> Vec<PathPose> {
+    /// The poses from the first scan to the last, the loop closures' jumps spread back over
+    /// the drift they undid, all closures at once (see [`crate::pose_graph`]).
+    pub fn smoothed(&self, noise: &GraphNoise) -> Vec<PathPose> {
         let (mut poses, closures) = self.nodes();
-        for (at, closure) in closures {
-            spread(&mut poses, at, &closure);
-        }
+        pose_graph::smooth(&mut poses, &closures, noise);
         poses
     }
 
@@ -260,10 +260,21 @@ mod tests {
             }),
         );
         let raw = path.poses();
-        let smoothed = path.smoothed();
+        // Drift that grows with the path alone, as this loop's did.
+        let noise = GraphNoise {
+            xy_per_metre: 1e-4,
+            xy_per_radian: 0.0,
+            yaw_per_metre: 1e-5,
+            yaw_per_radian: 0.0,
+        };
+        let smoothed = path.smoothed(&noise);
         assert_eq!(smoothed.len(), 41);
         assert_eq!(smoothed[0].pose, raw[0].pose);
-        assert_eq!(smoothed[40].pose, end);
+        let landed = smoothed[40].pose.between(&end);
+        assert!(
+            landed.translation_norm() < 1e-3 && landed.yaw.abs() < 1e-4,
+            "{landed:?}"
+        );
         let error = |poses: &[PathPose]| {
             poses
                 .iter()

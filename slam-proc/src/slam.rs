@@ -179,7 +179,7 @@ impl FastSlam {
     pub fn best_path(&self) -> Vec<PathPose> {
         self.particles
             .get(self.best)
-            .map(|p| p.path.smoothed())
+            .map(|p| p.path.smoothed(&self.config.graph_noise()))
             .unwrap_or_default()
     }
 
