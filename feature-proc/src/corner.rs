@@ -3,9 +3,9 @@
 
 use nalgebra::{Matrix4, SMatrix};
 
-use crate::angle::wrap_angle;
 use crate::config::FeatureConfig;
 use crate::features::{Corner, Line};
+use slam_geom::wrap_angle;
 
 /// The corner where `first` meets `second` (next in scan order), if they are two walls that
 /// truly meet: the near ends close to each other and to the intersection, both arms long

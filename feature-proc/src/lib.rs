@@ -21,7 +21,6 @@
 
 #![forbid(unsafe_code)]
 
-mod angle;
 mod config;
 mod corner;
 pub mod eval;
@@ -34,7 +33,6 @@ pub mod seed_hall;
 mod segment;
 mod split_merge;
 
-pub use angle::wrap_angle;
 pub use config::{ConfigError, FeatureConfig};
 pub use extractor::Extractor;
 pub use features::{Corner, FeatureSet, Line};

@@ -6,8 +6,8 @@
 
 use nalgebra::Matrix2;
 
-use crate::angle::wrap_angle;
 use crate::scan::ScanPoint;
+use slam_geom::wrap_angle;
 
 /// A fitted line with what its covariance needs.
 #[derive(Debug, Clone, Copy)]

@@ -5,10 +5,11 @@ mod common;
 
 use common::{Noise, full_turn, hokuyo, input, room};
 use feature_proc::eval::{ScanGeometry, View, World};
-use feature_proc::{Extractor, FeatureConfig, ScanError, ScanInput, wrap_angle};
+use feature_proc::{Extractor, FeatureConfig, ScanError, ScanInput};
 use nalgebra::{Vector2, Vector4};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use slam_geom::wrap_angle;
 
 /// A detected corner in the world frame, for a sensor at `pose`.
 fn to_world(pose: [f64; 3], x: f64, y: f64) -> [f64; 2] {

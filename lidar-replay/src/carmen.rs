@@ -28,12 +28,12 @@ use std::collections::{BTreeMap, VecDeque};
 use std::f64::consts::{PI, TAU};
 use std::io::BufRead;
 
-use crate::angle::wrap_angle;
 use crate::error::{LineError, Malformation, ReadError};
 use crate::lines::{NumberedLines, StopFlag, snippet};
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
 use crate::stamp::parse_stamp_ns;
+use slam_geom::wrap_angle;
 
 /// Longest range of a `FLASER` scan; readings at or beyond it become +inf (no return). The
 /// SICK LMS 2xx of these logs reports "no return" as 81.91 m (8191 cm, its largest code),

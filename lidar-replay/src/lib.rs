@@ -25,7 +25,6 @@
 //!   [`fill_scan`] and [`fill_odometry`] write the messages in place, the odometry with a
 //!   covariance that grows with the motion ([`OdometryCovariance`]), as the logs give none.
 
-mod angle;
 pub mod carmen;
 mod error;
 mod fill;
@@ -39,7 +38,6 @@ pub mod seed_csv;
 mod stamp;
 mod summary;
 
-pub use angle::wrap_angle;
 pub use carmen::CarmenReader;
 pub use error::{CheckError, LineError, Malformation, OpenError, ReadError};
 pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};

@@ -5,8 +5,8 @@
 //! lidar-sim publishes it. So the covariance here grows as a random walk with the distance
 //! driven and the angle turned, whatever the message rate.
 
-use crate::angle::wrap_angle;
 use crate::record::OdometryRecord;
+use slam_geom::wrap_angle;
 
 /// Random-walk standard deviations of wheel odometry.
 #[derive(Debug, Clone, Copy, PartialEq)]

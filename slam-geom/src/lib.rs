@@ -5,10 +5,14 @@
 //!
 //! * [`wrap_angle`] wraps an angle once, where it is made;
 //! * [`Pose2`] is the planar transform `world_from_robot` (docs/CONVENTIONS.md): composition,
-//!   inverse, the increment between two poses, interpolation.
+//!   inverse, the increment between two poses, interpolation; its yaw is always wrapped;
+//! * [`Point2`] is a point or vector in the plane.
 
 mod angle;
 mod pose;
 
 pub use angle::wrap_angle;
 pub use pose::Pose2;
+
+/// A point or vector in the plane, metres.
+pub type Point2 = nalgebra::Vector2<f64>;

@@ -2,6 +2,8 @@
 
 use nalgebra::{Matrix2, Vector2};
 
+use crate::Point2;
+
 use crate::angle::wrap_angle;
 
 /// A planar pose `world_from_robot`: position in metres, yaw in radians in `[-pi, pi)`.
@@ -15,10 +17,19 @@ pub struct Pose2 {
 
 impl Pose2 {
     /// The identity: the map frame's origin.
-    pub const IDENTITY: Self = Self::new(0.0, 0.0, 0.0);
+    pub const IDENTITY: Self = Self {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
 
-    pub const fn new(x: f64, y: f64, yaw: f64) -> Self {
-        Self { x, y, yaw }
+    /// A pose with its yaw wrapped (a no-op for a yaw already in `[-pi, pi)`).
+    pub fn new(x: f64, y: f64, yaw: f64) -> Self {
+        Self {
+            x,
+            y,
+            yaw: wrap_angle(yaw),
+        }
     }
 
     /// `self * other`: `other` expressed in the frame of `self` taken to the outer frame.
@@ -48,7 +59,7 @@ impl Pose2 {
     }
 
     /// Maps a point of this pose's frame into the outer frame.
-    pub fn transform(&self, point: Vector2<f64>) -> Vector2<f64> {
+    pub fn transform(&self, point: Point2) -> Point2 {
         self.rotation() * point + Vector2::new(self.x, self.y)
     }
 

@@ -11,7 +11,8 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use nalgebra::{Matrix4, Vector4};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use slam_proc::{FastSlam, MapCorner, Observation, Pose2, SlamConfig, wrap_angle};
+use slam_geom::wrap_angle;
+use slam_proc::{FastSlam, MapCorner, Observation, Pose2, SlamConfig};
 
 use common::{SensorModel, TrueCorner, observe};
 

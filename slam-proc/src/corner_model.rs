@@ -8,9 +8,9 @@
 use nalgebra::Matrix4x3;
 use nalgebra::{Matrix4, Vector2, Vector4};
 
-use crate::angle::wrap_angle;
 use crate::observation::Prepared;
 use slam_geom::Pose2;
+use slam_geom::wrap_angle;
 
 /// An observation in the world frame of one particle.
 #[derive(Debug, Clone, Copy, PartialEq)]

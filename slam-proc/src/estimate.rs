@@ -2,8 +2,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::angle::wrap_angle;
 use slam_geom::Pose2;
+use slam_geom::wrap_angle;
 
 /// Time spent in each stage of one update, nanoseconds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

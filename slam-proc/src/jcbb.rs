@@ -433,7 +433,7 @@ mod tests {
                 let p = inverse.transform(nalgebra::Vector2::new(c.mean.x, c.mean.y));
                 let noise = 0.005 * (i as f64 + 1.0);
                 let mut o = observation(p.x + noise, p.y - noise);
-                o.z.z = crate::angle::wrap_angle(c.mean.z - pose.yaw + 0.01);
+                o.z.z = slam_geom::wrap_angle(c.mean.z - pose.yaw + 0.01);
                 to_world(&pose, &o)
             })
             .collect();

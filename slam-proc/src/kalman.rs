@@ -6,11 +6,11 @@ use std::f64::consts::PI;
 
 use nalgebra::{Matrix4, Vector4};
 
-use crate::angle::wrap_angle;
 use crate::corner_model::innovation;
 #[cfg(test)]
 use crate::linalg::spd_inverse4;
 use crate::linalg::{joseph_sum, mul4};
+use slam_geom::wrap_angle;
 
 /// The smallest opening angle kept off 0 and pi: an update never turns a corner into a
 /// straight wall or a spike.

@@ -34,7 +34,6 @@
 //! # Ok::<(), slam_proc::ConfigError>(())
 //! ```
 
-mod angle;
 mod chi2;
 mod config;
 mod corner_model;
@@ -58,7 +57,6 @@ mod rigid_fit;
 mod rng;
 mod slam;
 
-pub use angle::wrap_angle;
 pub use config::{ConfigError, SlamConfig};
 pub use estimate::{Estimate, StageTiming};
 pub use map::MapCorner;

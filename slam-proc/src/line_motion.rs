@@ -13,10 +13,10 @@
 
 use nalgebra::{Cholesky, Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 
-use crate::angle::wrap_angle;
 use crate::observation::LineObservation;
 use crate::rigid_fit::{Prior, gauss_newton};
 use slam_geom::Pose2;
+use slam_geom::wrap_angle;
 
 /// A line of the current scan in the previous scan's frame.
 struct Moved {

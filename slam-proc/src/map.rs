@@ -8,8 +8,8 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix4, Vector2, Vector4};
 
-use crate::angle::wrap_angle;
 use slam_geom::Pose2;
+use slam_geom::wrap_angle;
 
 use crate::grid::SpatialGrid;
 use crate::persistent::PersistentArray;

@@ -18,13 +18,13 @@
 
 use nalgebra::{Cholesky, Matrix3, Matrix4, Matrix4x3, Vector2, Vector3, Vector4};
 
-use crate::angle::wrap_angle;
 use crate::chi2::quantile_even;
 use crate::config::SlamConfig;
 use crate::line_motion;
 use crate::observation::{LineObservation, OdometryInput, Prepared};
 use crate::rigid_fit::{Prior, kabsch, normal_equations, refine};
 use slam_geom::Pose2;
+use slam_geom::wrap_angle;
 
 /// The motion from the previous scan to this one (`previous_from_current`).
 #[derive(Debug, Clone, Copy, PartialEq)]

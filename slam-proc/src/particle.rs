@@ -7,7 +7,6 @@ use nalgebra::{Vector3, Vector4};
 use rand::Rng;
 use rand_distr::StandardNormal;
 
-use crate::angle::wrap_angle;
 use crate::chi2::Gates;
 use crate::config::SlamConfig;
 use crate::corner_model::{Frame, WorldObservation};
@@ -19,6 +18,7 @@ use crate::map::{CornerMap, CornerState};
 use crate::observation::Prepared;
 use crate::path::{self, Closure, Path, PathPose};
 use slam_geom::Pose2;
+use slam_geom::wrap_angle;
 
 #[derive(Debug, Clone)]
 pub(crate) struct Particle {
@@ -487,7 +487,11 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     /// The step the prediction made.
-    const STEP: Pose2 = Pose2::new(0.1, 0.01, 0.02);
+    const STEP: Pose2 = Pose2 {
+        x: 0.1,
+        y: 0.01,
+        yaw: 0.02,
+    };
 
     /// Four well-known corners around the origin, and what a robot at `pose` sees of them.
     fn scene(pose: &Pose2) -> (CornerMap, Vec<Prepared>) {

@@ -4,9 +4,9 @@
 
 use nalgebra::{Cholesky, Matrix2, Matrix3, Vector2, Vector3};
 
-use crate::angle::wrap_angle;
 use crate::observation::Prepared;
 use slam_geom::Pose2;
+use slam_geom::wrap_angle;
 
 /// Least-squares rigid transform `T` with `target ≈ R source + t`, each point weighted;
 /// `None` when the points do not fix a rotation (fewer than two distinct points).

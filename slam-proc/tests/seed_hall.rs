@@ -8,7 +8,8 @@ mod common;
 
 use common::recorded::{ScanFeatures, seed_hall_features};
 use feature_proc::FeatureConfig;
-use slam_proc::{FastSlam, MapCorner, Pose2, SlamConfig, wrap_angle};
+use slam_geom::wrap_angle;
+use slam_proc::{FastSlam, MapCorner, Pose2, SlamConfig};
 
 fn features() -> Vec<ScanFeatures> {
     // The course code keeps 15 m for SLAM: far corners are sparse and noisy.

@@ -2,8 +2,8 @@
 //! hypotheses from one or two corner matches of similar opening angle, the one that
 //! explains most corners wins, refined by a least-squares rigid fit of its matches.
 
-use crate::angle::wrap_angle;
 use crate::features::Corner;
+use slam_geom::wrap_angle;
 
 /// The pose of the later scan in the earlier scan's frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -2,9 +2,9 @@
 //! sensor at a pose could be expected to detect.
 
 use super::score::{CornerScore, score_corners};
-use crate::angle::wrap_angle;
 use crate::config::FeatureConfig;
 use crate::features::Corner;
+use slam_geom::wrap_angle;
 
 /// A corner of the world (docs/CONVENTIONS.md), without covariance: it is the truth.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -11,7 +11,8 @@ use nalgebra::{Matrix4, Vector2, Vector4};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
-use slam_proc::{Observation, Pose2, wrap_angle};
+use slam_geom::wrap_angle;
+use slam_proc::{Observation, Pose2};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrueCorner {
