@@ -9,7 +9,10 @@
 //! * a child that dies is named with its exit status and the tail of its stderr, its dead
 //!   node is cleaned up at once (a dead subscriber would otherwise stall a lossless
 //!   publisher), the others are stopped and the run fails;
-//! * Ctrl-C or SIGTERM stops every child and waits for map-sink to write its results;
+//! * Ctrl-C or SIGTERM stops every child and waits for map-sink to write its results; a
+//!   killed launcher takes its children with it (a parent-death signal, SIGTERM, so
+//!   map-sink still writes), and its domain's lock tells the next start at once that the
+//!   shared memory it left is abandoned;
 //! * given ground-truth relations (or finding them beside a replayed log, see
 //!   [`relations::relations_beside`]), it checks they parse before anything starts and has
 //!   map-sink score the run with them;

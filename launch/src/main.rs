@@ -172,6 +172,11 @@ fn run() -> Result<ExitCode> {
         "refusing to start: domain '{domain_name}' has {alive} live node(s), another \
          pipeline's; give another --domain, or none for a fresh one"
     );
+    // Held until this process ends, however it ends: if it is killed, the next start knows
+    // at once that the domain's shared memory is abandoned (its stages die with it).
+    let _claim = domain
+        .claim()
+        .context("refusing to start; give another --domain, or none for a fresh one")?;
 
     let plan = plan(&config, &domain, &bin_dir, &out, &config_dir)?;
     let display = Display {
