@@ -40,6 +40,7 @@ mod header;
 mod layout;
 mod message;
 pub mod messages;
+pub mod progress;
 pub mod rate;
 pub mod shutdown;
 pub mod topic;

@@ -17,8 +17,11 @@ const STDERR_TAIL: usize = 20;
 pub enum StageEvent {
     /// The child's ports are connected (`ready`).
     Ready(usize),
-    /// A `status key=value ...` progress line.
+    /// A `status key=value ...` progress line (map-sink's).
     Status(usize, String),
+    /// A `progress in:TOPIC=N out:TOPIC=N ...` line: what the stage received and sent
+    /// (`ipc_types::progress`), without its first word.
+    Progress(usize, String),
     /// Any other line.
     Line(usize, String),
 }
@@ -74,7 +77,10 @@ impl Stage {
             .args(args)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
-            .stderr(Stdio::piped());
+            .stderr(Stdio::piped())
+            // Each stage reports what it took in and sent out (see ipc_types::progress),
+            // which is how the supervisor tells which stage has stalled.
+            .env(ipc_types::progress::ENV, "1");
         die_with_launcher(&mut command);
         let mut child = command.spawn().map_err(|source| StageError::Spawn {
             name: name.to_owned(),
@@ -88,6 +94,11 @@ impl Stage {
                         StageEvent::Ready(index)
                     } else if let Some(rest) = line.strip_prefix("status ") {
                         StageEvent::Status(index, rest.to_owned())
+                    } else if let Some(rest) = line
+                        .strip_prefix(ipc_types::progress::PREFIX)
+                        .filter(|rest| rest.is_empty() || rest.starts_with(' '))
+                    {
+                        StageEvent::Progress(index, rest.to_owned())
                     } else {
                         StageEvent::Line(index, line)
                     };
