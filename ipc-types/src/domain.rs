@@ -9,6 +9,10 @@ const MAX_DOMAIN_LEN: usize = 40;
 const ABANDONED_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
 /// Prefix of every file a domain leaves in /dev/shm and /tmp/iceoryx2.
 pub const FILE_PREFIX: &str = "slam_";
+/// Where iceoryx2 keeps a domain's shared memory.
+const SHM_DIR: &str = "/dev/shm";
+/// The file a launcher keeps locked in /dev/shm while its run lives (see [`Domain::claim`]).
+const OWNER_FILE: &str = "owner.lock";
 
 /// Why a domain name was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -32,6 +36,40 @@ pub enum NodeError {
         domain: String,
         cause: iceoryx2::node::NodeCreationFailure,
     },
+}
+
+/// Why a domain could not be claimed for a run.
+#[derive(Debug, thiserror::Error)]
+pub enum ClaimError {
+    #[error("domain '{0}' belongs to another slam-launch that is still running")]
+    InUse(String),
+    #[error("cannot claim domain '{domain}' with {path}: {source}")]
+    Io {
+        domain: String,
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// A launcher's hold on its domain, for as long as it lives: an exclusive lock on the
+/// domain's owner file. The kernel drops the lock when the process dies however it dies
+/// (SIGKILL included), so a domain whose owner file is not locked is known to be abandoned
+/// at once, where a domain without one must first age (a pipeline starting right now has
+/// files but no live node yet).
+#[derive(Debug)]
+pub struct Claim {
+    _file: std::fs::File,
+}
+
+/// Whether a launcher owns a domain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Owner {
+    /// No owner file: started by hand or by a test.
+    None,
+    /// An owner file nobody holds: its launcher has died.
+    Gone,
+    /// Held by a live launcher.
+    Alive,
 }
 
 /// A run's domain: its name and the iceoryx2 configuration whose prefix keeps its shared
@@ -100,11 +138,65 @@ impl Domain {
             })
     }
 
+    fn owner_path(&self) -> std::path::PathBuf {
+        std::path::Path::new(SHM_DIR).join(format!("{}{OWNER_FILE}", self.file_prefix()))
+    }
+
+    /// Claims this domain for the calling process until the returned [`Claim`] is dropped
+    /// or the process ends; refused while another live process holds it. Its owner file
+    /// lies with the domain's other files and goes with [`Domain::remove_leftovers`].
+    pub fn claim(&self) -> Result<Claim, ClaimError> {
+        let path = self.owner_path();
+        let io = |source| ClaimError::Io {
+            domain: self.name.clone(),
+            path: path.clone(),
+            source,
+        };
+        // Locked under a name of no domain before it takes its place, so a sweep never
+        // finds the owner file of a live run unlocked.
+        let temp = std::path::Path::new(SHM_DIR).join(format!(
+            ".slam-claim-{}-{}",
+            std::process::id(),
+            crate::now_ns()
+        ));
+        let file = std::fs::File::create_new(&temp).map_err(io)?;
+        let claimed = file
+            .try_lock()
+            .map_err(|e| io(std::io::Error::other(e.to_string())))
+            .and_then(|()| {
+                // Twice at most: once more after removing the file of a dead owner.
+                for _ in 0..2 {
+                    match std::fs::hard_link(&temp, &path) {
+                        Ok(()) => return Ok(()),
+                        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                        Err(e) => return Err(io(e)),
+                    }
+                    if owner_at(&path).map_err(io)? == Owner::Alive {
+                        return Err(ClaimError::InUse(self.name.clone()));
+                    }
+                    match std::fs::remove_file(&path) {
+                        Ok(()) => {}
+                        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                        Err(e) => return Err(io(e)),
+                    }
+                }
+                // Another launcher claimed it between our removal and our link.
+                Err(ClaimError::InUse(self.name.clone()))
+            });
+        let _ = std::fs::remove_file(&temp);
+        claimed.map(|()| Claim { _file: file })
+    }
+
+    fn owner(&self) -> Owner {
+        // Unreadable counts as alive: a run we cannot judge is left alone.
+        owner_at(&self.owner_path()).unwrap_or(Owner::Alive)
+    }
+
     /// Deletes what iceoryx2 leaves of this domain in /dev/shm once every process of it has
     /// ended (its global management segment outlives the last node). Call it only when no
     /// process of the domain is alive. Returns the number of files removed.
     pub fn remove_leftovers(&self) -> std::io::Result<usize> {
-        self.remove_leftovers_in(std::path::Path::new("/dev/shm"))
+        self.remove_leftovers_in(std::path::Path::new(SHM_DIR))
     }
 
     /// Files in `dir` that belong to this domain.
@@ -134,7 +226,7 @@ impl Domain {
 
     /// True when every file of this domain in /dev/shm is older than `age`.
     fn is_older_than(&self, age: std::time::Duration) -> bool {
-        let Ok(files) = self.leftovers_in(std::path::Path::new("/dev/shm")) else {
+        let Ok(files) = self.leftovers_in(std::path::Path::new(SHM_DIR)) else {
             return false;
         };
         files.iter().all(|path| {
@@ -161,9 +253,11 @@ impl Domain {
 
     /// Cleans up every domain in /dev/shm that no live process uses any more: dead nodes are
     /// removed and, where no node is alive, the domain's files too. Returns the domains
-    /// cleaned. Run at start so crashed runs do not pile up shared memory.
+    /// cleaned. Run at start so crashed runs do not pile up shared memory. A domain claimed
+    /// by a live launcher is left to it; one whose launcher died is cleaned at once, one
+    /// never claimed once its files are a minute old.
     pub fn sweep_abandoned() -> Vec<String> {
-        let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+        let Ok(entries) = std::fs::read_dir(SHM_DIR) else {
             return Vec::new();
         };
         let mut names: Vec<String> = entries
@@ -181,9 +275,16 @@ impl Domain {
             let Ok(domain) = Domain::new(&name) else {
                 continue;
             };
+            let owner = domain.owner();
+            if owner == Owner::Alive {
+                continue;
+            }
             let dead = domain.cleanup_dead_nodes();
-            // A pipeline starting right now has files but no node yet: leave young domains.
-            if domain.alive_nodes() == 0 && domain.is_older_than(ABANDONED_AFTER) {
+            // A pipeline starting right now has files but no node yet: leave young domains,
+            // unless their launcher is known to be dead.
+            if domain.alive_nodes() == 0
+                && (owner == Owner::Gone || domain.is_older_than(ABANDONED_AFTER))
+            {
                 if domain.remove_leftovers().unwrap_or(0) > 0 || dead > 0 {
                     cleaned.push(name);
                 }
@@ -208,5 +309,20 @@ impl Domain {
             CallbackProgression::Continue
         });
         removed
+    }
+}
+
+/// Who holds the owner file at `path`.
+fn owner_at(path: &std::path::Path) -> std::io::Result<Owner> {
+    let file = match std::fs::File::open(path) {
+        Ok(file) => file,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Owner::None),
+        Err(e) => return Err(e),
+    };
+    // Shared, so two sweeps looking at once do not take each other for the owner.
+    match file.try_lock_shared() {
+        Ok(()) => Ok(Owner::Gone),
+        Err(std::fs::TryLockError::WouldBlock) => Ok(Owner::Alive),
+        Err(std::fs::TryLockError::Error(e)) => Err(e),
     }
 }

@@ -40,6 +40,7 @@ mod header;
 mod layout;
 mod message;
 pub mod messages;
+pub mod progress;
 pub mod rate;
 pub mod shutdown;
 pub mod topic;
@@ -50,7 +51,7 @@ pub use capacity::{
     CapacityError, MAX_BEAMS, MAX_FEATURE_CORNERS, MAX_LINES, MAX_MAP_CORNERS,
     MAX_PATH_CHUNK_POSES, MAX_WORLD_CORNERS,
 };
-pub use domain::{Domain, DomainError, FILE_PREFIX, NodeError};
+pub use domain::{Claim, ClaimError, Domain, DomainError, FILE_PREFIX, NodeError};
 pub use header::{FLAG_END_OF_STREAM, FRAME_ID_LEN, Header, now_ns};
 pub use message::Message;
 pub use messages::*;

@@ -6,6 +6,8 @@
 //! data), and travels downstream: a stage reads its input's mode and creates its output with
 //! the same one.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use iceoryx2::port::listener::Listener;
@@ -22,6 +24,7 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use crate::domain::Domain;
 use crate::header::{FLAG_END_OF_STREAM, now_ns};
 use crate::message::Message;
+use crate::progress::{self, Direction};
 use crate::shutdown;
 use crate::topic::Topic;
 
@@ -104,6 +107,8 @@ pub struct Outlet<T: Message> {
     service: PubSubFactory<ipc::Service, T, ()>,
     publisher: Publisher<ipc::Service, T, ()>,
     notifier: Notifier<ipc::Service>,
+    /// Messages sent, for the launcher (see [`crate::progress`]).
+    sent: Arc<AtomicU64>,
 }
 
 impl<T: Message> std::fmt::Debug for Outlet<T> {
@@ -169,6 +174,7 @@ impl<T: Message> Outlet<T> {
             service,
             publisher,
             notifier,
+            sent: progress::counter(Direction::Out, name),
         })
     }
 
@@ -236,6 +242,7 @@ impl<T: Message> Outlet<T> {
                 }
             }
         })?;
+        self.sent.fetch_add(1, Ordering::Relaxed);
         // A subscriber that misses a wake-up still drains its queue on its wait timeout.
         let _ = self.notifier.notify();
         Ok(reached)
@@ -352,6 +359,8 @@ pub struct Inlet<T: Message> {
     delivery: Delivery,
     subscriber: Subscriber<ipc::Service, T, ()>,
     listener: Listener<ipc::Service>,
+    /// Messages received, for the launcher (see [`crate::progress`]).
+    received: Arc<AtomicU64>,
 }
 
 impl<T: Message> std::fmt::Debug for Inlet<T> {
@@ -421,6 +430,7 @@ impl<T: Message> Inlet<T> {
             delivery,
             subscriber,
             listener,
+            received: progress::counter(Direction::In, name),
         })
     }
 
@@ -431,10 +441,14 @@ impl<T: Message> Inlet<T> {
 
     /// The next queued message, if any.
     pub fn receive(&self) -> Result<Option<Sample<ipc::Service, T, ()>>, ReceiveError> {
-        self.subscriber.receive().map_err(|e| ReceiveError {
+        let sample = self.subscriber.receive().map_err(|e| ReceiveError {
             service: self.name.to_owned(),
             cause: format!("{e:?}"),
-        })
+        })?;
+        if sample.is_some() {
+            self.received.fetch_add(1, Ordering::Relaxed);
+        }
+        Ok(sample)
     }
 
     fn listener(&self) -> &Listener<ipc::Service> {

@@ -2,6 +2,7 @@
 
 use std::time::{Duration, Instant};
 
+use ipc_types::ClaimError;
 use ipc_types::prelude::*;
 
 /// Removes the domain's files from /dev/shm when the test ends; declared before the nodes,
@@ -205,4 +206,38 @@ fn leftovers_are_removed_once_the_nodes_are_gone() {
             .unwrap()
             .is_empty()
     );
+}
+
+#[test]
+fn a_claimed_domain_is_refused_to_others_and_swept_at_once_when_its_owner_is_gone() {
+    let domain = unique_domain("claim");
+    let shm = std::path::Path::new("/dev/shm");
+    let claim = domain.claim().unwrap();
+    // flock belongs to the open file, so a second claim in this process is refused as
+    // another process's would be.
+    let refused = domain.claim().unwrap_err();
+    assert!(
+        matches!(&refused, ClaimError::InUse(name) if name == domain.name()),
+        "{refused:?}"
+    );
+    {
+        let node = domain.node("n").unwrap();
+        let _outlet = Outlet::create(&domain, &node, topic::POSE, Delivery::Latest, 0).unwrap();
+    }
+    // A live owner's domain is its own, however young or idle.
+    Domain::sweep_abandoned();
+    assert!(!domain.leftovers_in(shm).unwrap().is_empty());
+
+    // The owner dies (the lock goes with its file descriptor): its files go at the next
+    // sweep, without waiting for them to age.
+    drop(claim);
+    let cleaned = Domain::sweep_abandoned();
+    assert!(
+        cleaned.iter().any(|name| name == domain.name()),
+        "{cleaned:?}"
+    );
+    assert!(domain.leftovers_in(shm).unwrap().is_empty());
+    // And the domain can be claimed again.
+    drop(domain.claim().unwrap());
+    domain.remove_leftovers().unwrap();
 }

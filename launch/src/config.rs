@@ -147,16 +147,29 @@ impl Default for SlamSection {
     }
 }
 
+/// Default of [`RunConfig::stall_warning`], seconds.
+pub const STALL_WARNING_S: f64 = 10.0;
+/// Default of [`RunConfig::stall_limit`], seconds.
+pub const STALL_LIMIT_S: f64 = 120.0;
+/// The range of both stall times, seconds: shorter than a stage's progress report period
+/// (0.2 s) would name stages that are moving; a day is beyond any run's quiet spell.
+const STALL_RANGE_S: std::ops::RangeInclusive<f64> = 0.5..=86_400.0;
+
 /// The whole run. Sections the launcher does not interpret (`features`, `front_end`) are
 /// handed to the process that reads them (feature-proc), which validates them and names any
 /// mistake.
-#[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
     pub source: SourceKind,
     /// Ground-truth relations (Kuemmerle et al. 2009) to score the run against; for a replay
     /// of `DIR/NAME.clf` without one, `DIR/NAME.relations` if it exists.
     pub relations: Option<PathBuf>,
+    /// Seconds a stage may make no progress before the console names it (`--stall-warning`).
+    pub stall_warning: f64,
+    /// Seconds a stage may make no progress before the run fails (`--stall-limit`); at least
+    /// `stall_warning`.
+    pub stall_limit: f64,
     pub sim: SimSection,
     pub replay: ReplaySection,
     pub hokuyo: HokuyoSection,
@@ -164,6 +177,23 @@ pub struct RunConfig {
     /// The scan-matching front end's settings (scan_match::FrontEndConfig).
     pub front_end: toml::Table,
     pub slam: SlamSection,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        Self {
+            source: SourceKind::default(),
+            relations: None,
+            stall_warning: STALL_WARNING_S,
+            stall_limit: STALL_LIMIT_S,
+            sim: SimSection::default(),
+            replay: ReplaySection::default(),
+            hokuyo: HokuyoSection::default(),
+            features: toml::Table::new(),
+            front_end: toml::Table::new(),
+            slam: SlamSection::default(),
+        }
+    }
 }
 
 impl RunConfig {
@@ -208,7 +238,43 @@ impl RunConfig {
         if self.slam.map_every == 0 {
             return Err(ConfigError::Invalid("map_every must be at least 1".into()));
         }
+        for (key, value) in [
+            ("stall_warning (--stall-warning)", self.stall_warning),
+            ("stall_limit (--stall-limit)", self.stall_limit),
+        ] {
+            if !STALL_RANGE_S.contains(&value) {
+                return Err(ConfigError::Invalid(format!(
+                    "{key} must be from {} to {} seconds, not {value}",
+                    STALL_RANGE_S.start(),
+                    STALL_RANGE_S.end()
+                )));
+            }
+        }
+        if self.stall_limit < self.stall_warning {
+            return Err(ConfigError::Invalid(format!(
+                "stall_limit (--stall-limit) {} s is shorter than stall_warning \
+                 (--stall-warning) {} s: a stall would fail the run before it is reported",
+                self.stall_limit, self.stall_warning
+            )));
+        }
         Ok(())
+    }
+
+    /// Whether the run is in lockstep (lossless: every publisher waits for its
+    /// subscribers), as the source will choose it.
+    pub fn lockstep(&self) -> bool {
+        match self.source {
+            SourceKind::Sim => self.sim.rate == 0.0,
+            SourceKind::Replay => self.replay.rate == 0.0,
+            SourceKind::Hokuyo => false,
+        }
+    }
+
+    /// The stall times as durations (after [`RunConfig::validate`]: within range).
+    pub fn stall_times(&self) -> (std::time::Duration, std::time::Duration) {
+        let duration =
+            |s: f64| std::time::Duration::try_from_secs_f64(s).unwrap_or(std::time::Duration::MAX);
+        (duration(self.stall_warning), duration(self.stall_limit))
     }
 
     /// A section as the TOML text its process reads with `--config`.
@@ -220,6 +286,7 @@ impl RunConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Duration;
 
     #[test]
     fn a_full_file_parses_and_extra_keys_reach_the_process() {
@@ -284,5 +351,41 @@ mod tests {
                 .to_string()
                 .contains("particles")
         );
+    }
+
+    #[test]
+    fn stall_times_are_read_and_checked() {
+        let config: RunConfig = toml::from_str("stall_warning = 2\nstall_limit = 5.5").unwrap();
+        config.validate().unwrap();
+        assert_eq!(
+            config.stall_times(),
+            (Duration::from_secs(2), Duration::from_millis(5500))
+        );
+        let defaults = RunConfig::default();
+        assert_eq!(
+            defaults.stall_times(),
+            (Duration::from_secs(10), Duration::from_secs(120))
+        );
+        let mut config = RunConfig {
+            stall_limit: 5.0,
+            ..RunConfig::default()
+        };
+        assert_eq!(
+            config.validate().unwrap_err().to_string(),
+            "stall_limit (--stall-limit) 5 s is shorter than stall_warning (--stall-warning) \
+             10 s: a stall would fail the run before it is reported"
+        );
+        for bad in [0.0, 0.1, -3.0, f64::NAN, f64::INFINITY, 1e9] {
+            config.stall_warning = bad;
+            config.stall_limit = 10.0;
+            assert!(
+                config
+                    .validate()
+                    .unwrap_err()
+                    .to_string()
+                    .starts_with("stall_warning (--stall-warning) must be from 0.5 to 86400"),
+                "{bad}"
+            );
+        }
     }
 }

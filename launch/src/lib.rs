@@ -9,7 +9,12 @@
 //! * a child that dies is named with its exit status and the tail of its stderr, its dead
 //!   node is cleaned up at once (a dead subscriber would otherwise stall a lossless
 //!   publisher), the others are stopped and the run fails;
-//! * Ctrl-C or SIGTERM stops every child and waits for map-sink to write its results;
+//! * Ctrl-C or SIGTERM stops every child and waits for map-sink to write its results; a
+//!   killed launcher takes its children with it (a parent-death signal, SIGTERM, so
+//!   map-sink still writes), and its domain's lock tells the next start at once that the
+//!   shared memory it left is abandoned;
+//! * a stage that makes no progress is named on the console after `--stall-warning` and
+//!   fails the run after `--stall-limit` ([`stall`] explains how the stage is found);
 //! * given ground-truth relations (or finding them beside a replayed log, see
 //!   [`relations::relations_beside`]), it checks they parse before anything starts and has
 //!   map-sink score the run with them;
@@ -23,5 +28,6 @@ pub mod closing;
 pub mod config;
 pub mod relations;
 pub mod stage;
+pub mod stall;
 pub mod status;
 pub mod supervisor;

@@ -8,6 +8,7 @@ use clap::Parser;
 use ipc_types::{Domain, shutdown};
 use launch::config::{RunConfig, SourceKind};
 use launch::relations::relations_beside;
+use launch::stall::StallLimits;
 use launch::supervisor::{self, Display, Outcome, StagePlan};
 use map_sink::{METRICS_FILE, Metrics};
 use slam_eval::ScoreSummary;
@@ -16,15 +17,15 @@ use slam_eval::ScoreSummary;
 /// -> map-sink as separate processes over iceoryx2 shared memory in a domain of their own,
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
-/// Every setting can also come from a TOML file (--config) with the keys `source` and
-/// `relations` and the sections [sim], [replay], [hokuyo], [features], [front_end] and
-/// [slam]; options given here override the file. Keys a section does not know are refused
-/// by the process that reads it.
+/// Every setting can also come from a TOML file (--config) with the keys `source`,
+/// `relations`, `stall_warning` and `stall_limit` and the sections [sim], [replay],
+/// [hokuyo], [features], [front_end] and [slam]; options given here override the file.
+/// Keys a section does not know are refused by the process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
-    /// TOML file with `source`, `relations` and [sim], [replay], [hokuyo], [features],
-    /// [front_end], [slam] sections.
+    /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit` and [sim],
+    /// [replay], [hokuyo], [features], [front_end], [slam] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -67,6 +68,13 @@ struct Args {
     /// option if that file exists.
     #[arg(long, value_name = "FILE")]
     relations: Option<PathBuf>,
+    /// Seconds a stage may make no progress before the console names it (default 10).
+    #[arg(long, value_name = "SECONDS")]
+    stall_warning: Option<f64>,
+    /// Seconds a stage may make no progress before the run fails with its name (default
+    /// 120; at least --stall-warning).
+    #[arg(long, value_name = "SECONDS")]
+    stall_limit: Option<f64>,
     /// Output directory (default: runs/<world or log name>).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -172,6 +180,11 @@ fn run() -> Result<ExitCode> {
         "refusing to start: domain '{domain_name}' has {alive} live node(s), another \
          pipeline's; give another --domain, or none for a fresh one"
     );
+    // Held until this process ends, however it ends: if it is killed, the next start knows
+    // at once that the domain's shared memory is abandoned (its stages die with it).
+    let _claim = domain
+        .claim()
+        .context("refusing to start; give another --domain, or none for a fresh one")?;
 
     let plan = plan(&config, &domain, &bin_dir, &out, &config_dir)?;
     let display = Display {
@@ -184,7 +197,13 @@ fn run() -> Result<ExitCode> {
         .filter(|&frames| frames > 0),
         quiet: args.quiet,
     };
-    let outcome = supervisor::run(&plan, &domain, &log_dir, &display)?;
+    let (warning, limit) = config.stall_times();
+    let stall = StallLimits {
+        warning,
+        limit,
+        lockstep: config.lockstep(),
+    };
+    let outcome = supervisor::run(&plan, &domain, &log_dir, &display, &stall)?;
 
     domain.cleanup_dead_nodes();
     if let Err(e) = domain.remove_leftovers() {
@@ -285,6 +304,12 @@ fn apply_overrides(config: &mut RunConfig, args: &Args) {
     }
     if args.odometry {
         config.sim.odometry = true;
+    }
+    if let Some(seconds) = args.stall_warning {
+        config.stall_warning = seconds;
+    }
+    if let Some(seconds) = args.stall_limit {
+        config.stall_limit = seconds;
     }
 }
 

@@ -17,8 +17,11 @@ const STDERR_TAIL: usize = 20;
 pub enum StageEvent {
     /// The child's ports are connected (`ready`).
     Ready(usize),
-    /// A `status key=value ...` progress line.
+    /// A `status key=value ...` progress line (map-sink's).
     Status(usize, String),
+    /// A `progress in:TOPIC=N out:TOPIC=N ...` line: what the stage received and sent
+    /// (`ipc_types::progress`), without its first word.
+    Progress(usize, String),
     /// Any other line.
     Line(usize, String),
 }
@@ -52,7 +55,9 @@ pub struct Stage {
 
 impl Stage {
     /// Starts `program args` as stage `index`; stdout lines become events, stderr goes to
-    /// `log_dir/<name>.log` and its last lines are kept.
+    /// `log_dir/<name>.log` and its last lines are kept. The child is sent SIGTERM when the
+    /// calling thread ends (see [`die_with_launcher`]): call it from the thread that lives
+    /// as long as the run, the main thread.
     pub fn spawn(
         index: usize,
         name: &str,
@@ -67,17 +72,21 @@ impl Stage {
             source,
         })?;
         let _ = writeln!(log, "$ {} {}", program.display(), args.join(" "));
-        let mut child = Command::new(program)
+        let mut command = Command::new(program);
+        command
             .args(args)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|source| StageError::Spawn {
-                name: name.to_owned(),
-                program: program.display().to_string(),
-                source,
-            })?;
+            // Each stage reports what it took in and sent out (see ipc_types::progress),
+            // which is how the supervisor tells which stage has stalled.
+            .env(ipc_types::progress::ENV, "1");
+        die_with_launcher(&mut command);
+        let mut child = command.spawn().map_err(|source| StageError::Spawn {
+            name: name.to_owned(),
+            program: program.display().to_string(),
+            source,
+        })?;
         if let Some(stdout) = child.stdout.take() {
             std::thread::spawn(move || {
                 for line in BufReader::new(stdout).lines().map_while(Result::ok) {
@@ -85,6 +94,11 @@ impl Stage {
                         StageEvent::Ready(index)
                     } else if let Some(rest) = line.strip_prefix("status ") {
                         StageEvent::Status(index, rest.to_owned())
+                    } else if let Some(rest) = line
+                        .strip_prefix(ipc_types::progress::PREFIX)
+                        .filter(|rest| rest.is_empty() || rest.starts_with(' '))
+                    {
+                        StageEvent::Progress(index, rest.to_owned())
                     } else {
                         StageEvent::Line(index, line)
                     };
@@ -182,6 +196,39 @@ impl Stage {
         }
     }
 }
+
+/// Has the kernel send the child SIGTERM when the launcher dies, however it dies (SIGKILL
+/// included), so no stage outlives it holding its shared memory with nobody to stop it.
+/// SIGTERM, not SIGKILL: every stage takes it as Ctrl-C (`ipc_types::shutdown`), so
+/// map-sink still writes its results from what it received and the others remove their
+/// iceoryx2 nodes on the way out. Linux only (`PR_SET_PDEATHSIG`); it is tied to the thread
+/// that forked the child, not the process.
+#[cfg(target_os = "linux")]
+fn die_with_launcher(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    // Ours: the child's parent until we die. Always fits a pid_t on Linux.
+    let launcher = libc::pid_t::try_from(std::process::id()).unwrap_or(libc::pid_t::MAX);
+    let death_signal = libc::c_ulong::try_from(libc::SIGTERM).unwrap_or(15);
+    // SAFETY: the closure runs in the child between fork and exec; it calls only prctl(2)
+    // and getppid(2), which are async-signal-safe, and makes its errors without allocating.
+    unsafe {
+        command.pre_exec(move || {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, death_signal, 0, 0, 0) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            // We may have died between fork and prctl, before there was a death signal to
+            // send: the child then has another parent already, and must not run.
+            if libc::getppid() != launcher {
+                return Err(std::io::Error::from_raw_os_error(libc::ESRCH));
+            }
+            Ok(())
+        });
+    }
+}
+
+/// Elsewhere a stage outlives a killed launcher; it still stops on Ctrl-C.
+#[cfg(not(target_os = "linux"))]
+fn die_with_launcher(_command: &mut Command) {}
 
 /// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`.
 pub fn describe(status: ExitStatus) -> String {

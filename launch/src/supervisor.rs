@@ -8,12 +8,11 @@ use std::time::{Duration, Instant};
 use ipc_types::{Domain, shutdown};
 
 use crate::stage::{Stage, StageError, StageEvent, describe};
+use crate::stall::{StallLimits, StallReport, StallWatch};
 use crate::status::Progress;
 
 /// How long every stage has to print `ready`.
 const READY_TIMEOUT: Duration = Duration::from_secs(60);
-/// How long the pipeline may make no progress after the source has finished.
-const STALL_TIMEOUT: Duration = Duration::from_secs(120);
 /// How long stopped stages have to finish writing before they are killed.
 const STOP_GRACE: Duration = Duration::from_secs(30);
 const POLL: Duration = Duration::from_millis(50);
@@ -46,13 +45,15 @@ pub struct Display {
     pub quiet: bool,
 }
 
-/// Starts `plan` in order (the source last), supervises it and stops it.
-/// The stages must all use `domain`.
+/// Starts `plan` in order (the source last), supervises it and stops it; a stage that
+/// makes no progress is reported and fails the run after `stall`'s times (see
+/// [`crate::stall`]). The stages must all use `domain`.
 pub fn run(
     plan: &[StagePlan],
     domain: &Domain,
     log_dir: &Path,
     display: &Display,
+    stall: &StallLimits,
 ) -> Result<Outcome, StageError> {
     let (sender, events) = mpsc::channel();
     let mut stages = Vec::with_capacity(plan.len());
@@ -80,12 +81,25 @@ pub fn run(
     let started = Instant::now();
     let mut last_progress = (0, Instant::now());
     let source = stages.len().saturating_sub(1);
+    let names: Vec<String> = stages.iter().map(|s| s.name.clone()).collect();
+    let mut watch = StallWatch::new(&names, source, *stall, Instant::now());
+    let mut all_ready = false;
 
     let outcome = loop {
         while let Ok(event) = events.try_recv() {
             match event {
                 StageEvent::Ready(i) => ready[i] = true,
                 StageEvent::Status(_, line) => progress.update(&line),
+                StageEvent::Progress(i, line) => {
+                    if let Some(StallReport::Resumed { stage, after }) =
+                        watch.update(i, &line, Instant::now())
+                    {
+                        printer.warn(&format!(
+                            "{stage} moves again after {:.1} s",
+                            after.as_secs_f64()
+                        ));
+                    }
+                }
                 StageEvent::Line(i, line) => printer.line(&stages[i].name, &line),
             }
         }
@@ -150,18 +164,51 @@ pub fn run(
                 waiting.join(", ")
             ));
         }
+        if !all_ready && ready.iter().all(|&r| r) {
+            // Starting is the ready timeout's business, not a stall.
+            all_ready = true;
+            watch.restart(Instant::now());
+        }
+        if all_ready {
+            let running: Vec<bool> = stages.iter_mut().map(|s| s.poll_exit().is_none()).collect();
+            let mut failed = None;
+            for report in watch.check(&running, Instant::now()) {
+                match report {
+                    StallReport::Stalled { message, .. } => printer.warn(&message),
+                    StallReport::Failed { message, .. } => {
+                        failed.get_or_insert(message);
+                    }
+                    StallReport::Resumed { .. } => {}
+                }
+            }
+            if let Some(message) = failed {
+                stop_all(&mut stages, domain);
+                break Outcome::Failed(message);
+            }
+        }
         if progress.frames() != last_progress.0 {
             last_progress = (progress.frames(), Instant::now());
         }
+        // Once the source has ended no stage may have input pending and yet the run not be
+        // over: one finishing its output for ever (the final path, the picture).
         let source_done = stages
             .get_mut(source)
             .is_some_and(|s| s.poll_exit().is_some());
-        if source_done && last_progress.1.elapsed() > STALL_TIMEOUT {
+        let moved = watch
+            .last_moved()
+            .map_or(last_progress.1, |t| t.max(last_progress.1));
+        if source_done && moved.elapsed() > stall.limit {
+            let still: Vec<String> = stages
+                .iter_mut()
+                .filter_map(|s| s.poll_exit().is_none().then(|| s.name.clone()))
+                .collect();
             stop_all(&mut stages, domain);
             break Outcome::Failed(format!(
-                "no progress for {} s after the source finished (stalled at {} scans)",
-                STALL_TIMEOUT.as_secs(),
-                progress.frames()
+                "no progress for {} s after the source finished (stalled at {} scans; still \
+                 running: {})",
+                stall.limit.as_secs_f64(),
+                progress.frames(),
+                still.join(", ")
             ));
         }
         std::thread::sleep(POLL);
@@ -186,6 +233,10 @@ pub fn run(
 fn stop_all(stages: &mut [Stage], domain: &Domain) {
     for stage in stages.iter_mut().rev() {
         stage.signal(libc::SIGTERM);
+        // A stage frozen by SIGSTOP (a stall, or Ctrl-Z sent to it alone) would sit on
+        // the SIGTERM until the grace period ends and it is killed: wake it so it stops
+        // as the others do (map-sink writing its results). A running one ignores it.
+        stage.signal(libc::SIGCONT);
     }
     let deadline = Instant::now() + STOP_GRACE;
     while Instant::now() < deadline && stages.iter_mut().any(|s| s.poll_exit().is_none()) {
@@ -255,6 +306,12 @@ impl Printer {
         } else {
             eprintln!("{text}");
         }
+    }
+
+    /// A problem of the run, shown even in quiet mode (like the closing summaries).
+    fn warn(&mut self, text: &str) {
+        self.clear();
+        eprintln!("slam-launch: {text}");
     }
 
     fn clear(&mut self) {

@@ -1,5 +1,6 @@
 //! `map-sink`: records a run (trajectory, map, picture, metrics) from the pipeline's topics.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -41,10 +42,25 @@ fn main() -> ExitCode {
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("map-sink: {e:#}");
+            say_err(&format!("map-sink: {e:#}"));
             ExitCode::FAILURE
         }
     }
+}
+
+// slam-launch reads our stdout and stderr through pipes, and when it is killed they break
+// while we are still writing the run's results (it sends us SIGTERM as it dies); println!
+// would panic there and lose them. A line nobody can read is no reason to stop: these
+// drop it.
+
+/// A line on stdout, for slam-launch.
+fn say(line: &str) {
+    let _ = writeln!(std::io::stdout(), "{line}");
+}
+
+/// A line on stderr (the run's log).
+fn say_err(line: &str) {
+    let _ = writeln!(std::io::stderr(), "{line}");
 }
 
 /// What the status line shows, from the latest pose.
@@ -102,7 +118,7 @@ fn run() -> Result<()> {
     let maps = Inlet::open(&node, topic::MAP)?;
     let poses = Inlet::open(&node, topic::POSE)?;
     let path = Inlet::open(&node, topic::PATH)?;
-    println!("ready");
+    say("ready");
 
     let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps, &path];
     if let Some(truth) = &truth {
@@ -168,12 +184,12 @@ fn run() -> Result<()> {
             progress.map = sample.map_corners;
         }
         if args.status && last_status.elapsed() >= STATUS_PERIOD {
-            println!("{}", progress.line());
+            say(&progress.line());
             last_status = Instant::now();
         }
     }
     if args.status {
-        println!("{}", progress.line());
+        say(&progress.line());
     }
 
     if let Some(published) = published {
@@ -184,12 +200,12 @@ fn run() -> Result<()> {
         });
     }
     let metrics = recorder.finish()?;
-    eprintln!(
+    say_err(&format!(
         "map-sink: {} poses, {} map corners written to {}",
         metrics.frames_processed,
         metrics.map_corners,
         args.out.display()
-    );
+    ));
     Ok(())
 }
 
@@ -210,7 +226,7 @@ fn drain_path(
             })
             .collect();
         if let Err(e) = assembly.add(chunk.first, chunk.total, &poses) {
-            eprintln!("map-sink: {e}; the final path is incomplete");
+            say_err(&format!("map-sink: {e}; the final path is incomplete"));
             continue;
         }
         if let Some(path) = assembly.complete() {

@@ -170,3 +170,34 @@ pub fn duplicate_corners(corners: &[[f64; 4]], distance: f64, heading: f64) -> V
     }
     pairs
 }
+
+/// The children of `parent`, by /proc: `(pid, command name)`.
+pub fn children_of(parent: libc::pid_t) -> Vec<(libc::pid_t, String)> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir("/proc")
+        .expect("/proc")
+        .filter_map(Result::ok)
+    {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<libc::pid_t>() else {
+            continue;
+        };
+        // "pid (comm) state ppid ...": comm may hold spaces, so split after its ')'.
+        let Ok(stat) = std::fs::read_to_string(entry.path().join("stat")) else {
+            continue;
+        };
+        let (Some(open), Some(close)) = (stat.find('('), stat.rfind(')')) else {
+            continue;
+        };
+        let mut rest = stat[close + 1..].split_whitespace();
+        let ppid = rest.nth(1).and_then(|p| p.parse::<libc::pid_t>().ok());
+        if ppid == Some(parent) {
+            found.push((pid, stat[open + 1..close].to_owned()));
+        }
+    }
+    found
+}
+
+/// Lines of a file, 0 while it does not exist.
+pub fn lines_in(path: &Path) -> usize {
+    std::fs::read_to_string(path).map_or(0, |text| text.lines().count())
+}

@@ -1,0 +1,148 @@
+//! Issue 14, row 5: a stage frozen in lockstep (SIGSTOP). The console names it after the
+//! warning time, and after the limit the run fails with that reason; the stages it holds
+//! up are not named, and map-sink still writes the results.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use tests::*;
+
+/// Generous for a loaded 2-core machine.
+const LIMIT: Duration = Duration::from_secs(120);
+const STAGES: [&str; 4] = ["map-sink", "slam-proc", "feature-proc", "lidar-sim"];
+
+/// Freezes `stage` mid-run with a 2 s warning and a 6 s limit; returns slam-launch's exit
+/// code and its console (stderr).
+fn freeze(stage: &str) -> (Option<i32>, String) {
+    let domain = domain(&format!("stall-{stage}"));
+    let out = scratch(&format!("stall-{stage}"));
+    // Lockstep: the office loop's 3958 scans take several seconds, one frozen stage holds
+    // every other one up. Quiet: a stall is reported all the same.
+    let mut launcher = Command::new(bin("slam-launch"))
+        .args(["--quiet", "--domain", &domain, "--out"])
+        .arg(&out)
+        .args([
+            "--world",
+            "office",
+            "--stall-warning",
+            "2",
+            "--stall-limit",
+            "6",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start slam-launch");
+    let stderr = launcher.stderr.take().expect("stderr");
+    let console = std::thread::spawn(move || {
+        BufReader::new(stderr)
+            .lines()
+            .map_while(Result::ok)
+            .collect::<Vec<_>>()
+            .join("\n")
+    });
+    let launcher_pid = libc::pid_t::try_from(launcher.id()).expect("pid");
+    let stop = |launcher: &mut std::process::Child, why: &str| -> ! {
+        // SAFETY: kill(2) on our own child; SIGTERM so it stops its stages too.
+        unsafe {
+            libc::kill(launcher_pid, libc::SIGTERM);
+        }
+        let _ = launcher.wait();
+        panic!("{why}");
+    };
+
+    // Under way: some poses recorded (map-sink flushes the online path as it grows).
+    let online = out.join("trajectory_online.tum");
+    let deadline = Instant::now() + LIMIT;
+    while lines_in(&online) < 100 {
+        if let Some(status) = launcher.try_wait().expect("try_wait") {
+            let console = console.join().unwrap_or_default();
+            panic!("slam-launch ended before the test froze {stage}: {status}\n{console}");
+        }
+        if Instant::now() > deadline {
+            stop(&mut launcher, &format!("no poses recorded in {LIMIT:?}"));
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let Some(&(pid, _)) = children_of(launcher_pid)
+        .iter()
+        .find(|(_, name)| name == stage)
+    else {
+        stop(
+            &mut launcher,
+            &format!("no {stage} among slam-launch's children"),
+        );
+    };
+    // SAFETY: kill(2) on a process of this test's run.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+
+    let deadline = Instant::now() + LIMIT;
+    let status = loop {
+        if let Some(status) = launcher.try_wait().expect("try_wait") {
+            break status;
+        }
+        if Instant::now() > deadline {
+            // SAFETY: kill(2) on a process of this test's run, so it can be stopped.
+            unsafe {
+                libc::kill(pid, libc::SIGCONT);
+            }
+            stop(
+                &mut launcher,
+                &format!("slam-launch still running {LIMIT:?} after {stage} froze"),
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let console = console.join().expect("console");
+    // The frozen stage was woken and stopped with the others: map-sink wrote what it had
+    // (even when it was the frozen one).
+    assert!(out.join("metrics.json").is_file(), "{console}");
+    (status.code(), console)
+}
+
+/// The stages the console reported as making no progress.
+fn named(console: &str) -> Vec<&str> {
+    STAGES
+        .into_iter()
+        .filter(|stage| console.contains(&format!("slam-launch: {stage} has made no progress")))
+        .collect()
+}
+
+#[test]
+fn a_frozen_stage_in_the_middle_is_named_not_the_stages_waiting_on_it() {
+    // slam-proc frozen: feature-proc is blocked sending to it and the simulator is blocked
+    // sending to feature-proc, and map-sink waits for poses: only slam-proc is stuck.
+    let (code, console) = freeze("slam-proc");
+    assert_eq!(code, Some(1), "{console}");
+    assert_eq!(named(&console), ["slam-proc"], "{console}");
+    assert!(
+        console.contains(
+            "slam-launch: slam-proc has made no progress for 2 s (a message waits for it on \
+             'perception/features')"
+        ),
+        "{console}"
+    );
+    // The closing reason.
+    assert!(
+        console.contains(
+            "slam-launch: slam-proc stalled: no progress for 6 s (a message waits for it on \
+             'perception/features')"
+        ),
+        "{console}"
+    );
+}
+
+#[test]
+fn a_frozen_source_is_named() {
+    // Nothing is pending anywhere: the next scan is the simulator's to send.
+    let (code, console) = freeze("lidar-sim");
+    assert_eq!(code, Some(1), "{console}");
+    assert_eq!(named(&console), ["lidar-sim"], "{console}");
+    assert!(
+        console.contains(
+            "slam-launch: lidar-sim stalled: no progress for 6 s (the next scan is its to send)"
+        ),
+        "{console}"
+    );
+}
