@@ -32,7 +32,7 @@ use crate::error::{LineError, Malformation, ReadError};
 use crate::lines::{NumberedLines, StopFlag, snippet};
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
-use crate::stamp::parse_stamp_ns;
+use slam_geom::parse_stamp_ns;
 use slam_geom::wrap_angle;
 
 /// Longest range of a `FLASER` scan; readings at or beyond it become +inf (no return). The

@@ -16,7 +16,7 @@
 //! * No input can fill the memory or hold up a stop: a line longer than [`MAX_LINE_BYTES`]
 //!   is refused (and reading goes on at its end), and [`open_log_until`] takes a stop flag
 //!   the reading honours between reads, even within an endless line.
-//! * Stamps are the log's own, parsed to nanoseconds exactly ([`parse_stamp_ns`]); the
+//! * Stamps are the log's own, parsed to nanoseconds exactly ([`slam_geom::parse_stamp_ns`]); the
 //!   seed-hall recording has none and is stamped at a nominal 10 Hz
 //!   ([`seed_csv::NOMINAL_PERIOD_NS`]).
 //! * Ranges follow REP 117 (NaN = error, +inf = no return) in the sensor frame of
@@ -35,7 +35,6 @@ mod pacing;
 mod record;
 pub mod reorder;
 pub mod seed_csv;
-mod stamp;
 mod summary;
 
 pub use carmen::CarmenReader;
@@ -51,5 +50,4 @@ pub use pacing::{Pacer, RATE_RANGE, check_rate, parse_rate};
 pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 pub use reorder::{Records, ReorderConfig, ReorderCounts};
 pub use seed_csv::SeedCsvReader;
-pub use stamp::parse_stamp_ns;
 pub use summary::{ReplaySummary, SUMMARY_HEAD};

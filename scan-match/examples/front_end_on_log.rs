@@ -104,7 +104,7 @@ fn main() -> Result<()> {
             writeln!(
                 debug,
                 "{} {:.5} {:.5} {:.5} {:.5} {:.5} {:.5} {} {} {} {} {:.0} {:?} {:?}",
-                slam_eval::format_stamp(out.stamp_ns),
+                slam_geom::format_stamp(out.stamp_ns),
                 i.x,
                 i.y,
                 i.yaw,
@@ -123,7 +123,7 @@ fn main() -> Result<()> {
         if let MatchStatus::Failed(why) = out.status {
             eprintln!(
                 "{}: match failed ({why:?})",
-                slam_eval::format_stamp(out.stamp_ns)
+                slam_geom::format_stamp(out.stamp_ns)
             );
         }
         // A log whose lines go back in time can repeat a stamp; a trajectory cannot.
@@ -136,7 +136,7 @@ fn main() -> Result<()> {
         writeln!(
             tum,
             "{} {:.6} {:.6} 0 0 0 {:.9} {:.9}",
-            slam_eval::format_stamp(out.stamp_ns),
+            slam_geom::format_stamp(out.stamp_ns),
             p.x,
             p.y,
             s,

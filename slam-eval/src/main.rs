@@ -5,9 +5,8 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use slam_eval::{
-    DEFAULT_TOLERANCE_NS, ErrorStats, Score, Trajectory, format_stamp, read_relations, score,
-};
+use slam_eval::{DEFAULT_TOLERANCE_NS, ErrorStats, Score, Trajectory, read_relations, score};
+use slam_geom::format_stamp;
 
 /// Scores a trajectory with the relative-pose metric of Kuemmerle et al. 2009: for every
 /// ground-truth relation (t1, t2, motion) the trajectory's own motion from t1 to t2 is

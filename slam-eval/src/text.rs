@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::error::EvalError;
-use crate::stamp::parse_stamp_ns;
+use slam_geom::parse_stamp_ns;
 
 /// Reads `path` and hands each data line (1-based number, fields) to `parse`; a reason it
 /// returns becomes [`EvalError::Malformed`] naming the line.

@@ -6,13 +6,16 @@
 //! * [`wrap_angle`] wraps an angle once, where it is made;
 //! * [`Pose2`] is the planar transform `world_from_robot` (docs/CONVENTIONS.md): composition,
 //!   inverse, the increment between two poses, interpolation; its yaw is always wrapped;
-//! * [`Point2`] is a point or vector in the plane.
+//! * [`Point2`] is a point or vector in the plane;
+//! * [`parse_stamp_ns`] and [`format_stamp`] convert decimal seconds and nanoseconds exactly.
 
 mod angle;
 mod pose;
+mod stamp;
 
 pub use angle::wrap_angle;
 pub use pose::Pose2;
+pub use stamp::{StampError, StampProblem, format_stamp, parse_stamp_ns};
 
 /// A point or vector in the plane, metres.
 pub type Point2 = nalgebra::Vector2<f64>;
