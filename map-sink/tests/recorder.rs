@@ -7,8 +7,8 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    FrameCounts, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Metrics,
-    PathPose, Pose2, Recorder, RecorderOptions, RelationsFile, SinkError, TRAJECTORY_FILE,
+    FrameCounts, GROUND_TRUTH_FILE, GridConfig, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE,
+    Metrics, PathPose, Pose2, Recorder, RecorderOptions, RelationsFile, SinkError, TRAJECTORY_FILE,
     TRAJECTORY_ONLINE_FILE, corners_csv_header, format_stamp, read_tum, score_run,
 };
 
@@ -379,16 +379,31 @@ fn killed_run_keeps_its_trajectory_and_no_stale_results() -> TestResult {
 }
 
 #[test]
-fn invalid_cell_size_is_refused() {
+fn invalid_grid_settings_are_refused() {
     let dir = common::scratch_dir("invalid");
-    let options = RecorderOptions {
-        cell_m: 0.0,
-        ..RecorderOptions::default()
-    };
-    assert!(matches!(
-        Recorder::create(&dir, options),
-        Err(SinkError::InvalidOption(_))
-    ));
+    for (resolution_m, no_return_reach_m) in [
+        (0.0, 5.0),
+        (f64::NAN, 5.0),
+        (0.001, 5.0),
+        (20.0, 5.0),
+        (0.05, 0.0),
+        (0.05, f64::INFINITY),
+    ] {
+        let options = RecorderOptions {
+            grid: GridConfig {
+                resolution_m,
+                no_return_reach_m,
+            },
+            ..RecorderOptions::default()
+        };
+        assert!(
+            matches!(
+                Recorder::create(&dir, options),
+                Err(SinkError::InvalidOption(_))
+            ),
+            "{resolution_m} m, reach {no_return_reach_m} m"
+        );
+    }
 }
 
 /// A run of the size the pipeline produces (1200 scans of 1081 beams). Set
