@@ -7,9 +7,10 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    FrameCounts, GROUND_TRUTH_FILE, GridConfig, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE,
-    Metrics, PathPose, Pose2, Recorder, RecorderOptions, RelationsFile, SinkError, TRAJECTORY_FILE,
-    TRAJECTORY_ONLINE_FILE, corners_csv_header, format_stamp, read_tum, score_run,
+    CellState, FrameCounts, GROUND_TRUTH_FILE, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE,
+    MAP_SVG_FILE, METRICS_FILE, Metrics, PathPose, Pose2, Recorder, RecorderOptions, RelationsFile,
+    SavedMap, SinkError, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, corners_csv_header, format_stamp,
+    read_tum, score_run,
 };
 
 type TestResult = Result<(), Box<dyn std::error::Error>>;
@@ -106,6 +107,13 @@ fn full_run_writes_every_file() -> TestResult {
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), common::World::new().corners.len());
     assert!(rows.iter().all(|r| r.split(',').count() == 15));
+
+    // The run's directory is a map: the landmarks and the grid traced from its scans.
+    let map = SavedMap::load(&dir)?;
+    assert_eq!(map.landmarks.corners.len(), rows.len());
+    let grid = map.grid.ok_or("no grid")?;
+    assert!(grid.cells.contains(&CellState::Occupied));
+    assert!(dir.join(MAP_PNG_FILE).is_file());
 
     let json = fs::read_to_string(dir.join(METRICS_FILE))?;
     let expected: Vec<&str> = BASE_KEYS.iter().chain(&TRUTH_KEYS).copied().collect();
