@@ -17,14 +17,14 @@ use slam_eval::ScoreSummary;
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source` and
-/// `relations` and the sections [sim], [replay], [hokuyo], [features], [front_end] and
-/// [slam]; options given here override the file. Keys a section does not know are refused
+/// `relations` and the sections [sim], [replay], [hokuyo], [features], [front_end], [slam]
+/// and [grid]; options given here override the file. Keys a section does not know are refused
 /// by the process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
     /// TOML file with `source`, `relations` and [sim], [replay], [hokuyo], [features],
-    /// [front_end], [slam] sections.
+    /// [front_end], [slam], [grid] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -58,6 +58,9 @@ struct Args {
     /// Particles of the filter.
     #[arg(long)]
     particles: Option<usize>,
+    /// Edge of the occupancy grid's cells (map.pgm), metres; default 0.05.
+    #[arg(long, value_name = "METRES")]
+    resolution: Option<f64>,
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
     #[arg(long)]
     odometry: bool,
@@ -286,6 +289,9 @@ fn apply_overrides(config: &mut RunConfig, args: &Args) {
     if args.odometry {
         config.sim.odometry = true;
     }
+    if let Some(resolution) = args.resolution {
+        config.grid.resolution = resolution;
+    }
 }
 
 /// The processes of a simulated run, consumers first and the source last.
@@ -332,6 +338,7 @@ fn plan(
             config.slam.seed
         ),
     ];
+    sink.push(format!("--resolution={}", config.grid.resolution));
     // map-sink scores: it writes metrics.json and map.svg once, at the end, and the score
     // belongs in both (see map_sink::score_run).
     if let Some(relations) = &config.relations {

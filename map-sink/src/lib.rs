@@ -93,7 +93,7 @@ pub use map_yaml::{
 pub use metrics::{FrameCounts, Metrics};
 pub use occupancy_grid::{
     CellState, FREE_PROBABILITY, GridCell, GridConfig, GridError, OCCUPIED_PROBABILITY,
-    OccupancyGrid,
+    OccupancyGrid, RESOLUTION_RANGE_M,
 };
 pub use path_assembly::{ChunkError, PathAssembly, PathPose};
 pub use percentile::percentile;

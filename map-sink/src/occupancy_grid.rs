@@ -38,6 +38,32 @@ pub struct GridConfig {
     pub no_return_reach_m: f64,
 }
 
+/// The finest and coarsest resolutions accepted, metres: finer than 5 mm is below any
+/// scanner's noise, coarser than 5 m is no map of a building.
+pub const RESOLUTION_RANGE_M: std::ops::RangeInclusive<f64> = 0.005..=5.0;
+
+impl GridConfig {
+    /// Refuses a resolution outside [`RESOLUTION_RANGE_M`] or a reach that is not a positive
+    /// number of metres, saying which.
+    pub fn validate(&self) -> Result<(), String> {
+        let resolution = self.resolution_m;
+        if !RESOLUTION_RANGE_M.contains(&resolution) {
+            return Err(format!(
+                "the grid resolution must be from {} to {} m, not {resolution}",
+                RESOLUTION_RANGE_M.start(),
+                RESOLUTION_RANGE_M.end()
+            ));
+        }
+        let reach = self.no_return_reach_m;
+        if !(reach.is_finite() && reach > 0.0) {
+            return Err(format!(
+                "the reach of beams without a return must be a positive number of metres, not {reach}"
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for GridConfig {
     fn default() -> Self {
         Self {

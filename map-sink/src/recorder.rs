@@ -41,10 +41,6 @@ pub const MAP_SVG_FILE: &str = "map.svg";
 /// the run was finished.
 pub const METRICS_FILE: &str = "metrics.json";
 
-/// The finest and coarsest grid resolutions accepted, metres: finer than 5 mm is below
-/// any scanner's noise, coarser than 5 m is no map of a building.
-const RESOLUTION_RANGE_M: std::ops::RangeInclusive<f64> = 0.005..=5.0;
-
 /// How a [`Recorder`] records.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecorderOptions {
@@ -133,20 +129,8 @@ impl Recorder {
     /// Creates `dir` if needed and starts `trajectory_online.tum`. Files of an earlier run in the
     /// same directory are removed, so none can be mistaken for this run's.
     pub fn create(dir: &Path, options: RecorderOptions) -> Result<Self, SinkError> {
+        options.grid.validate().map_err(SinkError::InvalidOption)?;
         let resolution = options.grid.resolution_m;
-        if !RESOLUTION_RANGE_M.contains(&resolution) {
-            return Err(SinkError::InvalidOption(format!(
-                "the grid resolution must be from {} to {} m, not {resolution}",
-                RESOLUTION_RANGE_M.start(),
-                RESOLUTION_RANGE_M.end()
-            )));
-        }
-        let reach = options.grid.no_return_reach_m;
-        if !(reach.is_finite() && reach > 0.0) {
-            return Err(SinkError::InvalidOption(format!(
-                "the reach of beams without a return must be a positive number of metres, not {reach}"
-            )));
-        }
         fs::create_dir_all(dir).map_err(|e| SinkError::io("create directory", dir, e))?;
         for stale in [
             GROUND_TRUTH_FILE,

@@ -27,8 +27,10 @@ const TRUTH: &str = "#34a853";
 const DEAD_RECKONING: &str = "#f08c00";
 const MAP_CORNER: &str = "#d62728";
 const TRUE_CORNER: &str = "#6a3d9a";
-/// The grid's free cells, pale enough for the trajectories to stand out on them.
-const FREE_CELL: &str = "#ececec";
+/// The grid's cells as map.png shows them (free white, unknown grey, occupied dark), the
+/// grey paler so the trajectories stand out on it.
+const FREE_CELL: &str = "#ffffff";
+const UNKNOWN_CELL: &str = "#e2e2e2";
 /// The grid's occupied cells: the walls.
 const OCCUPIED_CELL: &str = "#555555";
 
@@ -43,7 +45,8 @@ pub struct SvgInput<'a> {
     pub note: &'a str,
     /// Edge of the cells of `cells`.
     pub cell_m: f64,
-    /// The occupancy grid's free and occupied cells (unknown ones are not drawn).
+    /// The occupancy grid's free and occupied cells; the rest of their bounding box is drawn
+    /// as unknown.
     pub cells: &'a [GridCell],
     /// Where the cells' grid sits in the picture's frame: the cells are accumulated in one
     /// frame (the SLAM frame) but may be drawn in another (the world's), rotated exactly by
@@ -238,6 +241,21 @@ fn draw_cells(svg: &mut String, frame: &Frame, input: &SvgInput<'_>) {
         e = frame.x0 + (tx - frame.min[0]) * frame.k,
         f = frame.y0 + (frame.max[1] - ty) * frame.k
     );
+    let (mut lo, mut hi) = ([i64::MAX; 2], [i64::MIN; 2]);
+    for c in &merged {
+        for a in 0..2 {
+            lo[a] = lo[a].min(c.index[a]);
+            hi[a] = hi[a].max(c.index[a] + 1);
+        }
+    }
+    let _ = writeln!(
+        svg,
+        r#"<rect transform="{transform}" x="{}" y="{}" width="{}" height="{}" fill="{UNKNOWN_CELL}"/>"#,
+        lo[0],
+        lo[1],
+        hi[0] - lo[0],
+        hi[1] - lo[1]
+    );
     for (occupied, colour) in [(false, FREE_CELL), (true, OCCUPIED_CELL)] {
         let d = run_path(merged.iter().filter(|c| c.occupied == occupied));
         if !d.is_empty() {
@@ -415,18 +433,22 @@ fn draw_footer(svg: &mut String, frame: &Frame, input: &SvgInput<'_>, top: f64) 
         cursor += 30.0 + 7.4 * label.chars().count() as f64 + 26.0;
     };
     if !input.cells.is_empty() {
-        item(svg, "occupancy grid (free, occupied)", &|svg, x, y| {
-            let _ = writeln!(
-                svg,
-                r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{}"/><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{}"/>"##,
-                x + 3.0,
-                y - 4.0,
-                FREE_CELL,
-                x + 12.0,
-                y - 4.0,
-                OCCUPIED_CELL
-            );
-        });
+        item(
+            svg,
+            "occupancy grid (free, unknown, occupied)",
+            &|svg, x, y| {
+                let _ = writeln!(
+                    svg,
+                    r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{FREE_CELL}" stroke="#bbbbbb" stroke-width="0.5"/><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{UNKNOWN_CELL}"/><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{OCCUPIED_CELL}"/>"##,
+                    x - 6.0,
+                    y - 4.0,
+                    x + 3.0,
+                    y - 4.0,
+                    x + 12.0,
+                    y - 4.0
+                );
+            },
+        );
     }
     if !input.trajectory.is_empty() {
         item(svg, "estimate", &|svg, x, y| {
