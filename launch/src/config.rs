@@ -155,6 +155,22 @@ pub const STALL_LIMIT_S: f64 = 120.0;
 /// (0.2 s) would name stages that are moving; a day is beyond any run's quiet spell.
 const STALL_RANGE_S: std::ops::RangeInclusive<f64> = 0.5..=86_400.0;
 
+/// map-sink's occupancy grid.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct GridSection {
+    /// Edge of a cell, metres (`map-sink --resolution`).
+    pub resolution: f64,
+}
+
+impl Default for GridSection {
+    fn default() -> Self {
+        Self {
+            resolution: map_sink::GridConfig::default().resolution_m,
+        }
+    }
+}
+
 /// The whole run. Sections the launcher does not interpret (`features`, `front_end`) are
 /// handed to the process that reads them (feature-proc), which validates them and names any
 /// mistake.
@@ -177,6 +193,7 @@ pub struct RunConfig {
     /// The scan-matching front end's settings (scan_match::FrontEndConfig).
     pub front_end: toml::Table,
     pub slam: SlamSection,
+    pub grid: GridSection,
 }
 
 impl Default for RunConfig {
@@ -192,6 +209,7 @@ impl Default for RunConfig {
             features: toml::Table::new(),
             front_end: toml::Table::new(),
             slam: SlamSection::default(),
+            grid: GridSection::default(),
         }
     }
 }
@@ -257,6 +275,15 @@ impl RunConfig {
                 self.stall_limit, self.stall_warning
             )));
         }
+        let grid = map_sink::GridConfig {
+            resolution_m: self.grid.resolution,
+            ..map_sink::GridConfig::default()
+        };
+        if let Err(e) = grid.validate() {
+            return Err(ConfigError::Invalid(format!(
+                "[grid] resolution (--resolution): {e}"
+            )));
+        }
         Ok(())
     }
 
@@ -316,6 +343,24 @@ mod tests {
     #[test]
     fn unknown_sections_are_refused() {
         assert!(toml::from_str::<RunConfig>("[simulation]\nworld = 'x'").is_err());
+    }
+
+    #[test]
+    fn the_grid_resolution_is_read_and_checked() {
+        let config: RunConfig = toml::from_str("[grid]\nresolution = 0.1").unwrap();
+        assert_eq!(config.grid.resolution, 0.1);
+        config.validate().unwrap();
+        assert_eq!(RunConfig::default().grid.resolution, 0.05);
+        for bad in [0.0, -0.05, 6.0, f64::NAN] {
+            let mut config = RunConfig::default();
+            config.grid.resolution = bad;
+            let message = config.validate().unwrap_err().to_string();
+            assert!(
+                message.starts_with("[grid] resolution (--resolution)"),
+                "{message}"
+            );
+        }
+        assert!(toml::from_str::<RunConfig>("[grid]\ncell = 0.1").is_err());
     }
 
     #[test]

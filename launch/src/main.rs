@@ -19,13 +19,13 @@ use slam_eval::ScoreSummary;
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source`,
 /// `relations`, `stall_warning` and `stall_limit` and the sections [sim], [replay],
-/// [hokuyo], [features], [front_end] and [slam]; options given here override the file.
-/// Keys a section does not know are refused by the process that reads it.
+/// [hokuyo], [features], [front_end], [slam] and [grid]; options given here override the
+/// file. Keys a section does not know are refused by the process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
     /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit` and [sim],
-    /// [replay], [hokuyo], [features], [front_end], [slam] sections.
+    /// [replay], [hokuyo], [features], [front_end], [slam], [grid] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -59,6 +59,9 @@ struct Args {
     /// Particles of the filter.
     #[arg(long)]
     particles: Option<usize>,
+    /// Edge of the occupancy grid's cells (map.pgm), metres; default 0.05.
+    #[arg(long, value_name = "METRES")]
+    resolution: Option<f64>,
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
     #[arg(long)]
     odometry: bool,
@@ -311,6 +314,9 @@ fn apply_overrides(config: &mut RunConfig, args: &Args) {
     if let Some(seconds) = args.stall_limit {
         config.stall_limit = seconds;
     }
+    if let Some(resolution) = args.resolution {
+        config.grid.resolution = resolution;
+    }
 }
 
 /// The processes of a simulated run, consumers first and the source last.
@@ -357,6 +363,7 @@ fn plan(
             config.slam.seed
         ),
     ];
+    sink.push(format!("--resolution={}", config.grid.resolution));
     // map-sink scores: it writes metrics.json and map.svg once, at the end, and the score
     // belongs in both (see map_sink::score_run).
     if let Some(relations) = &config.relations {

@@ -29,8 +29,14 @@ pub enum SinkError {
     /// and line).
     #[error(transparent)]
     Score(#[from] slam_eval::EvalError),
+    /// The occupancy grid could not be built.
+    #[error(transparent)]
+    Grid(#[from] crate::occupancy_grid::GridError),
+    /// The grid's PNG could not be encoded.
+    #[error("cannot encode the grid as PNG: {0}")]
+    Png(String),
     /// The metrics could not be serialised (only non-string map keys could cause it).
-    #[error("cannot serialise the metrics: {0}")]
+    #[error("cannot serialise the metrics or the landmarks: {0}")]
     Json(#[from] serde_json::Error),
 }
 

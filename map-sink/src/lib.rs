@@ -2,8 +2,10 @@
 //!
 //! Records a lidar SLAM run into a directory: the estimated trajectory (the filter's final
 //! path; the online per-scan estimate beside it), the true and dead-reckoning trajectories
-//! in TUM format, the corner map as CSV, a picture of the run as SVG and a
-//! `metrics.json` with throughput, latency and, when the truth is known, accuracy scores.
+//! in TUM format, the corner map as CSV, a saved map (an occupancy grid as ROS map_server
+//! reads it and the landmarks, [`SavedMap::load`] reads it back), a picture of the run as
+//! SVG and a `metrics.json` with throughput, latency and, when the truth is known, accuracy
+//! scores.
 //!
 //! This is the library half; the process shell receives the pipeline's messages and feeds
 //! them to a [`Recorder`] as plain values, so nothing here depends on the transport.
@@ -15,6 +17,9 @@
 //!   least-squares rigid SE(2) fit ([`align_se2`], as `evo_ape -a`) before the absolute
 //!   trajectory error ([`ate`]) is taken, and the map corners are moved by the same
 //!   transform before they are scored.
+//! * The occupancy grid is traced at the end of the run from the final path
+//!   ([`OccupancyGrid`]), so the scans are kept until then, compactly ([`CompactScan`],
+//!   [`ScanKeeper`]).
 //! * Given ground-truth relations ([`RecorderOptions::relations`]), the trajectory files are
 //!   scored with the relative-pose error of Kuemmerle et al. 2009 through slam-eval
 //!   ([`score_run`]; why here and not in slam-launch is said there).
@@ -43,38 +48,63 @@
 mod align;
 mod ate;
 mod atomic;
+mod compact_scan;
 mod corner;
 mod corner_score;
 mod corners_csv;
 mod error;
-mod hit_grid;
+mod grid_image;
+mod landmarks;
+mod map_load_error;
+mod map_writer;
+mod map_yaml;
 mod metrics;
+mod occupancy_grid;
 mod path_assembly;
 mod percentile;
+mod pgm;
 mod pose;
 mod recorder;
 mod rpe;
-mod scan_points;
+mod saved_map;
+mod scan_keeper;
 mod svg;
 mod tum;
 
 pub use align::{Se2Alignment, align_se2};
 pub use ate::{AteStats, ate};
 pub use atomic::{tmp_path, write_atomic};
+pub use compact_scan::{Beam, CompactScan};
 pub use corner::MapCorner;
 pub use corner_score::nearest_rmse;
 pub use corners_csv::{corners_csv, corners_csv_header};
 pub use error::SinkError;
-pub use hit_grid::{HitCell, HitGrid};
+pub use grid_image::{encode_png, grid_pixels};
+pub use landmarks::{
+    CornerLandmark, GridReference, LANDMARKS_FORMAT, LANDMARKS_FRAME, LANDMARKS_UNITS,
+    LANDMARKS_VERSION, Landmarks, LandmarksError,
+};
+pub use map_load_error::MapLoadError;
+pub use map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
+pub use map_yaml::{
+    FREE_PIXEL, FREE_THRESH, MapMode, MapYaml, OCCUPIED_PIXEL, OCCUPIED_THRESH, UNKNOWN_PIXEL,
+    YamlError, trinary_pixel,
+};
 pub use metrics::{FrameCounts, Metrics};
+pub use occupancy_grid::{
+    CellState, FREE_PROBABILITY, GridCell, GridConfig, GridError, OCCUPIED_PROBABILITY,
+    OccupancyGrid, RESOLUTION_RANGE_M,
+};
 pub use path_assembly::{ChunkError, PathAssembly, PathPose};
 pub use percentile::percentile;
+pub use pgm::{Pgm, PgmError, encode_pgm};
 pub use pose::{Pose2, wrap_angle};
 pub use recorder::{
-    DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Recorder,
-    RecorderOptions, TRAJECTORY_FILE,
+    DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE,
+    METRICS_FILE, Recorder, RecorderOptions, TRAJECTORY_FILE,
 };
 pub use rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
-pub use scan_points::scan_points;
+pub use saved_map::{GridMap, SavedMap};
+pub use scan_keeper::ScanKeeper;
 pub use svg::{SvgInput, render_svg};
 pub use tum::{TumPose, TumWriter, format_stamp, format_tum_line, read_tum, yaw_quaternion};

@@ -9,12 +9,14 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
-use map_sink::{FrameCounts, PathAssembly, PathPose, Recorder, RecorderOptions, RelationsFile};
+use map_sink::{
+    FrameCounts, GridConfig, PathAssembly, PathPose, Recorder, RecorderOptions, RelationsFile,
+};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
-/// trajectory.tum, ground_truth.tum, map_corners.csv, map.svg and metrics.json into DIR;
-/// with --relations, metrics.json and the picture also give the relative-pose error of each
-/// trajectory file.
+/// trajectory.tum, ground_truth.tum, map_corners.csv, the saved map (map.yaml, map.pgm,
+/// map.png, landmarks.json), map.svg and metrics.json into DIR; with --relations,
+/// metrics.json and the picture also give the relative-pose error of each trajectory file.
 #[derive(Debug, Parser)]
 #[command(name = "map-sink", version)]
 struct Args {
@@ -34,6 +36,9 @@ struct Args {
     /// the trajectories against at the end; read and checked before anything else.
     #[arg(long, value_name = "FILE")]
     relations: Option<PathBuf>,
+    /// Edge of the occupancy grid's cells, metres (0.005 to 5).
+    #[arg(long, value_name = "METRES", default_value_t = GridConfig::default().resolution_m)]
+    resolution: f64,
 }
 
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
@@ -103,6 +108,10 @@ fn run() -> Result<()> {
         RecorderOptions {
             title: args.title.clone(),
             relations,
+            grid: GridConfig {
+                resolution_m: args.resolution,
+                ..GridConfig::default()
+            },
             ..RecorderOptions::default()
         },
     )?;
@@ -199,13 +208,32 @@ fn run() -> Result<()> {
             dropped: published.saturating_sub(progress.poses),
         });
     }
-    let metrics = recorder.finish()?;
+    let (metrics, grid) = recorder.finish_with_report()?;
     say_err(&format!(
         "map-sink: {} poses, {} map corners written to {}",
         metrics.frames_processed,
         metrics.map_corners,
         args.out.display()
     ));
+    if let Some(g) = grid {
+        say_err(&format!(
+            "map-sink: occupancy grid {} x {} cells of {} m from {} scans ({} beams kept, {:.1} MB) in {:.2} s, {:.1} MB of log-odds",
+            g.width,
+            g.height,
+            g.resolution_m,
+            g.scans_traced,
+            g.beams_kept,
+            g.scan_bytes as f64 / 1e6,
+            g.build_s,
+            g.grid_bytes as f64 / 1e6
+        ));
+    }
+    if let Some(peak) = peak_memory_kb() {
+        say_err(&format!(
+            "map-sink: peak memory {:.1} MB",
+            peak as f64 / 1e3
+        ));
+    }
     Ok(())
 }
 
@@ -280,4 +308,11 @@ fn map_corners(snapshot: &MapSnapshot) -> Vec<map_sink::MapCorner> {
             observations: c.observations,
         })
         .collect()
+}
+
+/// This process's peak resident memory (Linux `VmHWM`), kilobytes; `None` elsewhere.
+fn peak_memory_kb() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }

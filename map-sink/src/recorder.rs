@@ -1,6 +1,6 @@
 //! The recorder: takes a run's messages as they arrive and writes the run's files.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fs;
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
@@ -9,17 +9,19 @@ use std::time::Instant;
 use crate::align::Se2Alignment;
 use crate::ate::{AteStats, ate, distance};
 use crate::atomic::write_atomic;
+use crate::compact_scan::CompactScan;
 use crate::corner::MapCorner;
 use crate::corner_score::nearest_rmse;
 use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
-use crate::hit_grid::HitGrid;
+use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
 use crate::metrics::{FrameCounts, Metrics};
+use crate::occupancy_grid::{GridConfig, OccupancyGrid};
 use crate::path_assembly::PathPose;
 use crate::percentile::percentile;
 use crate::pose::Pose2;
 use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
-use crate::scan_points::scan_points;
+use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum::{TumWriter, format_tum_line};
 
@@ -39,19 +41,13 @@ pub const MAP_SVG_FILE: &str = "map.svg";
 /// the run was finished.
 pub const METRICS_FILE: &str = "metrics.json";
 
-/// Scans kept while they wait for their pose. A scan whose pose never comes (the SLAM
-/// process dropped it) would otherwise be kept for ever; the oldest are dropped first.
-const MAX_PENDING_SCANS: usize = 256;
-
 /// How a [`Recorder`] records.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecorderOptions {
     /// The first line of the picture.
     pub title: String,
-    /// Edge of the picture's scan-hit cells, metres.
-    pub cell_m: f64,
-    /// Beams of a scan looked at, at most (evenly strided); 0 for all.
-    pub max_points_per_scan: usize,
+    /// The occupancy grid (`map.pgm`, `map.yaml`, `map.png`, the picture's background).
+    pub grid: GridConfig,
     /// Ground-truth relations to score the trajectory files against when the run finishes.
     pub relations: Option<RelationsFile>,
     /// How far a pose's stamp may be from a relation's, nanoseconds.
@@ -62,12 +58,29 @@ impl Default for RecorderOptions {
     fn default() -> Self {
         Self {
             title: "lidar SLAM run".to_owned(),
-            cell_m: 0.05,
-            max_points_per_scan: 2048,
+            grid: GridConfig::default(),
             relations: None,
             relations_tolerance_ns: slam_eval::DEFAULT_TOLERANCE_NS,
         }
     }
+}
+
+/// What the occupancy grid cost, for the run's log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridReport {
+    /// Cells across (x) and down (y).
+    pub width: usize,
+    pub height: usize,
+    pub resolution_m: f64,
+    /// Scans traced (kept and found on the final path).
+    pub scans_traced: usize,
+    /// Beams kept over the whole run, and the bytes the kept scans held until the end.
+    pub beams_kept: usize,
+    pub scan_bytes: usize,
+    /// Bytes of the grid's log-odds (as much again was used while tracing).
+    pub grid_bytes: usize,
+    /// Tracing and thresholding, seconds.
+    pub build_s: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -85,8 +98,8 @@ struct Estimate {
 /// [`finish`](Self::finish), so a crash never leaves one half-written.
 ///
 /// Poses, truth and scans are matched by sequence number (the scan's), in any arrival order.
-/// Scans are projected into the picture's hit grid as soon as their pose is known and then
-/// forgotten, so memory grows with the area seen rather than the length of the run.
+/// The occupancy grid is traced at the end from the final path, so scans are kept until
+/// then: compactly, and only those taken from a new viewpoint ([`ScanKeeper`]).
 #[derive(Debug)]
 pub struct Recorder {
     dir: PathBuf,
@@ -99,8 +112,7 @@ pub struct Recorder {
     /// The truth again by stamp, to score the final path (which carries stamps only).
     truth_by_stamp: BTreeMap<u64, Pose2>,
     final_path: Option<Vec<PathPose>>,
-    pending_scans: BTreeMap<u64, Vec<[f64; 2]>>,
-    grid: HitGrid,
+    scans: ScanKeeper,
     latencies_ns: Vec<u64>,
     map: Vec<MapCorner>,
     true_corners: Vec<[f64; 2]>,
@@ -117,12 +129,8 @@ impl Recorder {
     /// Creates `dir` if needed and starts `trajectory_online.tum`. Files of an earlier run in the
     /// same directory are removed, so none can be mistaken for this run's.
     pub fn create(dir: &Path, options: RecorderOptions) -> Result<Self, SinkError> {
-        if !(options.cell_m.is_finite() && options.cell_m > 0.0) {
-            return Err(SinkError::InvalidOption(format!(
-                "cell_m must be a positive number of metres, not {}",
-                options.cell_m
-            )));
-        }
+        options.grid.validate().map_err(SinkError::InvalidOption)?;
+        let resolution = options.grid.resolution_m;
         fs::create_dir_all(dir).map_err(|e| SinkError::io("create directory", dir, e))?;
         for stale in [
             GROUND_TRUTH_FILE,
@@ -131,6 +139,10 @@ impl Recorder {
             MAP_CORNERS_FILE,
             MAP_SVG_FILE,
             METRICS_FILE,
+            MAP_PGM_FILE,
+            MAP_YAML_FILE,
+            MAP_PNG_FILE,
+            LANDMARKS_FILE,
         ] {
             let path = dir.join(stale);
             match fs::remove_file(&path) {
@@ -143,7 +155,7 @@ impl Recorder {
         let online = TumWriter::create(&dir.join(TRAJECTORY_ONLINE_FILE))?;
         Ok(Self {
             dir: dir.to_path_buf(),
-            grid: HitGrid::new(options.cell_m),
+            scans: ScanKeeper::new(resolution),
             options,
             online,
             ground_truth: None,
@@ -152,7 +164,6 @@ impl Recorder {
             truth: BTreeMap::new(),
             truth_by_stamp: BTreeMap::new(),
             final_path: None,
-            pending_scans: BTreeMap::new(),
             latencies_ns: Vec::new(),
             map: Vec::new(),
             true_corners: Vec::new(),
@@ -203,9 +214,7 @@ impl Recorder {
             },
         );
         self.latencies_ns.extend(latency_ns);
-        if let Some(points) = self.pending_scans.remove(&seq) {
-            self.project(est, &points);
-        }
+        self.scans.add_pose(seq, stamp_ns, est);
         Ok(())
     }
 
@@ -224,8 +233,8 @@ impl Recorder {
         Ok(())
     }
 
-    /// Records scan `seq` for the picture: its valid points go into the hit grid through
-    /// the scan's pose, now if the pose is known, else when it arrives.
+    /// Records scan `seq` for the occupancy grid: kept (compactly) if it was taken from a
+    /// new viewpoint, which its online estimate decides, now if known, else when it comes.
     pub fn record_scan(
         &mut self,
         seq: u64,
@@ -237,23 +246,18 @@ impl Recorder {
     ) {
         self.touch();
         self.scans_seen += 1;
-        let points = scan_points(
+        let grid = &self.options.grid;
+        let scan = CompactScan::new(
             angle_min,
             angle_increment,
             range_min,
             range_max,
             ranges,
-            self.options.max_points_per_scan,
+            grid.resolution_m,
+            grid.no_return_reach_m,
         );
-        if let Some(estimate) = self.estimates.get(&seq) {
-            let pose = estimate.pose;
-            self.project(pose, &points);
-            return;
-        }
-        self.pending_scans.insert(seq, points);
-        while self.pending_scans.len() > MAX_PENDING_SCANS {
-            self.pending_scans.pop_first();
-        }
+        let estimate = self.estimates.get(&seq).map(|e| (e.stamp_ns, e.pose));
+        self.scans.add_scan(seq, scan, estimate);
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).
@@ -284,9 +288,16 @@ impl Recorder {
     }
 
     /// Syncs the trajectories, scores the run (against the relations too, if given: every
-    /// trajectory file is complete by then) and writes `map_corners.csv`, `map.svg` and
-    /// finally `metrics.json`, each atomically. Returns the metrics written.
+    /// trajectory file is complete by then), traces the occupancy grid from the final path
+    /// and writes `map_corners.csv`, the map (`map.pgm`, `map.yaml`, `map.png`,
+    /// `landmarks.json`), `map.svg` and finally `metrics.json`, each atomically. Returns
+    /// the metrics written.
     pub fn finish(self) -> Result<Metrics, SinkError> {
+        self.finish_with_report().map(|(metrics, _)| metrics)
+    }
+
+    /// [`finish`](Self::finish), also saying what the occupancy grid cost.
+    pub fn finish_with_report(self) -> Result<(Metrics, Option<GridReport>), SinkError> {
         self.online.sync()?;
         for writer in [&self.ground_truth, &self.dead_reckoning]
             .into_iter()
@@ -336,24 +347,46 @@ impl Recorder {
             &self.dir.join(MAP_CORNERS_FILE),
             corners_csv(&self.map).as_bytes(),
         )?;
-        let svg = self.picture(&trajectory, stats, &metrics);
+        let started = Instant::now();
+        let grid = self.grid(&final_path)?;
+        let report = grid.as_ref().map(|(grid, traced)| GridReport {
+            width: grid.width(),
+            height: grid.height(),
+            resolution_m: grid.resolution_m(),
+            scans_traced: *traced,
+            beams_kept: self.scans.beams(),
+            scan_bytes: self.scans.bytes(),
+            grid_bytes: grid.bytes(),
+            build_s: started.elapsed().as_secs_f64(),
+        });
+        let grid = grid.map(|(grid, _)| grid);
+        write_map(&self.dir, grid.as_ref(), &self.map)?;
+        let svg = self.picture(&trajectory, stats, &metrics, grid.as_ref());
         write_atomic(&self.dir.join(MAP_SVG_FILE), svg.as_bytes())?;
         let mut json = serde_json::to_string_pretty(&metrics)?;
         json.push('\n');
         write_atomic(&self.dir.join(METRICS_FILE), json.as_bytes())?;
-        Ok(metrics)
+        Ok((metrics, report))
+    }
+
+    /// The occupancy grid of the scans kept, each traced from its pose on `path` (matched by
+    /// stamp; a scan the path does not hold is left out), with the number traced.
+    fn grid(&self, path: &[PathPose]) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
+        let poses: HashMap<u64, Pose2> = path.iter().map(|p| (p.stamp_ns, p.pose)).collect();
+        let scans: Vec<(Pose2, &CompactScan)> = self
+            .scans
+            .kept()
+            .iter()
+            .filter_map(|(stamp, scan)| Some((*poses.get(stamp)?, scan)))
+            .collect();
+        let grid = OccupancyGrid::build(&self.options.grid, &scans)?;
+        Ok(grid.map(|g| (g, scans.len())))
     }
 
     fn touch(&mut self) {
         let now = Instant::now();
         self.first_message.get_or_insert(now);
         self.last_message = Some(now);
-    }
-
-    fn project(&mut self, pose: Pose2, points: &[[f64; 2]]) {
-        for p in points {
-            self.grid.add(pose.transform_point(*p));
-        }
     }
 
     /// ATE of the final path over the poses whose stamps have truth.
@@ -430,7 +463,7 @@ impl Recorder {
     }
 
     /// The picture is drawn in the world frame when there is an alignment: the estimate,
-    /// its map, the dead reckoning (which shares the SLAM frame) and the scan hits are moved
+    /// its map, the dead reckoning (which shares the SLAM frame) and the occupancy grid are moved
     /// by the trajectory alignment onto the truth. Without one (no truth, or no scan with
     /// both an estimate and truth) it is drawn in the SLAM frame and the truth is left out.
     fn picture(
@@ -438,6 +471,7 @@ impl Recorder {
         trajectory: &[[f64; 2]],
         stats: Option<AteStats>,
         metrics: &Metrics,
+        grid: Option<&OccupancyGrid>,
     ) -> String {
         let placement = stats.map_or(Se2Alignment::IDENTITY, |s| s.alignment);
         let trajectory: Vec<[f64; 2]> = trajectory.iter().map(|p| placement.apply(*p)).collect();
@@ -457,17 +491,17 @@ impl Recorder {
             (Vec::new(), &[])
         };
         let note = if stats.is_some() {
-            "World frame: the estimate, its map, its scan hits and the dead reckoning are moved onto the truth by the least-squares SE(2) fit of the estimated to the true positions."
+            "World frame: the estimate, its map, its occupancy grid and the dead reckoning are moved onto the truth by the least-squares SE(2) fit of the estimated to the true positions."
         } else {
             "SLAM frame: the first pose is the origin, facing +x."
         };
-        let cells = self.grid.cells();
+        let cells = grid.map(OccupancyGrid::known_cells).unwrap_or_default();
         let subtitle = subtitle(metrics);
         render_svg(&SvgInput {
             title: &self.options.title,
             subtitle: &subtitle,
             note,
-            cell_m: self.grid.cell_m(),
+            cell_m: self.options.grid.resolution_m,
             cells: &cells,
             cells_placement: placement,
             trajectory: &trajectory,
@@ -568,18 +602,13 @@ mod tests {
         let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
         let ranges = [1.0_f32, 2.0, 3.0];
         recorder.record_scan(0, 0.0, 0.5, 0.1, 10.0, &ranges);
-        assert!(recorder.grid.is_empty(), "no pose yet");
-        recorder.record_pose(0, 0, Pose2::default(), None, None)?;
-        assert_eq!(recorder.grid.len(), 3);
-        recorder.record_pose(1, 1, Pose2::new(50.0, 0.0, 0.0), None, None)?;
+        assert!(recorder.scans.kept().is_empty(), "no pose yet");
+        recorder.record_pose(0, 7, Pose2::default(), None, None)?;
+        recorder.record_pose(1, 8, Pose2::new(50.0, 0.0, 0.0), None, None)?;
         recorder.record_scan(1, 0.0, 0.5, 0.1, 10.0, &ranges);
-        assert_eq!(recorder.grid.len(), 6);
-        assert!(recorder.pending_scans.is_empty());
-        // A scan whose pose never comes is eventually forgotten.
-        for seq in 100..100 + MAX_PENDING_SCANS as u64 + 10 {
-            recorder.record_scan(seq, 0.0, 0.5, 0.1, 10.0, &ranges);
-        }
-        assert_eq!(recorder.pending_scans.len(), MAX_PENDING_SCANS);
+        let stamps: Vec<u64> = recorder.scans.kept().iter().map(|(s, _)| *s).collect();
+        assert_eq!(stamps, [7, 8]);
+        assert_eq!(recorder.scans.pending(), 0);
         let _ = std::fs::remove_dir_all(&dir);
         Ok(())
     }

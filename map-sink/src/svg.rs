@@ -1,4 +1,4 @@
-//! The picture of a run: a hand-written SVG of the scan hits, the trajectories and the
+//! The picture of a run: a hand-written SVG of the occupancy grid, the trajectories and the
 //! corners, with a title, a legend and a scale bar.
 //!
 //! The world (metres, y up) is mapped onto a canvas of at most [`MAX_MAP_W`] x
@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use crate::align::Se2Alignment;
 use crate::corner::MapCorner;
-use crate::hit_grid::HitCell;
+use crate::occupancy_grid::GridCell;
 
 const MAX_MAP_W: f64 = 1400.0;
 const MAX_MAP_H: f64 = 1000.0;
@@ -27,9 +27,12 @@ const TRUTH: &str = "#34a853";
 const DEAD_RECKONING: &str = "#f08c00";
 const MAP_CORNER: &str = "#d62728";
 const TRUE_CORNER: &str = "#6a3d9a";
-/// Scan-hit shades by hit count: seen once, a few times, often. Noise is usually seen once,
-/// walls often, so walls come out dark and stray returns faint.
-const HIT_SHADES: [(u32, &str); 3] = [(1, "#d4d4d4"), (3, "#a3a3a3"), (10, "#5f5f5f")];
+/// The grid's cells as map.png shows them (free white, unknown grey, occupied dark), the
+/// grey paler so the trajectories stand out on it.
+const FREE_CELL: &str = "#ffffff";
+const UNKNOWN_CELL: &str = "#e2e2e2";
+/// The grid's occupied cells: the walls.
+const OCCUPIED_CELL: &str = "#555555";
 
 /// Everything the picture shows, in one frame (metres). Empty slices are simply not drawn
 /// (and left out of the legend).
@@ -42,7 +45,9 @@ pub struct SvgInput<'a> {
     pub note: &'a str,
     /// Edge of the cells of `cells`.
     pub cell_m: f64,
-    pub cells: &'a [HitCell],
+    /// The occupancy grid's free and occupied cells; the rest of their bounding box is drawn
+    /// as unknown.
+    pub cells: &'a [GridCell],
     /// Where the cells' grid sits in the picture's frame: the cells are accumulated in one
     /// frame (the SLAM frame) but may be drawn in another (the world's), rotated exactly by
     /// the SVG transform rather than re-binned, which would alias.
@@ -197,27 +202,28 @@ fn frame(input: &SvgInput<'_>, header_h: f64) -> Frame {
     }
 }
 
-/// Draws the hit cells as one path per shade, with runs of neighbouring cells in a row
-/// merged into one rectangle: the file stays small even for a long run.
+/// Draws the grid cells as one path per state, with runs of neighbouring cells in a row
+/// merged into one rectangle: the file stays small even for a long run. Cells too small to
+/// see are merged into coarser ones, occupied if any of them is: a wall stays visible.
 fn draw_cells(svg: &mut String, frame: &Frame, input: &SvgInput<'_>) {
     if input.cells.is_empty() || !input.cell_m.is_finite() || input.cell_m <= 0.0 {
         return;
     }
     let factor = (MIN_CELL_PX / (input.cell_m * frame.k)).ceil().max(1.0) as i64;
     let cell = input.cell_m * factor as f64;
-    let mut merged: Vec<HitCell> = Vec::with_capacity(input.cells.len());
+    let mut merged: Vec<GridCell> = Vec::with_capacity(input.cells.len());
     for c in input.cells {
         let index = [c.index[0].div_euclid(factor), c.index[1].div_euclid(factor)];
-        merged.push(HitCell {
+        merged.push(GridCell {
             index,
-            hits: c.hits,
+            occupied: c.occupied,
         });
     }
     merged.sort_by_key(|c| (c.index[1], c.index[0]));
     merged.dedup_by(|next, kept| {
         let same = next.index == kept.index;
         if same {
-            kept.hits = kept.hits.saturating_add(next.hits);
+            kept.occupied |= next.occupied;
         }
         same
     });
@@ -235,12 +241,23 @@ fn draw_cells(svg: &mut String, frame: &Frame, input: &SvgInput<'_>) {
         e = frame.x0 + (tx - frame.min[0]) * frame.k,
         f = frame.y0 + (frame.max[1] - ty) * frame.k
     );
-    for (shade, (threshold, colour)) in HIT_SHADES.iter().enumerate() {
-        let upper = HIT_SHADES.get(shade + 1).map_or(u32::MAX, |(t, _)| *t);
-        let cells = merged
-            .iter()
-            .filter(|c| c.hits >= *threshold && c.hits < upper);
-        let d = run_path(cells);
+    let (mut lo, mut hi) = ([i64::MAX; 2], [i64::MIN; 2]);
+    for c in &merged {
+        for a in 0..2 {
+            lo[a] = lo[a].min(c.index[a]);
+            hi[a] = hi[a].max(c.index[a] + 1);
+        }
+    }
+    let _ = writeln!(
+        svg,
+        r#"<rect transform="{transform}" x="{}" y="{}" width="{}" height="{}" fill="{UNKNOWN_CELL}"/>"#,
+        lo[0],
+        lo[1],
+        hi[0] - lo[0],
+        hi[1] - lo[1]
+    );
+    for (occupied, colour) in [(false, FREE_CELL), (true, OCCUPIED_CELL)] {
+        let d = run_path(merged.iter().filter(|c| c.occupied == occupied));
         if !d.is_empty() {
             let _ = writeln!(
                 svg,
@@ -252,7 +269,7 @@ fn draw_cells(svg: &mut String, frame: &Frame, input: &SvgInput<'_>) {
 
 /// A path of unit squares, cells ordered by row then column; horizontal runs become one
 /// rectangle and each subpath starts relative to the previous one to keep numbers short.
-fn run_path<'a>(cells: impl Iterator<Item = &'a HitCell>) -> String {
+fn run_path<'a>(cells: impl Iterator<Item = &'a GridCell>) -> String {
     let mut d = String::new();
     let mut start: Option<[i64; 2]> = None;
     let mut run = 0_i64;
@@ -416,18 +433,22 @@ fn draw_footer(svg: &mut String, frame: &Frame, input: &SvgInput<'_>, top: f64) 
         cursor += 30.0 + 7.4 * label.chars().count() as f64 + 26.0;
     };
     if !input.cells.is_empty() {
-        item(svg, "scan hits", &|svg, x, y| {
-            let _ = writeln!(
-                svg,
-                r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{}"/><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{}"/>"##,
-                x + 3.0,
-                y - 4.0,
-                HIT_SHADES[0].1,
-                x + 12.0,
-                y - 4.0,
-                HIT_SHADES[2].1
-            );
-        });
+        item(
+            svg,
+            "occupancy grid (free, unknown, occupied)",
+            &|svg, x, y| {
+                let _ = writeln!(
+                    svg,
+                    r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{FREE_CELL}" stroke="#bbbbbb" stroke-width="0.5"/><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{UNKNOWN_CELL}"/><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{OCCUPIED_CELL}"/>"##,
+                    x - 6.0,
+                    y - 4.0,
+                    x + 3.0,
+                    y - 4.0,
+                    x + 12.0,
+                    y - 4.0
+                );
+            },
+        );
     }
     if !input.trajectory.is_empty() {
         item(svg, "estimate", &|svg, x, y| {
@@ -526,8 +547,10 @@ mod tests {
 
     #[test]
     fn runs_merge_and_move_relatively() {
-        let cells =
-            [[0, 0], [1, 0], [2, 0], [5, 0], [1, 2]].map(|index| HitCell { index, hits: 1 });
+        let cells = [[0, 0], [1, 0], [2, 0], [5, 0], [1, 2]].map(|index| GridCell {
+            index,
+            occupied: true,
+        });
         assert_eq!(
             run_path(cells.iter()),
             "M0 0h3v1h-3zm5 0h1v1h-1zm-4 2h1v1h-1z"

@@ -7,9 +7,10 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    FrameCounts, GROUND_TRUTH_FILE, MAP_CORNERS_FILE, MAP_SVG_FILE, METRICS_FILE, Metrics,
-    PathPose, Pose2, Recorder, RecorderOptions, RelationsFile, SinkError, TRAJECTORY_FILE,
-    TRAJECTORY_ONLINE_FILE, corners_csv_header, format_stamp, read_tum, score_run,
+    CellState, FrameCounts, GROUND_TRUTH_FILE, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE,
+    MAP_SVG_FILE, METRICS_FILE, Metrics, PathPose, Pose2, Recorder, RecorderOptions, RelationsFile,
+    SavedMap, SinkError, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, corners_csv_header, format_stamp,
+    read_tum, score_run,
 };
 
 type TestResult = Result<(), Box<dyn std::error::Error>>;
@@ -106,6 +107,13 @@ fn full_run_writes_every_file() -> TestResult {
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), common::World::new().corners.len());
     assert!(rows.iter().all(|r| r.split(',').count() == 15));
+
+    // The run's directory is a map: the landmarks and the grid traced from its scans.
+    let map = SavedMap::load(&dir)?;
+    assert_eq!(map.landmarks.corners.len(), rows.len());
+    let grid = map.grid.ok_or("no grid")?;
+    assert!(grid.cells.contains(&CellState::Occupied));
+    assert!(dir.join(MAP_PNG_FILE).is_file());
 
     let json = fs::read_to_string(dir.join(METRICS_FILE))?;
     let expected: Vec<&str> = BASE_KEYS.iter().chain(&TRUTH_KEYS).copied().collect();
@@ -379,16 +387,31 @@ fn killed_run_keeps_its_trajectory_and_no_stale_results() -> TestResult {
 }
 
 #[test]
-fn invalid_cell_size_is_refused() {
+fn invalid_grid_settings_are_refused() {
     let dir = common::scratch_dir("invalid");
-    let options = RecorderOptions {
-        cell_m: 0.0,
-        ..RecorderOptions::default()
-    };
-    assert!(matches!(
-        Recorder::create(&dir, options),
-        Err(SinkError::InvalidOption(_))
-    ));
+    for (resolution_m, no_return_reach_m) in [
+        (0.0, 5.0),
+        (f64::NAN, 5.0),
+        (0.001, 5.0),
+        (20.0, 5.0),
+        (0.05, 0.0),
+        (0.05, f64::INFINITY),
+    ] {
+        let options = RecorderOptions {
+            grid: GridConfig {
+                resolution_m,
+                no_return_reach_m,
+            },
+            ..RecorderOptions::default()
+        };
+        assert!(
+            matches!(
+                Recorder::create(&dir, options),
+                Err(SinkError::InvalidOption(_))
+            ),
+            "{resolution_m} m, reach {no_return_reach_m} m"
+        );
+    }
 }
 
 /// A run of the size the pipeline produces (1200 scans of 1081 beams). Set

@@ -1,0 +1,351 @@
+//! The office loop's occupancy grid against the world it was made in (issue 15, first
+//! acceptance bullet): `map.yaml` and `map.pgm` are read here by the ROS map_server rules
+//! with a parser of this file's own, not with map-sink's code, and the grid is compared with
+//! the simulator's walls.
+
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+use lidar_sim::{RayCaster, SensorConfig, World};
+use tests::*;
+
+/// An occupied cell counts as a wall when its centre is this close to one, and a wall point
+/// counts as mapped when an occupied cell centre is this close to it.
+const TOLERANCE_M: f64 = 0.1;
+/// Wall points are sampled this far apart.
+const SAMPLE_STEP_M: f64 = 0.02;
+
+/// The keys map_server reads from a map YAML.
+struct MapDescription {
+    image: String,
+    mode: String,
+    resolution: f64,
+    origin: [f64; 3],
+    negate: bool,
+    occupied_thresh: f64,
+    free_thresh: f64,
+}
+
+/// A flat `key: value` YAML as map_server writes and reads it.
+fn parse_yaml(text: &str) -> MapDescription {
+    let mut keys = HashMap::new();
+    for line in text.lines() {
+        let line = line.split(" #").next().unwrap_or("").trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let (key, value) = line.split_once(':').expect("key: value");
+        keys.insert(key.trim().to_owned(), value.trim().to_owned());
+    }
+    let get = |key: &str| {
+        keys.get(key)
+            .unwrap_or_else(|| panic!("map.yaml has no {key}"))
+            .clone()
+    };
+    let number = |key: &str| -> f64 {
+        get(key)
+            .parse()
+            .unwrap_or_else(|_| panic!("{key} is not a number"))
+    };
+    let origin: Vec<f64> = get("origin")
+        .trim_start_matches('[')
+        .trim_end_matches(']')
+        .split(',')
+        .map(|v| v.trim().parse().expect("origin number"))
+        .collect();
+    MapDescription {
+        image: get("image"),
+        mode: keys
+            .get("mode")
+            .cloned()
+            .unwrap_or_else(|| "trinary".into()),
+        resolution: number("resolution"),
+        origin: [origin[0], origin[1], origin[2]],
+        negate: get("negate") == "1",
+        occupied_thresh: number("occupied_thresh"),
+        free_thresh: number("free_thresh"),
+    }
+}
+
+/// A binary PGM: width, height and the pixels, rows from the top.
+fn parse_pgm(bytes: &[u8]) -> (usize, usize, Vec<u8>) {
+    assert_eq!(&bytes[..2], b"P5", "not a binary PGM");
+    let mut at = 2;
+    let mut fields = Vec::new();
+    while fields.len() < 3 {
+        while bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        if bytes[at] == b'#' {
+            while bytes[at] != b'\n' {
+                at += 1;
+            }
+            continue;
+        }
+        let start = at;
+        while bytes[at].is_ascii_digit() {
+            at += 1;
+        }
+        let field: usize = std::str::from_utf8(&bytes[start..at])
+            .expect("ASCII")
+            .parse()
+            .expect("a number");
+        fields.push(field);
+    }
+    at += 1; // the single whitespace after the maximum value
+    let (width, height, maxval) = (fields[0], fields[1], fields[2]);
+    assert_eq!(maxval, 255);
+    let pixels = bytes[at..].to_vec();
+    assert_eq!(pixels.len(), width * height, "pixel count");
+    (width, height, pixels)
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Cell {
+    Occupied,
+    Free,
+    Unknown,
+}
+
+/// map_server's reading of one pixel (ROS 1 image_loader, nav2 map_io): occupancy from the
+/// shade, then the thresholds.
+fn read_pixel(map: &MapDescription, pixel: u8) -> Cell {
+    let shade = f64::from(pixel) / 255.0;
+    let occ = if map.negate { shade } else { 1.0 - shade };
+    if occ > map.occupied_thresh {
+        Cell::Occupied
+    } else if occ < map.free_thresh {
+        Cell::Free
+    } else {
+        Cell::Unknown
+    }
+}
+
+/// The rigid transform (rotation, translation) that best maps `from` onto `to`, least
+/// squares over the positions (Umeyama without scale).
+fn fit_se2(from: &[[f64; 2]], to: &[[f64; 2]]) -> (f64, [f64; 2]) {
+    let n = from.len() as f64;
+    let mean = |p: &[[f64; 2]]| {
+        let s = p.iter().fold([0.0, 0.0], |a, q| [a[0] + q[0], a[1] + q[1]]);
+        [s[0] / n, s[1] / n]
+    };
+    let (mf, mt) = (mean(from), mean(to));
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for (f, t) in from.iter().zip(to) {
+        let (a, b) = ([f[0] - mf[0], f[1] - mf[1]], [t[0] - mt[0], t[1] - mt[1]]);
+        dot += a[0] * b[0] + a[1] * b[1];
+        cross += a[0] * b[1] - a[1] * b[0];
+    }
+    let theta = cross.atan2(dot);
+    let (s, c) = theta.sin_cos();
+    (
+        theta,
+        [
+            mt[0] - (c * mf[0] - s * mf[1]),
+            mt[1] - (s * mf[0] + c * mf[1]),
+        ],
+    )
+}
+
+fn apply(t: (f64, [f64; 2]), p: [f64; 2]) -> [f64; 2] {
+    let (s, c) = t.0.sin_cos();
+    [c * p[0] - s * p[1] + t.1[0], s * p[0] + c * p[1] + t.1[1]]
+}
+
+fn distance_to_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let len2 = e[0] * e[0] + e[1] * e[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * e[0] + (p[1] - a[1]) * e[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * e[0]).hypot(p[1] - a[1] - t * e[1])
+}
+
+/// The map-frame-to-world transform: the final path fitted onto the truth by stamp.
+fn map_to_world(out: &Path) -> (f64, [f64; 2]) {
+    let truth: HashMap<u64, [f64; 2]> = read_tum(&out.join("ground_truth.tum"))
+        .iter()
+        .map(|p| (p[0].to_bits(), [p[1], p[2]]))
+        .collect();
+    let (est, tru): (Vec<[f64; 2]>, Vec<[f64; 2]>) = read_tum(&out.join("trajectory.tum"))
+        .iter()
+        .filter_map(|p| Some(([p[1], p[2]], *truth.get(&p[0].to_bits())?)))
+        .unzip();
+    assert!(est.len() > 1000, "{} poses with truth", est.len());
+    fit_se2(&est, &tru)
+}
+
+/// Points along the walls, `SAMPLE_STEP_M` apart, that the simulated scanner's beams hit
+/// from some true pose: the wall the sensor saw.
+fn seen_wall_points(world: &World, truth: &[[f64; 5]]) -> Vec<[f64; 2]> {
+    let caster = RayCaster::new(world);
+    let sensor = SensorConfig::default();
+    let key = |p: [f64; 2]| {
+        [
+            (p[0] / SAMPLE_STEP_M).floor() as i64,
+            (p[1] / SAMPLE_STEP_M).floor() as i64,
+        ]
+    };
+    let mut hit = HashSet::new();
+    for pose in truth.iter().step_by(2) {
+        let yaw = 2.0 * pose[3].atan2(pose[4]);
+        for i in 0..sensor.beams {
+            let bearing = yaw + sensor.angle_min + i as f64 * sensor.angle_increment;
+            if let Some(r) = caster.cast([pose[1], pose[2]], bearing, sensor.range_max) {
+                hit.insert(key([
+                    pose[1] + r * bearing.cos(),
+                    pose[2] + r * bearing.sin(),
+                ]));
+            }
+        }
+    }
+    let mut seen = Vec::new();
+    for [a, b] in world.segments() {
+        let length = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let n = (length / SAMPLE_STEP_M).ceil().max(1.0) as usize;
+        for k in 0..n {
+            let t = (k as f64 + 0.5) / n as f64;
+            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            let [x, y] = key(p);
+            let near = (-1..=1).any(|dx| (-1..=1).any(|dy| hit.contains(&[x + dx, y + dy])));
+            if near {
+                seen.push(p);
+            }
+        }
+    }
+    seen
+}
+
+#[test]
+fn the_office_grid_matches_the_world() {
+    let domain = domain("grid-office");
+    let out = scratch("grid-office");
+    let output = launch(
+        &domain,
+        &out,
+        &["--world", "office", "--rate", "0", "--seed", "1"],
+    );
+    assert_success(&output);
+
+    let yaml = std::fs::read_to_string(out.join("map.yaml")).expect("map.yaml");
+    let map = parse_yaml(&yaml);
+    assert_eq!(map.image, "map.pgm");
+    assert_eq!(map.mode, "trinary");
+    assert_eq!(map.resolution, 0.05);
+    assert_eq!(map.origin[2], 0.0);
+    assert!(!map.negate);
+    let (width, height, pixels) = parse_pgm(&std::fs::read(out.join(&map.image)).expect("map.pgm"));
+    assert!(
+        pixels.iter().all(|p| [0, 205, 254].contains(p)),
+        "a trinary image has three values"
+    );
+    assert_eq!(read_pixel(&map, 205), Cell::Unknown, "{yaml}");
+    assert_eq!(read_pixel(&map, 254), Cell::Free);
+    assert_eq!(read_pixel(&map, 0), Cell::Occupied);
+
+    // map_server puts image row 0 at the top: cell (col, row) from the bottom-left has its
+    // centre at origin + (col + 0.5, row + 0.5) * resolution.
+    let mut occupied = Vec::new();
+    let mut free = 0;
+    for (i, &pixel) in pixels.iter().enumerate() {
+        let (col, row) = (i % width, height - 1 - i / width);
+        match read_pixel(&map, pixel) {
+            Cell::Occupied => occupied.push([
+                map.origin[0] + (col as f64 + 0.5) * map.resolution,
+                map.origin[1] + (row as f64 + 0.5) * map.resolution,
+            ]),
+            Cell::Free => free += 1,
+            Cell::Unknown => {}
+        }
+    }
+    assert!(free > 10 * occupied.len(), "{free} free cells");
+
+    let world = World::builtin("office").expect("office");
+    let walls: Vec<[[f64; 2]; 2]> = world.segments().collect();
+    let to_world = map_to_world(&out);
+    let on_a_wall = occupied
+        .iter()
+        .filter(|c| {
+            let p = apply(to_world, **c);
+            walls
+                .iter()
+                .any(|w| distance_to_segment(p, *w) <= TOLERANCE_M)
+        })
+        .count();
+    let precision = on_a_wall as f64 / occupied.len() as f64;
+
+    let truth = read_tum(&out.join("ground_truth.tum"));
+    let seen = seen_wall_points(&world, &truth);
+    let total: f64 = walls
+        .iter()
+        .map(|[a, b]| (b[0] - a[0]).hypot(b[1] - a[1]))
+        .sum();
+    let to_map = {
+        let (theta, t) = to_world;
+        let (s, c) = theta.sin_cos();
+        (-theta, [-(c * t[0] + s * t[1]), s * t[0] - c * t[1]])
+    };
+    let cell_key = |p: [f64; 2]| {
+        [
+            ((p[0] - map.origin[0]) / map.resolution).floor() as i64,
+            ((p[1] - map.origin[1]) / map.resolution).floor() as i64,
+        ]
+    };
+    let occupied_cells: HashSet<[i64; 2]> = occupied.iter().map(|c| cell_key(*c)).collect();
+    let reach = (TOLERANCE_M / map.resolution).ceil() as i64 + 1;
+    let mapped = seen
+        .iter()
+        .filter(|p| {
+            let q = apply(to_map, **p);
+            let [x, y] = cell_key(q);
+            (-reach..=reach).any(|dx| {
+                (-reach..=reach).any(|dy| {
+                    let c = [x + dx, y + dy];
+                    let centre = [
+                        map.origin[0] + (c[0] as f64 + 0.5) * map.resolution,
+                        map.origin[1] + (c[1] as f64 + 0.5) * map.resolution,
+                    ];
+                    occupied_cells.contains(&c)
+                        && (centre[0] - q[0]).hypot(centre[1] - q[1]) <= TOLERANCE_M
+                })
+            })
+        })
+        .count();
+    let recall = mapped as f64 / seen.len() as f64;
+    eprintln!(
+        "office grid {width} x {height}: {} occupied cells, {:.2} % within {TOLERANCE_M} m of a wall; \
+         {:.1} of {total:.1} m of wall seen, {:.2} % of it with an occupied cell within {TOLERANCE_M} m",
+        occupied.len(),
+        100.0 * precision,
+        seen.len() as f64 * SAMPLE_STEP_M,
+        100.0 * recall
+    );
+    assert!(
+        precision >= 0.95,
+        "{:.2} % of occupied cells on a wall",
+        100.0 * precision
+    );
+    assert!(
+        recall >= 0.90,
+        "{:.2} % of the seen wall mapped",
+        100.0 * recall
+    );
+
+    // The rest of the saved map: the PNG for people and the landmarks beside the grid.
+    let png = std::fs::read(out.join("map.png")).expect("map.png");
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+    let landmarks: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("landmarks.json")).expect("landmarks.json"),
+    )
+    .expect("landmarks.json is JSON");
+    assert_eq!(landmarks["format"], "lidar-slam-landmarks");
+    assert_eq!(landmarks["version"], 1);
+    assert_eq!(landmarks["grid"]["width"], width);
+    assert_eq!(
+        landmarks["corners"].as_array().map(Vec::len),
+        Some(number(&metrics(&out), "map_corners") as usize)
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
