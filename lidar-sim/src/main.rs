@@ -156,7 +156,7 @@ fn run() -> Result<()> {
         truth.publish(|message| {
             message.header = header;
             message.header.set_frame_id("map");
-            message.pose = Pose2::new(frame.pose.x, frame.pose.y, frame.pose.yaw);
+            message.pose = frame.pose.into();
         })?;
         if let Some(odometry) = &odometry {
             if let Some(last) = last_odometry {
@@ -172,7 +172,7 @@ fn run() -> Result<()> {
             odometry.publish(|message| {
                 message.header = header;
                 message.header.set_frame_id("odom");
-                message.pose = Pose2::new(frame.odometry.x, frame.odometry.y, frame.odometry.yaw);
+                message.pose = frame.odometry.into();
                 message.covariance[0] = position_variance;
                 message.covariance[4] = position_variance;
                 message.covariance[8] = odometry_variance[2];

@@ -1,7 +1,7 @@
 //! Least-squares rigid SE(2) alignment of two paired point sets.
 
 use crate::corner::MapCorner;
-use crate::pose::{Pose2, wrap_angle};
+use slam_geom::{Pose2, wrap_angle};
 
 /// A rigid planar transform `p -> R(rotation) * p + translation`, taking estimate
 /// coordinates (the SLAM frame) into truth coordinates (the world frame).
@@ -27,7 +27,7 @@ impl Se2Alignment {
     }
 
     pub fn apply_pose(&self, pose: Pose2) -> Pose2 {
-        let [x, y] = self.apply(pose.position());
+        let [x, y] = self.apply(pose.position().into());
         Pose2::new(x, y, wrap_angle(pose.yaw + self.rotation))
     }
 

@@ -63,7 +63,6 @@ mod occupancy_grid;
 mod path_assembly;
 mod percentile;
 mod pgm;
-mod pose;
 mod recorder;
 mod rpe;
 mod saved_map;
@@ -98,7 +97,6 @@ pub use occupancy_grid::{
 pub use path_assembly::{ChunkError, PathAssembly, PathPose};
 pub use percentile::percentile;
 pub use pgm::{Pgm, PgmError, encode_pgm};
-pub use pose::{Pose2, wrap_angle};
 pub use recorder::{
     DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE,
     METRICS_FILE, Recorder, RecorderOptions, TRAJECTORY_FILE,
@@ -106,5 +104,6 @@ pub use recorder::{
 pub use rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 pub use saved_map::{GridMap, SavedMap};
 pub use scan_keeper::ScanKeeper;
+pub use slam_geom::Pose2;
 pub use svg::{SvgInput, render_svg};
-pub use tum::{TumPose, TumWriter, format_stamp, format_tum_line, read_tum, yaw_quaternion};
+pub use tum::{TumPose, TumWriter, format_tum_line, read_tum, yaw_quaternion};

@@ -155,7 +155,7 @@ fn run() -> Result<()> {
             while let Some(sample) = truth.receive()? {
                 if !sample.header.is_end_of_stream() {
                     let p = sample.pose;
-                    recorder.record_truth(sample.header.seq, sample.header.stamp_ns, pose(p))?;
+                    recorder.record_truth(sample.header.seq, sample.header.stamp_ns, p.into())?;
                 }
             }
         }
@@ -181,8 +181,8 @@ fn run() -> Result<()> {
                 sample.header.stamp_ns,
                 // The weighted mean is the filter's estimate of each pose; the best
                 // particle (whose map is published) flickers as the weights change.
-                pose(sample.mean),
-                Some(pose(sample.dead_reckoning)),
+                sample.mean.into(),
+                Some(sample.dead_reckoning.into()),
                 latency,
             )?;
             progress.poses += 1;
@@ -250,7 +250,7 @@ fn drain_path(
             .iter()
             .map(|p| PathPose {
                 stamp_ns: p.stamp_ns,
-                pose: pose(p.pose),
+                pose: p.pose.into(),
             })
             .collect();
         if let Err(e) = assembly.add(chunk.first, chunk.total, &poses) {
@@ -287,13 +287,6 @@ fn drain_scans(
     Ok(())
 }
 
-fn pose(p: Pose2) -> map_sink::Pose2 {
-    map_sink::Pose2 {
-        x: p.x,
-        y: p.y,
-        yaw: p.yaw,
-    }
-}
 
 fn map_corners(snapshot: &MapSnapshot) -> Vec<map_sink::MapCorner> {
     snapshot

@@ -8,7 +8,7 @@
 //! hit.
 
 use crate::compact_scan::{Beam, CompactScan};
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// Log-odds added by a return: `ln(0.7 / 0.3)`, a hit makes a cell 70 % likely occupied.
 const HIT_LOG_ODDS: f32 = 0.847;
@@ -132,10 +132,10 @@ impl OccupancyGrid {
             }
         };
         for (pose, scan) in scans {
-            if scan.is_empty() || !finite(pose.position()) || !pose.yaw.is_finite() {
+            if scan.is_empty() || !finite(pose.position().into()) || !pose.yaw.is_finite() {
                 continue;
             }
-            include(cell(pose.position()));
+            include(cell(pose.position().into()));
             for (end, _) in ends(pose, scan) {
                 include(cell(end));
             }
@@ -164,7 +164,7 @@ impl OccupancyGrid {
         // The scan that last changed each cell (its number + 1), so a scan changes it once.
         let mut mark = vec![0_u32; width * height];
         for (number, (pose, scan)) in scans.iter().enumerate() {
-            if scan.is_empty() || !finite(pose.position()) || !pose.yaw.is_finite() {
+            if scan.is_empty() || !finite(pose.position().into()) || !pose.yaw.is_finite() {
                 continue;
             }
             let id = number as u32 + 1;
@@ -177,7 +177,7 @@ impl OccupancyGrid {
                     }
                 }
             }
-            let from = grid.local(pose.position());
+            let from = grid.local(pose.position().into());
             for (end, beam) in ends(pose, scan) {
                 let include_end = beam == Beam::NoReturn;
                 trace(from, grid.local(end), include_end, |col, row| {

@@ -1,6 +1,6 @@
 //! Puts the filter's final path back together from the chunks it travels in.
 
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// One pose of the final path: a scan's stamp and the pose at it.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -19,11 +19,11 @@ use crate::metrics::{FrameCounts, Metrics};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
 use crate::path_assembly::PathPose;
 use crate::percentile::percentile;
-use crate::pose::Pose2;
 use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum::{TumWriter, format_tum_line};
+use slam_geom::Pose2;
 
 /// The estimated trajectory: the filter's final path (the best particle's, consistent with
 /// its map), written atomically by [`Recorder::finish`]; the online estimates when no final
@@ -321,7 +321,10 @@ impl Recorder {
             .map(|p| format_tum_line(p.stamp_ns, p.pose))
             .collect();
         write_atomic(&self.dir.join(TRAJECTORY_FILE), text.as_bytes())?;
-        let trajectory: Vec<[f64; 2]> = final_path.iter().map(|p| p.pose.position()).collect();
+        let trajectory: Vec<[f64; 2]> = final_path
+            .iter()
+            .map(|p| p.pose.position().into())
+            .collect();
         let stats = self.score_path(&final_path);
         let online_stats = self.score(|e| Some(e.pose));
         let dead_reckoning_stats = self.score(|e| e.dead_reckoning);
@@ -394,10 +397,8 @@ impl Recorder {
         let (est, truth): (Vec<[f64; 2]>, Vec<[f64; 2]>) = path
             .iter()
             .filter_map(|p| {
-                Some((
-                    p.pose.position(),
-                    self.truth_by_stamp.get(&p.stamp_ns)?.position(),
-                ))
+                let truth = self.truth_by_stamp.get(&p.stamp_ns)?;
+                Some((xy(&p.pose), xy(truth)))
             })
             .unzip();
         ate(&est, &truth)
@@ -408,7 +409,10 @@ impl Recorder {
         let (est, truth): (Vec<[f64; 2]>, Vec<[f64; 2]>) = self
             .estimates
             .iter()
-            .filter_map(|(seq, e)| Some((pick(e)?.position(), self.truth.get(seq)?.position())))
+            .filter_map(|(seq, e)| {
+                let (estimate, truth) = (pick(e)?, self.truth.get(seq)?);
+                Some((xy(&estimate), xy(truth)))
+            })
             .unzip();
         ate(&est, &truth)
     }
@@ -478,15 +482,15 @@ impl Recorder {
         let dead_reckoning: Vec<[f64; 2]> = self
             .estimates
             .values()
-            .filter_map(|e| e.dead_reckoning.map(|p| placement.apply(p.position())))
+            .filter_map(|e| {
+                e.dead_reckoning
+                    .map(|p| placement.apply(p.position().into()))
+            })
             .collect();
         let map_corners: Vec<MapCorner> =
             self.map.iter().map(|c| placement.apply_corner(c)).collect();
         let (ground_truth, true_corners): (Vec<[f64; 2]>, &[[f64; 2]]) = if stats.is_some() {
-            (
-                self.truth.values().map(Pose2::position).collect(),
-                &self.true_corners,
-            )
+            (self.truth.values().map(xy).collect(), &self.true_corners)
         } else {
             (Vec::new(), &[])
         };
@@ -590,6 +594,11 @@ fn rpe_line(rpe: &RelativePoseErrors) -> String {
         return "relative pose error: no trajectory to score".to_owned();
     }
     format!("relative pose error: {}", parts.join("  ·  "))
+}
+
+/// A pose's position as the scoring and drawing code takes it.
+fn xy(pose: &Pose2) -> [f64; 2] {
+    pose.position().into()
 }
 
 #[cfg(test)]

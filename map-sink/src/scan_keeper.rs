@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use crate::compact_scan::CompactScan;
-use crate::pose::Pose2;
+use slam_geom::Pose2;
 
 /// Scans kept while they wait for their pose. A scan whose pose never comes (the SLAM
 /// process dropped it) would otherwise be kept for ever; the oldest are dropped first.

@@ -5,18 +5,10 @@ use std::fs::{self, File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::error::SinkError;
-use crate::pose::Pose2;
+use slam_geom::{format_stamp, parse_stamp_ns};
 
-/// Formats a nanosecond stamp as seconds with all nine decimals (`1.000000001`): integer
-/// arithmetic, because an `f64` has too few digits for today's epoch in nanoseconds.
-pub fn format_stamp(stamp_ns: u64) -> String {
-    format!(
-        "{}.{:09}",
-        stamp_ns / 1_000_000_000,
-        stamp_ns % 1_000_000_000
-    )
-}
+use crate::error::SinkError;
+use slam_geom::Pose2;
 
 /// The unit quaternion `[qx, qy, qz, qw]` of a rotation by `yaw` about z.
 pub fn yaw_quaternion(yaw: f64) -> [f64; 4] {
@@ -138,7 +130,7 @@ fn parse_line(line: &str) -> Result<TumPose, String> {
     if rest.len() != 7 {
         return Err(format!("expected 8 fields, found {}", fields.len()));
     }
-    let stamp_ns = parse_stamp(stamp)?;
+    let stamp_ns = parse_stamp_ns(stamp).map_err(|e| e.to_string())?;
     let mut numbers = [0.0; 7];
     for (number, field) in numbers.iter_mut().zip(rest) {
         *number = field
@@ -153,43 +145,9 @@ fn parse_line(line: &str) -> Result<TumPose, String> {
     })
 }
 
-/// Parses `secs[.fraction]` into nanoseconds exactly; more than nine decimals would need
-/// rounding and is refused rather than silently changed.
-fn parse_stamp(stamp: &str) -> Result<u64, String> {
-    let bad = || format!("{stamp:?} is not a stamp in seconds with at most 9 decimals");
-    let (secs, fraction) = stamp.split_once('.').unwrap_or((stamp, ""));
-    let all_digits = |s: &str| s.bytes().all(|b| b.is_ascii_digit());
-    if secs.is_empty() || !all_digits(secs) || !all_digits(fraction) || fraction.len() > 9 {
-        return Err(bad());
-    }
-    let secs: u64 = secs.parse().map_err(|_| bad())?;
-    let nanos: u64 = if fraction.is_empty() {
-        0
-    } else {
-        format!("{fraction:0<9}").parse().map_err(|_| bad())?
-    };
-    secs.checked_mul(1_000_000_000)
-        .and_then(|ns| ns.checked_add(nanos))
-        .ok_or_else(bad)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn stamps_parse_exactly() {
-        assert_eq!(
-            parse_stamp("1234567890.123456789"),
-            Ok(1_234_567_890_123_456_789)
-        );
-        assert_eq!(parse_stamp("2.5"), Ok(2_500_000_000));
-        assert_eq!(parse_stamp("7"), Ok(7_000_000_000));
-        assert!(parse_stamp("1.0000000001").is_err());
-        assert!(parse_stamp("-1.0").is_err());
-        assert!(parse_stamp("1e9").is_err());
-        assert!(parse_stamp("99999999999999999999").is_err());
-    }
 
     #[test]
     fn malformed_line_is_reported_with_its_number() {

@@ -9,9 +9,10 @@ use common::Synthetic;
 use map_sink::{
     CellState, FrameCounts, GROUND_TRUTH_FILE, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE,
     MAP_SVG_FILE, METRICS_FILE, Metrics, PathPose, Pose2, Recorder, RecorderOptions, RelationsFile,
-    SavedMap, SinkError, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, corners_csv_header, format_stamp,
-    read_tum, score_run,
+    SavedMap, SinkError, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, corners_csv_header, read_tum,
+    score_run,
 };
+use slam_geom::format_stamp;
 
 type TestResult = Result<(), Box<dyn std::error::Error>>;
 
@@ -157,7 +158,7 @@ fn relations_from_truth(truth: &Path, step: usize) -> Result<String, Box<dyn std
             Pose2::new(a.position[0], a.position[1], a.yaw()),
             Pose2::new(b.position[0], b.position[1], b.yaw()),
         );
-        let delta = common::compose(common::inverse(pa), pb);
+        let delta = pa.between(&pb);
         text.push_str(&format!(
             "{} {} {} {} 0 0 0 {}\n",
             format_stamp(a.stamp_ns),

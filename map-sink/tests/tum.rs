@@ -6,9 +6,8 @@ use std::f64::consts::PI;
 use std::fs;
 use std::io::Write;
 
-use map_sink::{
-    Pose2, SinkError, TumWriter, format_stamp, format_tum_line, read_tum, yaw_quaternion,
-};
+use map_sink::{Pose2, SinkError, TumWriter, format_tum_line, read_tum, yaw_quaternion};
+use slam_geom::format_stamp;
 
 #[test]
 fn stamp_keeps_every_nanosecond() {

@@ -58,6 +58,11 @@ impl Pose2 {
         self.inverse().compose(other)
     }
 
+    /// The position, metres.
+    pub fn position(&self) -> Point2 {
+        Point2::new(self.x, self.y)
+    }
+
     /// Maps a point of this pose's frame into the outer frame.
     pub fn transform(&self, point: Point2) -> Point2 {
         self.rotation() * point + Vector2::new(self.x, self.y)

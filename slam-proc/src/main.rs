@@ -116,14 +116,14 @@ fn run() -> Result<()> {
             };
             // The front end's own pose is the motion estimate alone, whatever moved the
             // particles: both start at the first scan's pose.
-            let dead_reckoning = front_end.map_or(to_pose(&estimate.dead_reckoning), |m| m.pose);
+            let dead_reckoning = front_end.map_or(estimate.dead_reckoning.into(), |m| m.pose);
             let header = sample.header;
             poses.publish(|pose| {
                 pose.header = header;
                 pose.header.set_frame_id("map");
                 pose.scan_sent_ns = sample.scan_sent_ns;
-                pose.best = to_pose(&estimate.best);
-                pose.mean = to_pose(&estimate.mean);
+                pose.best = estimate.best.into();
+                pose.mean = estimate.mean.into();
                 pose.dead_reckoning = dead_reckoning;
                 for r in 0..3 {
                     for c in 0..3 {
@@ -263,6 +263,3 @@ fn to_odometry(odometry: OdometryAtScan) -> OdometryInput {
     }
 }
 
-fn to_pose(pose: &slam_proc::Pose2) -> Pose2 {
-    Pose2::new(pose.x, pose.y, pose.yaw)
-}

@@ -5,7 +5,7 @@
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
-use map_sink::{MapCorner, Pose2, wrap_angle};
+use map_sink::{MapCorner, Pose2};
 
 /// A fresh, empty directory under the system temp dir, unique to this process and name.
 pub fn scratch_dir(name: &str) -> PathBuf {
@@ -101,7 +101,7 @@ impl World {
         self.corners
             .iter()
             .map(|(tip, d1, d2)| {
-                let p = t.transform_point(*tip);
+                let p: [f64; 2] = t.transform((*tip).into()).into();
                 let heading = (-(d1[1] + d2[1])).atan2(-(d1[0] + d2[0]));
                 let mut covariance = [0.0; 16];
                 for (i, v) in [0.01, 0.01, 0.002, 0.003].iter().enumerate() {
@@ -110,7 +110,7 @@ impl World {
                 MapCorner {
                     x: p[0] + sigma * rng.normal(),
                     y: p[1] + sigma * rng.normal(),
-                    heading: wrap_angle(heading + t.yaw),
+                    heading: slam_geom::wrap_angle(heading + t.yaw),
                     angle: (d1[0] * d2[0] + d1[1] * d2[1]).clamp(-1.0, 1.0).acos(),
                     covariance,
                     observations: 5 + (rng.uniform() * 50.0) as u32,
@@ -131,18 +131,7 @@ pub fn true_pose(i: usize, n: usize) -> Pose2 {
     let t = 2.0 * PI * i as f64 / n as f64;
     let (x, y) = (7.25 + 5.0 * t.cos(), 5.0 + 3.2 * t.sin());
     let yaw = (3.2 * t.cos()).atan2(-5.0 * t.sin());
-    Pose2::new(x, y, wrap_angle(yaw))
-}
-
-/// `a * b` for planar poses.
-pub fn compose(a: Pose2, b: Pose2) -> Pose2 {
-    let [x, y] = a.transform_point(b.position());
-    Pose2::new(x, y, wrap_angle(a.yaw + b.yaw))
-}
-
-pub fn inverse(a: Pose2) -> Pose2 {
-    let (s, c) = a.yaw.sin_cos();
-    Pose2::new(-(c * a.x + s * a.y), s * a.x - c * a.y, wrap_angle(-a.yaw))
+    Pose2::new(x, y, yaw)
 }
 
 /// What a synthetic run includes.
@@ -162,7 +151,7 @@ pub fn drive(recorder: &mut map_sink::Recorder, run: Synthetic) -> Result<(), ma
     let world = World::new();
     let mut rng = Rng::new(42);
     let n = run.scans;
-    let slam_from_world = inverse(true_pose(0, n));
+    let slam_from_world = true_pose(0, n).inverse();
     let angle_min = -0.75 * PI;
     let angle_increment = 1.5 * PI / (run.beams - 1) as f64;
     if run.truth {
@@ -175,7 +164,7 @@ pub fn drive(recorder: &mut map_sink::Recorder, run: Synthetic) -> Result<(), ma
         let truth = true_pose(i, n);
         for (b, range) in ranges.iter_mut().enumerate() {
             let r = world.cast(
-                truth.position(),
+                truth.position().into(),
                 truth.yaw + angle_min + b as f64 * angle_increment,
             );
             let r = r + 0.01 * rng.normal();
@@ -194,10 +183,10 @@ pub fn drive(recorder: &mut map_sink::Recorder, run: Synthetic) -> Result<(), ma
             0.03 * (5.0 * phase).cos() - 0.03,
             0.004 * phase.sin(),
         );
-        let est = compose(slam_from_world, compose(truth, wobble));
+        let est = slam_from_world.compose(&truth.compose(&wobble));
         // Dead reckoning: a heading bias integrates into a swing about the start.
         let drift = Pose2::new(0.0, 0.0, 0.12 * i as f64 / n as f64);
-        let dr = compose(drift, est);
+        let dr = drift.compose(&est);
         let latency_ns = 2_000_000 + (rng.uniform() * 3_000_000.0) as u64;
         let scan_first = i % 2 == 0;
         if scan_first {
