@@ -106,4 +106,4 @@ pub use saved_map::{GridMap, SavedMap};
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::Pose2;
 pub use svg::{SvgInput, render_svg};
-pub use tum::{TumPose, TumWriter, format_tum_line, read_tum, yaw_quaternion};
+pub use tum::{TumWriter, read_tum};

@@ -287,7 +287,6 @@ fn drain_scans(
     Ok(())
 }
 
-
 fn map_corners(snapshot: &MapSnapshot) -> Vec<map_sink::MapCorner> {
     snapshot
         .corners()

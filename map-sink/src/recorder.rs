@@ -22,8 +22,9 @@ use crate::percentile::percentile;
 use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
-use crate::tum::{TumWriter, format_tum_line};
+use crate::tum::TumWriter;
 use slam_geom::Pose2;
+use slam_geom::format_tum_line;
 
 /// The estimated trajectory: the filter's final path (the best particle's, consistent with
 /// its map), written atomically by [`Recorder::finish`]; the online estimates when no final
@@ -318,7 +319,7 @@ impl Recorder {
         };
         let text: String = final_path
             .iter()
-            .map(|p| format_tum_line(p.stamp_ns, p.pose))
+            .map(|p| format_tum_line(p.stamp_ns, &p.pose))
             .collect();
         write_atomic(&self.dir.join(TRAJECTORY_FILE), text.as_bytes())?;
         let trajectory: Vec<[f64; 2]> = final_path

@@ -3,8 +3,9 @@
 use std::path::Path;
 
 use crate::error::EvalError;
+use slam_geom::parse_tum;
+
 use crate::pose::{Pose, from_tum};
-use crate::text::{expect_fields, number, parse_lines, stamp};
 
 /// Poses sorted by stamp, each stamp once.
 #[derive(Debug, Clone, Default)]
@@ -25,26 +26,45 @@ impl Trajectory {
         Ok(Self { stamps_ns, poses })
     }
 
-    /// Reads a TUM file; blank lines and `#` comments are skipped.
+    /// Reads a TUM file with [`slam_geom::parse_tum`]'s rules (blank lines and `#` comments
+    /// skipped, a last line cut short by a crash dropped).
     pub fn read_tum(path: &Path) -> Result<Self, EvalError> {
-        let lines = parse_lines(path, parse_tum_line)?;
+        let malformed = |line, reason| EvalError::Malformed {
+            path: path.to_path_buf(),
+            line,
+            reason,
+        };
+        let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let lines = parse_tum(&text).map_err(|e| malformed(e.line, e.problem.to_string()))?;
         if lines.is_empty() {
             return Err(EvalError::Empty {
                 path: path.to_path_buf(),
                 what: "poses",
             });
         }
-        Self::new(lines.iter().map(|(_, stamped)| *stamped).collect()).map_err(|repeated| {
+        let mut stamped = Vec::with_capacity(lines.len());
+        for (line, tum) in &lines {
+            let pose = from_tum(tum.position, tum.orientation).ok_or_else(|| {
+                malformed(
+                    *line,
+                    "the quaternion has no direction (zero length)".to_owned(),
+                )
+            })?;
+            stamped.push((tum.stamp_ns, pose));
+        }
+        Self::new(stamped).map_err(|repeated| {
             let mut at = lines
                 .iter()
-                .filter(|(_, (stamp_ns, _))| *stamp_ns == repeated)
+                .filter(|(_, tum)| tum.stamp_ns == repeated)
                 .map(|(line, _)| *line);
             let first = at.next().unwrap_or_default();
-            EvalError::Malformed {
-                path: path.to_path_buf(),
-                line: at.next().unwrap_or_default(),
-                reason: format!("stamp repeats line {first}"),
-            }
+            malformed(
+                at.next().unwrap_or_default(),
+                format!("stamp repeats line {first}"),
+            )
         })
     }
 
@@ -69,23 +89,6 @@ impl Trajectory {
             .min()
             .map(|(_, i)| &self.poses[i])
     }
-}
-
-fn parse_tum_line(fields: &[&str]) -> Result<(u64, Pose), String> {
-    expect_fields(fields, "stamp x y z qx qy qz qw")?;
-    let stamp_ns = stamp(fields[0], "stamp")?;
-    let mut values = [0.0; 7];
-    for (value, (field, name)) in values.iter_mut().zip(
-        fields[1..]
-            .iter()
-            .zip(["x", "y", "z", "qx", "qy", "qz", "qw"]),
-    ) {
-        *value = number(field, name)?;
-    }
-    let [x, y, z, qx, qy, qz, qw] = values;
-    let pose = from_tum([x, y, z], [qx, qy, qz, qw])
-        .ok_or_else(|| "the quaternion has no direction (zero length)".to_owned())?;
-    Ok((stamp_ns, pose))
 }
 
 #[cfg(test)]

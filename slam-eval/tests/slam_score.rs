@@ -105,7 +105,7 @@ fn malformed_lines_are_named() {
     let output = slam_score(&trajectory, &relations, &[]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
-        stderr.contains("bad.tum, line 2: qz: \"x\" is not a number"),
+        stderr.contains("bad.tum, line 2: qz: \"x\" is not a finite number"),
         "{stderr}"
     );
 

@@ -7,15 +7,20 @@
 //! * [`Pose2`] is the planar transform `world_from_robot` (docs/CONVENTIONS.md): composition,
 //!   inverse, the increment between two poses, interpolation; its yaw is always wrapped;
 //! * [`Point2`] is a point or vector in the plane;
-//! * [`parse_stamp_ns`] and [`format_stamp`] convert decimal seconds and nanoseconds exactly.
+//! * [`parse_stamp_ns`] and [`format_stamp`] convert decimal seconds and nanoseconds exactly;
+//! * [`parse_tum`] and [`format_tum_line`] read and write TUM trajectories.
 
 mod angle;
 mod pose;
 mod stamp;
+mod tum;
 
 pub use angle::wrap_angle;
 pub use pose::Pose2;
 pub use stamp::{StampError, StampProblem, format_stamp, parse_stamp_ns};
+pub use tum::{
+    TumError, TumPose, TumProblem, format_tum_line, parse_tum, parse_tum_line, yaw_quaternion,
+};
 
 /// A point or vector in the plane, metres.
 pub type Point2 = nalgebra::Vector2<f64>;

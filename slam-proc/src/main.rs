@@ -262,4 +262,3 @@ fn to_odometry(odometry: OdometryAtScan) -> OdometryInput {
         covariance: nalgebra::Matrix3::from_row_slice(&odometry.covariance),
     }
 }
-

@@ -87,25 +87,17 @@ pub fn number(metrics: &serde_json::Value, key: &str) -> f64 {
 pub fn read_tum(path: &Path) -> Vec<[f64; 5]> {
     let text = std::fs::read_to_string(path)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    text.lines()
-        .filter(|line| !line.starts_with('#') && !line.trim().is_empty())
-        .enumerate()
-        .map(|(i, line)| {
-            let fields: Vec<f64> = line
-                .split_whitespace()
-                .map(|f| {
-                    f.parse()
-                        .unwrap_or_else(|_| panic!("line {}: {line}", i + 1))
-                })
-                .collect();
-            assert_eq!(
-                fields.len(),
-                8,
-                "line {} of {}: {line}",
-                i + 1,
-                path.display()
-            );
-            [fields[0], fields[1], fields[2], fields[6], fields[7]]
+    slam_geom::parse_tum(&text)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .into_iter()
+        .map(|(_, pose)| {
+            let [x, y, _] = pose.position;
+            let [_, _, qz, qw] = pose.orientation;
+            // The stamp as the file spells it, read as seconds.
+            let stamp = slam_geom::format_stamp(pose.stamp_ns)
+                .parse()
+                .unwrap_or(f64::NAN);
+            [stamp, x, y, qz, qw]
         })
         .collect()
 }
