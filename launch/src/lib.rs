@@ -21,7 +21,9 @@
 //! * a stage's closing summary on stderr (`<stage>: summary ...` and the indented lines
 //!   after it, e.g. what lidar-replay could not publish) is shown when the run ends;
 //! * shared memory of crashed earlier runs is cleaned up at start, and nothing of this run is
-//!   left in /dev/shm at the end.
+//!   left in /dev/shm at the end;
+//! * a particle count slam-proc's memory estimate does not fit in the memory available is
+//!   refused before anything starts (`slam_proc::memory`).
 
 pub mod bench;
 pub mod closing;

@@ -109,6 +109,8 @@ fn run() -> Result<ExitCode> {
     };
     apply_overrides(&mut config, &args);
     config.validate()?;
+    // slam-proc refuses it too, but as a stage that dies once map-sink is up.
+    slam_proc::memory::check(config.slam.particles).context("refusing to start")?;
     // An address that names nothing would be retried for ever by lidar-hokuyo.
     if config.source == SourceKind::Hokuyo {
         lidar_hokuyo::resolve(&config.hokuyo.addr)

@@ -64,6 +64,9 @@ fn run() -> Result<()> {
         anyhow::ensure!(particles > 0, "--particles must be at least 1");
         config.particles = particles;
     }
+    // Before the particles exist: a count the machine cannot hold would otherwise grow
+    // until the kernel kills this process (or another one).
+    slam_proc::memory::check(config.particles).context("refusing to start")?;
     let mut slam = FastSlam::new(config, args.seed)?;
 
     let domain = Domain::new(&args.domain)?;
