@@ -42,6 +42,7 @@ mod message;
 pub mod messages;
 pub mod progress;
 pub mod rate;
+pub mod shm;
 pub mod shutdown;
 pub mod topic;
 mod transport;

@@ -166,6 +166,9 @@ fn run() -> Result<ExitCode> {
             cleaned.join(", ")
         );
     }
+    // After the sweep, which may have freed some: a stage that finds /dev/shm full dies of
+    // SIGBUS wherever it is, so the run must fit before it starts.
+    launch::shm_room::check(&config).context("refusing to start")?;
     let domain_name = args.domain.clone().unwrap_or_else(|| {
         format!(
             "run-{}-{}",

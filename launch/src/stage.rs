@@ -230,11 +230,13 @@ fn die_with_launcher(command: &mut Command) {
 #[cfg(not(target_os = "linux"))]
 fn die_with_launcher(_command: &mut Command) {}
 
-/// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`.
+/// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`; a SIGBUS with
+/// what /dev/shm has left (see [`crate::shm_room`]).
 pub fn describe(status: ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (status.code(), status.signal()) {
         (Some(code), _) => format!("exit status {code}"),
+        (None, Some(libc::SIGBUS)) => crate::shm_room::sigbus_explanation(),
         (None, Some(signal)) => format!("killed by signal {signal}"),
         _ => status.to_string(),
     }
