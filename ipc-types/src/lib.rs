@@ -38,6 +38,7 @@ mod capacity;
 mod domain;
 mod header;
 mod layout;
+pub mod losses;
 mod message;
 pub mod messages;
 pub mod progress;

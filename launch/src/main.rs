@@ -208,7 +208,18 @@ fn run() -> Result<ExitCode> {
         limit,
         lockstep: config.lockstep(),
     };
-    let outcome = supervisor::run(&plan, &domain, &log_dir, &display, &stall)?;
+    let supervisor::Ended {
+        outcome,
+        mut losses,
+    } = supervisor::run(&plan, &domain, &log_dir, &display, &stall)?;
+    // map-sink's count is in its metrics; it prints none of its own.
+    if let Some(metrics) = read_metrics(&out) {
+        losses.add("map-sink", "frames_dropped", metrics.frames_dropped);
+    }
+    // Even in quiet mode, like the stages' closing summaries: lost data is part of the result.
+    for line in losses.lines() {
+        eprintln!("{line}");
+    }
 
     domain.cleanup_dead_nodes();
     if let Err(e) = domain.remove_leftovers() {
@@ -495,6 +506,12 @@ fn sim_stage(
         program: program("lidar-sim")?,
         args: sim,
     })
+}
+
+/// metrics.json, if the run wrote a readable one.
+fn read_metrics(out: &Path) -> Option<Metrics> {
+    let text = std::fs::read_to_string(out.join(METRICS_FILE)).ok()?;
+    serde_json::from_str(&text).ok()
 }
 
 /// Prints the key numbers of metrics.json.
