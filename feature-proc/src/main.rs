@@ -175,11 +175,13 @@ fn run() -> Result<()> {
             features.publish_end_of_stream(seq, stamp_ns)?;
             eprintln!("feature-proc: {}", counts.summary());
             eprintln!("{}", front_end_summary(&front_end.stats()));
+            ipc_types::losses::report(&counts.losses());
             return Ok(());
         }
     }
     eprintln!("feature-proc: stopped; {}", counts.summary());
     eprintln!("{}", front_end_summary(&front_end.stats()));
+    ipc_types::losses::report(&counts.losses());
     Ok(())
 }
 
@@ -196,6 +198,17 @@ struct Counts {
 }
 
 impl Counts {
+    /// What was lost, for the launcher (`ipc_types::losses`). A scan without odometry is
+    /// not: a run may have none.
+    fn losses(&self) -> [(&'static str, u64); 4] {
+        [
+            ("skipped_scans", self.skipped),
+            ("odometry_not_finite", self.odometry_not_finite),
+            ("odometry_out_of_order", self.odometry_out_of_order),
+            ("scans_not_registered", self.unregistered),
+        ]
+    }
+
     fn summary(&self) -> String {
         let mut text = format!("{} scans, {} skipped", self.processed, self.skipped);
         let notes = [

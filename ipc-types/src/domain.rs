@@ -3,14 +3,14 @@
 use iceoryx2::config::Config;
 use iceoryx2::prelude::*;
 
+use crate::shm::SHM_DIR;
+
 /// Characters a domain name may have: they become part of file names in /dev/shm.
 const MAX_DOMAIN_LEN: usize = 40;
 /// A domain with no live node whose files are this old is abandoned.
 const ABANDONED_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
 /// Prefix of every file a domain leaves in /dev/shm and /tmp/iceoryx2.
 pub const FILE_PREFIX: &str = "slam_";
-/// Where iceoryx2 keeps a domain's shared memory.
-const SHM_DIR: &str = "/dev/shm";
 /// The file a launcher keeps locked in /dev/shm while its run lives (see [`Domain::claim`]).
 const OWNER_FILE: &str = "owner.lock";
 

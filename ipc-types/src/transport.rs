@@ -44,6 +44,19 @@ pub enum Delivery {
 pub const LOSSLESS_QUEUE: usize = 1;
 /// Queue depth of a subscriber in [`Delivery::Latest`] mode: a second of scans at 40 Hz.
 pub const LATEST_QUEUE: usize = 40;
+/// Subscribers a topic may have at once. iceoryx2 preallocates queue slots for each in the
+/// publisher's shared memory (see [`crate::shm`]), so this is not free: the pipeline needs
+/// two on the scans and one elsewhere, and the rest is room for tools and tests.
+pub(crate) const MAX_SUBSCRIBERS: usize = 16;
+
+/// The queue depth of each subscriber of a topic with this delivery and history.
+pub(crate) fn subscriber_queue(delivery: Delivery, history: usize) -> usize {
+    match delivery {
+        Delivery::Lossless => LOSSLESS_QUEUE.max(history),
+        Delivery::Latest => LATEST_QUEUE.max(history),
+    }
+}
+
 /// How long an outlet blocked on a full subscriber waits between sweeps for dead nodes.
 const DEAD_NODE_SWEEP: Duration = Duration::from_millis(500);
 
@@ -128,17 +141,14 @@ impl<T: Message> Outlet<T> {
         history: usize,
     ) -> Result<Self, OpenError> {
         let name = topic.name();
-        let queue = match delivery {
-            Delivery::Lossless => LOSSLESS_QUEUE.max(history),
-            Delivery::Latest => LATEST_QUEUE.max(history),
-        };
+        let queue = subscriber_queue(delivery, history);
         let service = node
             .service_builder(&service_name(name)?)
             .publish_subscribe::<T>()
             .enable_safe_overflow(delivery == Delivery::Latest)
             .subscriber_max_buffer_size(queue)
             .history_size(history)
-            .max_subscribers(16)
+            .max_subscribers(MAX_SUBSCRIBERS)
             .max_publishers(4)
             .open_or_create()
             .map_err(|e| OpenError::Service {

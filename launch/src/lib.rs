@@ -19,14 +19,21 @@
 //!   [`relations::relations_beside`]), it checks they parse before anything starts and has
 //!   map-sink score the run with them;
 //! * a stage's closing summary on stderr (`<stage>: summary ...` and the indented lines
-//!   after it, e.g. what lidar-replay could not publish) is shown when the run ends;
-//! * shared memory of crashed earlier runs is cleaned up at start, and nothing of this run is
-//!   left in /dev/shm at the end.
+//!   after it, e.g. what lidar-replay could not publish) is shown when the run ends, and
+//!   then one block of every count of skipped or lost data, per stage ([`losses`]);
+//! * shared memory of crashed earlier runs is cleaned up at start, the run's own is checked
+//!   against the room left in /dev/shm before anything starts ([`shm_room`]; a stage that
+//!   dies of SIGBUS all the same is reported with that room), and nothing of this run is
+//!   left in /dev/shm at the end;
+//! * a particle count slam-proc's memory estimate does not fit in the memory available is
+//!   refused before anything starts (`slam_proc::memory`).
 
 pub mod bench;
 pub mod closing;
 pub mod config;
+pub mod losses;
 pub mod relations;
+pub mod shm_room;
 pub mod stage;
 pub mod stall;
 pub mod status;

@@ -112,6 +112,8 @@ fn run() -> Result<ExitCode> {
     };
     apply_overrides(&mut config, &args);
     config.validate()?;
+    // slam-proc refuses it too, but as a stage that dies once map-sink is up.
+    slam_proc::memory::check(config.slam.particles).context("refusing to start")?;
     // An address that names nothing would be retried for ever by lidar-hokuyo.
     if config.source == SourceKind::Hokuyo {
         lidar_hokuyo::resolve(&config.hokuyo.addr)
@@ -167,6 +169,9 @@ fn run() -> Result<ExitCode> {
             cleaned.join(", ")
         );
     }
+    // After the sweep, which may have freed some: a stage that finds /dev/shm full dies of
+    // SIGBUS wherever it is, so the run must fit before it starts.
+    launch::shm_room::check(&config).context("refusing to start")?;
     let domain_name = args.domain.clone().unwrap_or_else(|| {
         format!(
             "run-{}-{}",
@@ -206,7 +211,18 @@ fn run() -> Result<ExitCode> {
         limit,
         lockstep: config.lockstep(),
     };
-    let outcome = supervisor::run(&plan, &domain, &log_dir, &display, &stall)?;
+    let supervisor::Ended {
+        outcome,
+        mut losses,
+    } = supervisor::run(&plan, &domain, &log_dir, &display, &stall)?;
+    // map-sink's count is in its metrics; it prints none of its own.
+    if let Some(metrics) = read_metrics(&out) {
+        losses.add("map-sink", "frames_dropped", metrics.frames_dropped);
+    }
+    // Even in quiet mode, like the stages' closing summaries: lost data is part of the result.
+    for line in losses.lines() {
+        eprintln!("{line}");
+    }
 
     domain.cleanup_dead_nodes();
     if let Err(e) = domain.remove_leftovers() {
@@ -497,6 +513,12 @@ fn sim_stage(
         program: program("lidar-sim")?,
         args: sim,
     })
+}
+
+/// metrics.json, if the run wrote a readable one.
+fn read_metrics(out: &Path) -> Option<Metrics> {
+    let text = std::fs::read_to_string(out.join(METRICS_FILE)).ok()?;
+    serde_json::from_str(&text).ok()
 }
 
 /// Prints the key numbers of metrics.json.

@@ -22,6 +22,9 @@ pub enum StageEvent {
     /// A `progress in:TOPIC=N out:TOPIC=N ...` line: what the stage received and sent
     /// (`ipc_types::progress`), without its first word.
     Progress(usize, String),
+    /// A `losses key=count ...` line: what the stage skipped or lost, as it ends
+    /// (`ipc_types::losses`).
+    Losses(usize, Vec<(String, u64)>),
     /// Any other line.
     Line(usize, String),
 }
@@ -49,6 +52,7 @@ pub struct Stage {
     child: Child,
     stderr_tail: Arc<Mutex<VecDeque<String>>>,
     summary: Arc<Mutex<ClosingSummary>>,
+    stdout_reader: Option<std::thread::JoinHandle<()>>,
     stderr_reader: Option<std::thread::JoinHandle<()>>,
     exit: Option<ExitStatus>,
 }
@@ -87,8 +91,9 @@ impl Stage {
             program: program.display().to_string(),
             source,
         })?;
+        let mut stdout_reader = None;
         if let Some(stdout) = child.stdout.take() {
-            std::thread::spawn(move || {
+            stdout_reader = Some(std::thread::spawn(move || {
                 for line in BufReader::new(stdout).lines().map_while(Result::ok) {
                     let event = if line == "ready" {
                         StageEvent::Ready(index)
@@ -99,6 +104,11 @@ impl Stage {
                         .filter(|rest| rest.is_empty() || rest.starts_with(' '))
                     {
                         StageEvent::Progress(index, rest.to_owned())
+                    } else if let Some(rest) = line
+                        .strip_prefix(ipc_types::losses::PREFIX)
+                        .filter(|rest| rest.is_empty() || rest.starts_with(' '))
+                    {
+                        StageEvent::Losses(index, ipc_types::losses::parse(rest))
                     } else {
                         StageEvent::Line(index, line)
                     };
@@ -106,7 +116,7 @@ impl Stage {
                         break;
                     }
                 }
-            });
+            }));
         }
         let stderr_tail = Arc::new(Mutex::new(VecDeque::with_capacity(STDERR_TAIL)));
         let summary = Arc::new(Mutex::new(ClosingSummary::new(name)));
@@ -134,6 +144,7 @@ impl Stage {
             child,
             stderr_tail,
             summary,
+            stdout_reader,
             stderr_reader,
             exit: None,
         })
@@ -163,6 +174,17 @@ impl Stage {
             .lock()
             .map(|summary| summary.lines().to_vec())
             .unwrap_or_default()
+    }
+
+    /// Once the child has ended, waits until every event of its stdout has been sent (its
+    /// last line, the losses, may come after the exit was seen).
+    pub fn join_stdout(&mut self) {
+        if self.poll_exit().is_some()
+            && let Some(reader) = self.stdout_reader.take()
+        {
+            // The pipe closes with the child, so this returns as soon as the last line is in.
+            let _ = reader.join();
+        }
     }
 
     /// Once the child has ended, waits until its last stderr line is in.
@@ -230,11 +252,13 @@ fn die_with_launcher(command: &mut Command) {
 #[cfg(not(target_os = "linux"))]
 fn die_with_launcher(_command: &mut Command) {}
 
-/// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`.
+/// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`; a SIGBUS with
+/// what /dev/shm has left (see [`crate::shm_room`]).
 pub fn describe(status: ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (status.code(), status.signal()) {
         (Some(code), _) => format!("exit status {code}"),
+        (None, Some(libc::SIGBUS)) => crate::shm_room::sigbus_explanation(),
         (None, Some(signal)) => format!("killed by signal {signal}"),
         _ => status.to_string(),
     }

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 
 use ipc_types::{Domain, shutdown};
 
+use crate::losses::Losses;
 use crate::stage::{Stage, StageError, StageEvent, describe};
 use crate::stall::{StallLimits, StallReport, StallWatch};
 use crate::status::Progress;
@@ -37,6 +38,13 @@ pub enum Outcome {
     Failed(String),
 }
 
+/// How a run ended, and what its stages reported losing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ended {
+    pub outcome: Outcome,
+    pub losses: Losses,
+}
+
 /// Options of the progress display.
 #[derive(Debug, Clone)]
 pub struct Display {
@@ -54,7 +62,7 @@ pub fn run(
     log_dir: &Path,
     display: &Display,
     stall: &StallLimits,
-) -> Result<Outcome, StageError> {
+) -> Result<Ended, StageError> {
     let (sender, events) = mpsc::channel();
     let mut stages = Vec::with_capacity(plan.len());
     for (index, stage) in plan.iter().enumerate() {
@@ -84,6 +92,7 @@ pub fn run(
     let names: Vec<String> = stages.iter().map(|s| s.name.clone()).collect();
     let mut watch = StallWatch::new(&names, source, *stall, Instant::now());
     let mut all_ready = false;
+    let mut losses = Losses::new(&names);
 
     let outcome = loop {
         while let Ok(event) = events.try_recv() {
@@ -100,6 +109,7 @@ pub fn run(
                         ));
                     }
                 }
+                StageEvent::Losses(i, counts) => losses.record(i, counts),
                 StageEvent::Line(i, line) => printer.line(&stages[i].name, &line),
             }
         }
@@ -213,9 +223,15 @@ pub fn run(
         }
         std::thread::sleep(POLL);
     };
+    // Every stage has ended: once their readers are done, every event is in the channel.
+    for stage in &mut stages {
+        stage.join_stdout();
+    }
     while let Ok(event) = events.try_recv() {
-        if let StageEvent::Status(_, line) = event {
-            progress.update(&line);
+        match event {
+            StageEvent::Status(_, line) => progress.update(&line),
+            StageEvent::Losses(i, counts) => losses.record(i, counts),
+            _ => {}
         }
     }
     printer.finish(&progress);
@@ -225,7 +241,7 @@ pub fn run(
             eprintln!("{line}");
         }
     }
-    Ok(outcome)
+    Ok(Ended { outcome, losses })
 }
 
 /// SIGTERM to every stage, the source first so the stream ends; then waits for them to

@@ -128,6 +128,7 @@ fn run() -> Result<()> {
         "lidar-hokuyo: {how}: published {} scans, dropped {} damaged scans, {} connections",
         stats.published, stats.damaged, stats.connections
     );
+    ipc_types::losses::report(&[("damaged_scans", stats.damaged)]);
     // A live source that never delivered has failed, however it was stopped.
     if stats.published == 0 {
         let why = match notices.last_problem() {

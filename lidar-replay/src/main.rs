@@ -219,6 +219,7 @@ fn run() -> Result<()> {
     summary.not_replayed = log.skipped_records();
     // One block at the very end, so slam-launch can show it whole (see SUMMARY_HEAD).
     eprintln!("{summary}");
+    ipc_types::losses::report(&summary.losses());
     Ok(())
 }
 

@@ -41,6 +41,25 @@ impl ReplaySummary {
     pub fn malformed_total(&self) -> u64 {
         self.malformed.values().sum()
     }
+
+    /// What the replay could not publish, or not in order, as counts for the launcher
+    /// (`ipc_types::losses`). Reordered records were published in order; lines of record
+    /// types the pipeline has no use for (`PARAM`, ...) and odometry left out on request are
+    /// no loss.
+    pub fn losses(&self) -> Vec<(&'static str, u64)> {
+        let mut counts = vec![("malformed_lines", self.malformed_total())];
+        if let Some((_, c)) = &self.reordering {
+            counts.extend([
+                ("late_scans", c.late.scans),
+                ("late_odometry", c.late.odometry),
+                ("repeated_scans", c.duplicate.scans),
+                ("repeated_odometry", c.duplicate.odometry),
+                ("scans_let_out_unordered", c.forced_out.scans),
+                ("odometry_let_out_unordered", c.forced_out.odometry),
+            ]);
+        }
+        counts
+    }
 }
 
 /// `3 scans, 2 odometry poses`, or `none`.

@@ -114,6 +114,11 @@ fn run() -> Result<()> {
     } else {
         None
     };
+    // A message holds MAX_WORLD_CORNERS; the rest are not scored.
+    let corners_left_out = true_corners
+        .len()
+        .saturating_sub(ipc_types::MAX_WORLD_CORNERS) as u64;
+    let losses = [("world_corners_not_published", corners_left_out)];
     corners.publish(|message| {
         message.header = Header::new(0, 0, "map");
         if let Err(e) = message.set(&true_corners) {
@@ -202,6 +207,7 @@ fn run() -> Result<()> {
     }
     if shutdown::requested() {
         eprintln!("lidar-sim: stopped after {published} scans");
+        ipc_types::losses::report(&losses);
         return Ok(());
     }
     // The odometry's end first: a consumer that sees the scans' end has all of it.
@@ -210,5 +216,6 @@ fn run() -> Result<()> {
     }
     scans.publish_end_of_stream(published, last_stamp)?;
     eprintln!("lidar-sim: published {published} scans");
+    ipc_types::losses::report(&losses);
     Ok(())
 }

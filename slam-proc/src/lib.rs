@@ -45,6 +45,7 @@ mod kalman;
 mod linalg;
 mod line_motion;
 mod map;
+pub mod memory;
 mod motion;
 mod observation;
 mod particle;

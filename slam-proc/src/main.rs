@@ -64,6 +64,9 @@ fn run() -> Result<()> {
         anyhow::ensure!(particles > 0, "--particles must be at least 1");
         config.particles = particles;
     }
+    // Before the particles exist: a count the machine cannot hold would otherwise grow
+    // until the kernel kills this process (or another one).
+    slam_proc::memory::check(config.particles).context("refusing to start")?;
     let mut slam = FastSlam::new(config, args.seed)?;
 
     let domain = Domain::new(&args.domain)?;
@@ -84,16 +87,19 @@ fn run() -> Result<()> {
     let mut lines = Vec::new();
     let mut processed = 0u64;
     let mut last_header = Header::new(0, 0, "map");
+    // The most corners a map snapshot had to leave out (MAX_MAP_CORNERS fit in one).
+    let mut left_out = 0u64;
     loop {
         if wait_any(&[&features], Duration::from_millis(100))? == Wake::Shutdown {
             break;
         }
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
-                publish_map(&maps, &slam, last_header)?;
+                left_out = left_out.max(publish_map(&maps, &slam, last_header)?);
                 publish_path(&path, &slam, last_header)?;
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
                 eprintln!("{}", summary(&slam.stats()));
+                ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
                 return Ok(());
             }
             observations.clear();
@@ -144,15 +150,16 @@ fn run() -> Result<()> {
             last_header = header;
             processed += 1;
             if processed.is_multiple_of(args.map_every) {
-                publish_map(&maps, &slam, header)?;
+                left_out = left_out.max(publish_map(&maps, &slam, header)?);
             }
         }
     }
     // Stopped by a signal: leave the map and the path as far as they got.
-    publish_map(&maps, &slam, last_header)?;
+    left_out = left_out.max(publish_map(&maps, &slam, last_header)?);
     publish_path(&path, &slam, last_header)?;
     eprintln!("slam-proc: stopped after {processed} scans");
     eprintln!("{}", summary(&slam.stats()));
+    ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
     Ok(())
 }
 
@@ -168,7 +175,8 @@ fn summary(stats: &FilterStats) -> String {
     )
 }
 
-fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> Result<()> {
+/// Publishes the best particle's map; returns how many corners did not fit the message.
+fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> Result<u64> {
     let corners: Vec<MapCorner> = slam
         .best_map()
         .iter()
@@ -205,7 +213,7 @@ fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> R
         // Cut to capacity above, so this cannot fail.
         let _ = message.set(&corners[..keep]);
     })?;
-    Ok(())
+    Ok((corners.len() - keep) as u64)
 }
 
 /// The best particle's whole path, in chunks numbered from 0.

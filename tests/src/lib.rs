@@ -193,3 +193,26 @@ pub fn children_of(parent: libc::pid_t) -> Vec<(libc::pid_t, String)> {
 pub fn lines_in(path: &Path) -> usize {
     std::fs::read_to_string(path).map_or(0, |text| text.lines().count())
 }
+
+/// Runs `command` with its output captured, killing it after `limit`: `None` if it had to
+/// be killed, so a test of a refusal fails instead of hanging on a program that does not
+/// refuse.
+pub fn output_within(command: &mut Command, limit: std::time::Duration) -> Option<Output> {
+    use std::process::Stdio;
+    let mut child = command
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start the command");
+    let deadline = std::time::Instant::now() + limit;
+    while std::time::Instant::now() < deadline {
+        if child.try_wait().expect("poll the command").is_some() {
+            return Some(child.wait_with_output().expect("read the command's output"));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}

@@ -1,0 +1,266 @@
+//! The shared memory a run's services take in /dev/shm, and whether the file system has it.
+//!
+//! iceoryx2 gives every publisher a data segment, a file in /dev/shm with a slot for every
+//! sample the service could ever hold at once (each of [`crate::transport`]'s 16 possible
+//! subscribers' queue and the samples it may hold while reading, the history, the samples
+//! the publisher may loan). The file is sparse: a page is taken from the tmpfs when it is
+//! first written, and a process that writes one when the tmpfs is full dies of SIGBUS,
+//! wherever it happens to be. Freed slots are handed out again last in, first out, so the
+//! slots ever written are at most the most ever in use together: the queues and borrowed
+//! samples of the subscribers a run really has, the history and the loans. That is the
+//! figure a run is checked against before it starts (the sparse files' full size, sixteen
+//! subscribers' worth, would refuse runs that fit: a lockstep office run that makes 54 MB of
+//! files runs in a 3 MiB /dev/shm).
+
+use std::path::Path;
+
+use crate::messages::{
+    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
+    WorldCorners,
+};
+use crate::topic::{self, Topic};
+use crate::transport::{Delivery, MAX_SUBSCRIBERS, subscriber_queue};
+
+/// Where iceoryx2 keeps its shared memory.
+pub const SHM_DIR: &str = "/dev/shm";
+
+/// Samples a subscriber may hold while it reads them (iceoryx2 0.10's default, which the
+/// transport keeps).
+const SUBSCRIBER_MAX_BORROWED: usize = 2;
+/// Samples a publisher may loan before it sends (iceoryx2 0.10's default, kept).
+const PUBLISHER_MAX_LOANED: usize = 2;
+/// Bytes iceoryx2 adds to each sample: its header before the payload and the padding to the
+/// payload's alignment. Measured from the segment files' sizes (LaserScan: 65 687 bytes a
+/// slot for a 65 632-byte message), rounded up.
+const SAMPLE_OVERHEAD: u64 = 64;
+/// Every file of a run that is not a data segment (service descriptions, port and
+/// connection management, events): a few hundred of at most a few KiB each, rounded up.
+const MANAGEMENT_BYTES: u64 = 2 << 20;
+
+/// Sample slots of one publisher's data segment that `subscribers` subscribers can have in
+/// use together (iceoryx2's `required_amount_of_samples_per_data_segment` for the service
+/// the transport creates, with `subscribers` in place of its maximum; with the maximum it is
+/// the segment file's slot count).
+pub fn sample_slots(delivery: Delivery, history: usize, subscribers: usize) -> u64 {
+    let per_subscriber = subscriber_queue(delivery, history) + SUBSCRIBER_MAX_BORROWED;
+    (subscribers.min(MAX_SUBSCRIBERS) * per_subscriber + history + PUBLISHER_MAX_LOANED) as u64
+}
+
+/// Bytes of one publisher's data segment on a topic of `T` that `subscribers` subscribers
+/// can have written.
+pub fn segment_bytes<T>(delivery: Delivery, history: usize, subscribers: usize) -> u64 {
+    let slot = std::mem::size_of::<T>() as u64 + SAMPLE_OVERHEAD;
+    sample_slots(delivery, history, subscribers) * slot
+}
+
+/// One service of a run and the bytes its publisher's segment takes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ServiceSize {
+    pub topic: &'static str,
+    pub bytes: u64,
+}
+
+fn service<T>(
+    topic: Topic<T>,
+    delivery: Delivery,
+    history: usize,
+    subscribers: usize,
+) -> ServiceSize {
+    ServiceSize {
+        topic: topic.name(),
+        bytes: segment_bytes::<T>(delivery, history, subscribers),
+    }
+}
+
+/// What decides which services a run has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunShape {
+    /// The source's delivery, which every stage passes on.
+    pub delivery: Delivery,
+    /// The simulator: ground truth and the world's corners.
+    pub simulated: bool,
+    /// A source that publishes odometry.
+    pub odometry: bool,
+}
+
+/// The services of a pipeline run and what they can take, as the stages create and open
+/// them: the histories of their `Outlet::create` calls (the path always lossless), the
+/// scans read by feature-proc and map-sink, every other topic by one stage.
+pub fn pipeline_services(shape: RunShape) -> Vec<ServiceSize> {
+    let d = shape.delivery;
+    let mut services = vec![
+        service::<LaserScan>(topic::SCAN, d, 0, 2),
+        service::<Features>(topic::FEATURES, d, 0, 1),
+        service::<PoseEstimate>(topic::POSE, d, 0, 1),
+        service::<MapSnapshot>(topic::MAP, d, 1, 1),
+        service::<PathChunk>(topic::PATH, Delivery::Lossless, 0, 1),
+    ];
+    if shape.odometry {
+        services.push(service::<Odometry>(topic::ODOMETRY, d, 0, 1));
+    }
+    if shape.simulated {
+        services.push(service::<GroundTruthPose>(topic::GROUND_TRUTH, d, 0, 1));
+        services.push(service::<WorldCorners>(topic::WORLD_CORNERS, d, 1, 1));
+    }
+    services
+}
+
+/// The bytes of /dev/shm a run of `shape` may take.
+pub fn pipeline_bytes(shape: RunShape) -> u64 {
+    pipeline_services(shape)
+        .iter()
+        .map(|s| s.bytes)
+        .sum::<u64>()
+        + MANAGEMENT_BYTES
+}
+
+/// Not enough shared memory for a run, or no way to tell.
+#[derive(Debug, thiserror::Error)]
+pub enum ShmError {
+    #[error(
+        "{dir} has {} MiB free, but the run's shared memory may take {} MiB ({}); free some \
+         or make it larger (docker run --shm-size, or mount -o remount,size=... {dir})",
+        *free >> 20,
+        mib(*need),
+        largest(services)
+    )]
+    TooSmall {
+        dir: String,
+        free: u64,
+        need: u64,
+        services: Vec<ServiceSize>,
+    },
+    #[error("cannot read the free space of {dir}: {source}")]
+    Statvfs { dir: String, source: std::io::Error },
+}
+
+/// Bytes as whole MiB, rounded up so a need is never understated (a free space is rounded
+/// down).
+pub fn mib(bytes: u64) -> u64 {
+    bytes.div_ceil(1 << 20)
+}
+
+/// The largest services, for the message: where the memory goes.
+fn largest(services: &[ServiceSize]) -> String {
+    let mut sorted: Vec<&ServiceSize> = services.iter().collect();
+    sorted.sort_by_key(|s| std::cmp::Reverse(s.bytes));
+    sorted
+        .iter()
+        .take(3)
+        .map(|s| format!("'{}' {} MiB", s.topic, mib(s.bytes)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Bytes free to an unprivileged writer on the file system of `dir` (statvfs).
+pub fn free_bytes(dir: &Path) -> std::io::Result<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let path = std::ffi::CString::new(dir.as_os_str().as_bytes())
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
+    let mut stat = std::mem::MaybeUninit::<libc::statvfs>::uninit();
+    // SAFETY: a NUL-terminated path and a buffer of the size statvfs(3) writes.
+    let result = unsafe { libc::statvfs(path.as_ptr(), stat.as_mut_ptr()) };
+    if result != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: statvfs returned 0, so it filled the buffer.
+    let stat = unsafe { stat.assume_init() };
+    // Both are 64-bit here, narrower on some targets.
+    #[allow(clippy::useless_conversion)]
+    let (blocks, size) = (u64::from(stat.f_bavail), u64::from(stat.f_frsize));
+    Ok(blocks.saturating_mul(size))
+}
+
+/// Refuses a run of `shape` when `free` bytes of /dev/shm cannot hold its services.
+pub fn check_room(shape: RunShape, free: u64) -> Result<(), ShmError> {
+    let need = pipeline_bytes(shape);
+    if need <= free {
+        return Ok(());
+    }
+    Err(ShmError::TooSmall {
+        dir: SHM_DIR.to_owned(),
+        free,
+        need,
+        services: pipeline_services(shape),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slots_follow_the_transport_s_queues() {
+        // Every possible subscriber: the segment file's slots (16 subscribers of a queue of
+        // one and two borrowed samples, plus two loaned).
+        assert_eq!(
+            sample_slots(Delivery::Lossless, 0, MAX_SUBSCRIBERS),
+            16 * 3 + 2
+        );
+        // The two scan subscribers of a run.
+        assert_eq!(sample_slots(Delivery::Lossless, 0, 2), 2 * 3 + 2);
+        // A history of one is kept besides the queue.
+        assert_eq!(sample_slots(Delivery::Lossless, 1, 1), 3 + 1 + 2);
+        // Real time: 40 queued per subscriber.
+        assert_eq!(sample_slots(Delivery::Latest, 0, 2), 2 * 42 + 2);
+        assert_eq!(sample_slots(Delivery::Latest, 0, 99), 16 * 42 + 2);
+    }
+
+    #[test]
+    fn a_run_s_need_is_the_sum_of_its_segments() {
+        let lockstep = RunShape {
+            delivery: Delivery::Lossless,
+            simulated: true,
+            odometry: false,
+        };
+        let services = pipeline_services(lockstep);
+        assert_eq!(services.len(), 7);
+        let scan = &services[0];
+        assert_eq!(scan.topic, "lidar/scan");
+        assert_eq!(
+            scan.bytes,
+            8 * (std::mem::size_of::<LaserScan>() as u64 + SAMPLE_OVERHEAD)
+        );
+        let need = pipeline_bytes(lockstep);
+        assert_eq!(
+            need,
+            services.iter().map(|s| s.bytes).sum::<u64>() + MANAGEMENT_BYTES
+        );
+        // Measured: a lockstep office run dies of SIGBUS in a 1 MiB /dev/shm and runs in
+        // 3 MiB; the bound is above what it used, and far below the files' 54 MB.
+        assert!((3 << 20..16 << 20).contains(&need), "{need}");
+        // Real time queues 40 messages per subscriber: several times more, still within a
+        // container's default 64 MiB.
+        let live = RunShape {
+            delivery: Delivery::Latest,
+            ..lockstep
+        };
+        assert!((4 * need..64 << 20).contains(&pipeline_bytes(live)));
+    }
+
+    #[test]
+    fn too_little_room_is_refused_with_both_figures_and_the_largest_services() {
+        let shape = RunShape {
+            delivery: Delivery::Lossless,
+            simulated: false,
+            odometry: true,
+        };
+        let need = pipeline_bytes(shape);
+        assert!(check_room(shape, need).is_ok());
+        let error = check_room(shape, 1 << 20).unwrap_err().to_string();
+        assert!(
+            error.starts_with(&format!(
+                "/dev/shm has 1 MiB free, but the run's shared memory may take {} MiB \
+                 ('slam/map' ",
+                mib(need)
+            )),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn the_free_space_of_a_directory_is_read() {
+        assert!(free_bytes(Path::new("/")).is_ok());
+        assert!(free_bytes(Path::new("/no/such/dir")).is_err());
+    }
+}
