@@ -6,9 +6,9 @@
 //!
 //! A chain with closures needs no sparse solver: the unknowns are the steps, each closure
 //! constrains the sum of the steps it spans, and the normal equations reduce to one small
-//! system per closure pair (`S^T W^-1 S + C`, `S` the closures' spans, `W` the steps'
-//! information, `C` the closures' variances), whose entries are the variance of the steps
-//! two closures share. The solution moves each step by its variance times the multipliers of
+//! system over the closures (`S^T W^-1 S + C`, k x k for k closures, `S` their spans, `W`
+//! the steps' information, `C` the closures' variances), whose entry for two closures is the
+//! variance of the steps they share. The solution moves each step by its variance times the multipliers of
 //! the closures spanning it: a step that drifts more takes more of the correction, and a
 //! stretch that two loops share is bent only as far as both allow.
 //!
