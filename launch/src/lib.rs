@@ -26,6 +26,7 @@
 pub mod bench;
 pub mod closing;
 pub mod config;
+pub mod record;
 pub mod relations;
 pub mod stage;
 pub mod stall;
