@@ -7,9 +7,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use iceoryx2::prelude::{
-    CallbackProgression, Node, SignalHandlingMode, WaitSetBuilder, ipc,
-};
+use iceoryx2::prelude::{CallbackProgression, Node, SignalHandlingMode, WaitSetBuilder, ipc};
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use recorder::Recording;
