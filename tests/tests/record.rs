@@ -1,6 +1,7 @@
 //! `slam-launch --record` (issue 16): a short simulated office run recorded into run.mcap,
 //! read back with the mcap crate's reader and checked against the run's own counters
-//! (metrics.json) and files (ground_truth.tum, trajectory.tum).
+//! (metrics.json) and files (ground_truth.tum, trajectory.tum); and the same run without
+//! the recorder gives the same results bit for bit.
 
 use std::collections::BTreeMap;
 
@@ -19,21 +20,35 @@ struct TopicRead {
 
 #[test]
 fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
+    let frames = FRAMES.to_string();
+    // With odometry, so that every topic is recorded.
+    let args = [
+        "--world",
+        "office",
+        "--frames",
+        &frames,
+        "--rate",
+        "0",
+        "--odometry",
+    ];
     let out = scratch("record");
     let output = launch(
         &domain("record"),
         &out,
-        &[
-            "--world",
-            "office",
-            "--frames",
-            &FRAMES.to_string(),
-            "--rate",
-            "0",
-            "--record",
-        ],
+        &[&args[..], &["--record"]].concat(),
     );
     assert_success(&output);
+    // The recorder is one more subscriber the publishers wait for: the run is the same.
+    let plain = scratch("record-plain");
+    assert_success(&launch(&domain("record-plain"), &plain, &args));
+    for file in ["trajectory.tum", "map_corners.csv", "dead_reckoning.tum"] {
+        assert_eq!(
+            std::fs::read(out.join(file)).expect("recorded run's file"),
+            std::fs::read(plain.join(file)).expect("plain run's file"),
+            "{file} differs with --record"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&plain);
     let metrics = metrics(&out);
     let published = number(&metrics, "frames_published") as u64;
     let processed = number(&metrics, "frames_processed") as u64;
@@ -56,6 +71,7 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         ("/perception/features", "slam.Features"),
         ("/slam/map", "slam.MapSnapshot"),
         ("/sim/world_corners", "slam.WorldCorners"),
+        ("/robot/odometry", "slam.Odometry"),
     ]
     .into_iter()
     .collect();
@@ -69,7 +85,6 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         assert_eq!(text["title"], schema.name.as_str());
         channels.insert(channel.topic.as_str(), schema.name.as_str());
     }
-    // No odometry in this run: the simulator publishes none unless asked.
     assert_eq!(channels, expected);
 
     // Every message, decoded and counted by topic.
@@ -97,6 +112,7 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(count("/slam/pose"), processed);
     assert_eq!(count("/sim/world_corners"), 1);
     assert_eq!(count("/slam/path"), 1);
+    assert!(count("/robot/odometry") > 0);
     assert!(count("/slam/map") >= FRAMES / 20, "a map every 20 scans");
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(tf_children.get("base_link"), Some(&processed));
