@@ -81,26 +81,30 @@ pub struct RunShape {
     pub simulated: bool,
     /// A source that publishes odometry.
     pub odometry: bool,
+    /// The recorder (slam-record): one more subscriber on every topic.
+    pub recorded: bool,
 }
 
 /// The services of a pipeline run and what they can take, as the stages create and open
 /// them: the histories of their `Outlet::create` calls (the path always lossless), the
-/// scans read by feature-proc and map-sink, every other topic by one stage.
+/// scans read by feature-proc and map-sink, every other topic by one stage, and every topic
+/// by the recorder too when there is one.
 pub fn pipeline_services(shape: RunShape) -> Vec<ServiceSize> {
     let d = shape.delivery;
+    let one = 1 + usize::from(shape.recorded);
     let mut services = vec![
-        service::<LaserScan>(topic::SCAN, d, 0, 2),
-        service::<Features>(topic::FEATURES, d, 0, 1),
-        service::<PoseEstimate>(topic::POSE, d, 0, 1),
-        service::<MapSnapshot>(topic::MAP, d, 1, 1),
-        service::<PathChunk>(topic::PATH, Delivery::Lossless, 0, 1),
+        service::<LaserScan>(topic::SCAN, d, 0, 1 + one),
+        service::<Features>(topic::FEATURES, d, 0, one),
+        service::<PoseEstimate>(topic::POSE, d, 0, one),
+        service::<MapSnapshot>(topic::MAP, d, 1, one),
+        service::<PathChunk>(topic::PATH, Delivery::Lossless, 0, one),
     ];
     if shape.odometry {
-        services.push(service::<Odometry>(topic::ODOMETRY, d, 0, 1));
+        services.push(service::<Odometry>(topic::ODOMETRY, d, 0, one));
     }
     if shape.simulated {
-        services.push(service::<GroundTruthPose>(topic::GROUND_TRUTH, d, 0, 1));
-        services.push(service::<WorldCorners>(topic::WORLD_CORNERS, d, 1, 1));
+        services.push(service::<GroundTruthPose>(topic::GROUND_TRUTH, d, 0, one));
+        services.push(service::<WorldCorners>(topic::WORLD_CORNERS, d, 1, one));
     }
     services
 }
@@ -212,6 +216,7 @@ mod tests {
             delivery: Delivery::Lossless,
             simulated: true,
             odometry: false,
+            recorded: false,
         };
         let services = pipeline_services(lockstep);
         assert_eq!(services.len(), 7);
@@ -236,6 +241,13 @@ mod tests {
             ..lockstep
         };
         assert!((4 * need..64 << 20).contains(&pipeline_bytes(live)));
+        // The recorder reads every topic: one more subscriber's slots on each.
+        let recorded = RunShape {
+            recorded: true,
+            ..lockstep
+        };
+        assert!(pipeline_bytes(recorded) > need);
+        assert_eq!(pipeline_services(recorded).len(), services.len());
     }
 
     #[test]
@@ -244,6 +256,7 @@ mod tests {
             delivery: Delivery::Lossless,
             simulated: false,
             odometry: true,
+            recorded: false,
         };
         let need = pipeline_bytes(shape);
         assert!(check_room(shape, need).is_ok());

@@ -194,6 +194,7 @@ pub struct RunConfig {
     pub front_end: toml::Table,
     pub slam: SlamSection,
     pub grid: GridSection,
+    pub record: crate::record::RecordSection,
 }
 
 impl Default for RunConfig {
@@ -210,6 +211,7 @@ impl Default for RunConfig {
             front_end: toml::Table::new(),
             slam: SlamSection::default(),
             grid: GridSection::default(),
+            record: crate::record::RecordSection::default(),
         }
     }
 }

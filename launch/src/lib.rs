@@ -32,6 +32,7 @@ pub mod bench;
 pub mod closing;
 pub mod config;
 pub mod losses;
+pub mod record;
 pub mod relations;
 pub mod shm_room;
 pub mod stage;

@@ -19,13 +19,13 @@ use slam_eval::ScoreSummary;
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source`,
 /// `relations`, `stall_warning` and `stall_limit` and the sections [sim], [replay],
-/// [hokuyo], [features], [front_end], [slam] and [grid]; options given here override the
-/// file. Keys a section does not know are refused by the process that reads it.
+/// [hokuyo], [features], [front_end], [slam], [grid] and [record]; options given here
+/// override the file. Keys a section does not know are refused by the process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
     /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit` and [sim],
-    /// [replay], [hokuyo], [features], [front_end], [slam], [grid] sections.
+    /// [replay], [hokuyo], [features], [front_end], [slam], [grid], [record] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -90,6 +90,10 @@ struct Args {
     /// No progress output, only the final summary.
     #[arg(long)]
     quiet: bool,
+    /// Record every topic into OUT/run.mcap (slam-record), for Foxglove; in lockstep the
+    /// run stays lossless and deterministic.
+    #[arg(long)]
+    record: bool,
 }
 
 fn main() -> ExitCode {
@@ -333,6 +337,9 @@ fn apply_overrides(config: &mut RunConfig, args: &Args) {
     if let Some(resolution) = args.resolution {
         config.grid.resolution = resolution;
     }
+    if args.record {
+        config.record.enabled = true;
+    }
 }
 
 /// The processes of a simulated run, consumers first and the source last.
@@ -364,6 +371,10 @@ fn plan(
     };
     let section = |name: &str, table: &toml::Table| section_as(name, table, "--config");
     let d = domain.name().to_owned();
+    // The recorder subscribes to every topic: each publisher waits for it too.
+    let recorder = config.record.extra_subscribers();
+    // feature-proc and map-sink take the scans.
+    let scan_subscribers = (2 + recorder).to_string();
 
     let mut sink: Vec<String> = vec![
         "--domain".into(),
@@ -395,9 +406,18 @@ fn plan(
         config.slam.seed.to_string(),
         "--map-every".into(),
         config.slam.map_every.to_string(),
+        // map-sink takes the poses.
+        "--subscribers".into(),
+        (1 + recorder).to_string(),
     ];
     slam.extend(section("slam", &config.slam.extra)?);
-    let mut features = vec!["--domain".into(), d.clone()];
+    // slam-proc takes the features.
+    let mut features = vec![
+        "--domain".into(),
+        d.clone(),
+        "--subscribers".into(),
+        (1 + recorder).to_string(),
+    ];
     features.extend(section("features", &config.features)?);
     features.extend(section_as(
         "front_end",
@@ -405,7 +425,7 @@ fn plan(
         "--front-end-config",
     )?);
     let source = match config.source {
-        SourceKind::Sim => sim_stage(config, &d, &section, &program)?,
+        SourceKind::Sim => sim_stage(config, &d, &scan_subscribers, &section, &program)?,
         SourceKind::Replay => {
             let mut args = vec![
                 "--format".into(),
@@ -422,7 +442,7 @@ fn plan(
                 "--domain".into(),
                 d.clone(),
                 "--subscribers".into(),
-                "2".into(),
+                scan_subscribers.clone(),
                 "--frames".into(),
                 config.replay.frames.to_string(),
             ];
@@ -445,7 +465,7 @@ fn plan(
                 "--domain".into(),
                 d.clone(),
                 "--subscribers".into(),
-                "2".into(),
+                scan_subscribers.clone(),
             ];
             for (key, value) in &config.hokuyo.extra {
                 args.push(format!("--{}", key.replace('_', "-")));
@@ -462,7 +482,20 @@ fn plan(
         }
     };
 
-    Ok(vec![
+    let mut stages = Vec::new();
+    if config.record.enabled {
+        stages.push(StagePlan {
+            name: "slam-record".into(),
+            program: program("slam-record")?,
+            args: vec![
+                "--domain".into(),
+                d.clone(),
+                "--out".into(),
+                out.display().to_string(),
+            ],
+        });
+    }
+    stages.extend([
         StagePlan {
             name: "map-sink".into(),
             program: program("map-sink")?,
@@ -479,13 +512,15 @@ fn plan(
             args: features,
         },
         source,
-    ])
+    ]);
+    Ok(stages)
 }
 
 /// The simulator's stage.
 fn sim_stage(
     config: &RunConfig,
     domain: &str,
+    scan_subscribers: &str,
     section: &dyn Fn(&str, &toml::Table) -> Result<Vec<String>>,
     program: &dyn Fn(&str) -> Result<PathBuf>,
 ) -> Result<StagePlan> {
@@ -500,9 +535,8 @@ fn sim_stage(
         config.sim.seed.to_string(),
         "--domain".into(),
         domain.to_owned(),
-        // feature-proc and map-sink take the scans.
         "--subscribers".into(),
-        "2".into(),
+        scan_subscribers.to_owned(),
     ];
     if config.sim.odometry {
         sim.push("--odometry".into());

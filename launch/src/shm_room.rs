@@ -28,6 +28,7 @@ pub fn run_shape(config: &RunConfig) -> RunShape {
             SourceKind::Replay => config.replay.odometry,
             SourceKind::Hokuyo => false,
         },
+        recorded: config.record.enabled,
     }
 }
 
@@ -71,6 +72,7 @@ mod tests {
                 delivery: Delivery::Lossless,
                 simulated: true,
                 odometry: false,
+                recorded: false,
             }
         );
         config.source = SourceKind::Hokuyo;
@@ -80,6 +82,7 @@ mod tests {
                 delivery: Delivery::Latest,
                 simulated: false,
                 odometry: false,
+                recorded: false,
             }
         );
         config.source = SourceKind::Replay;
@@ -90,8 +93,11 @@ mod tests {
                 delivery: Delivery::Latest,
                 simulated: false,
                 odometry: true,
+                recorded: false,
             }
         );
+        config.record.enabled = true;
+        assert!(run_shape(&config).recorded);
     }
 
     #[test]

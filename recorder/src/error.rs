@@ -1,0 +1,21 @@
+//! Why a recording failed.
+
+/// An error of the recording: the file could not be created or written.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("cannot create {path}: {source}")]
+    Create {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("cannot write the recording {path}: {source}")]
+    Mcap {
+        path: String,
+        source: mcap::McapError,
+    },
+    #[error("cannot encode a message for {topic}: {source}")]
+    Encode {
+        topic: &'static str,
+        source: serde_json::Error,
+    },
+}

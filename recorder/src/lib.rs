@@ -1,0 +1,45 @@
+//! # recorder
+//!
+//! Records a run of the pipeline as MCAP (`run.mcap`) that Foxglove opens ready to look at:
+//! every topic's messages as JSON, under Foxglove's well-known schemas where one fits
+//! (`foxglove.LaserScan`, `foxglove.FrameTransform`, `foxglove.PoseInFrame`,
+//! `foxglove.PosesInFrame`) and under schemas of our own (`slam.*`) where none does. A
+//! message of a Foxglove schema carries Foxglove's fields and, after them, whatever of ours
+//! they lack, so a scan or a pose can be rebuilt exactly from the file.
+//!
+//! The file is written as the run goes, in zstd-compressed chunks of about 1 MB that reach
+//! the disk as each is closed (at least once a second), so a recorder that dies leaves a file
+//! readable up to its last complete chunk. `slam-record` is the process; this library holds
+//! the encoding and the file, without shared memory.
+//!
+//! Why JSON with JSON schemas: it is MCAP's and Foxglove's simplest well-supported pairing
+//! (no code generation, no descriptor sets), every field is readable in Foxglove's raw
+//! message panel, and zstd takes most of its size back.
+
+mod error;
+mod geometry;
+mod ground_truth;
+mod header;
+mod mcap_file;
+mod own;
+mod path;
+mod pose;
+mod recording;
+mod scan;
+mod schema;
+mod stamp;
+mod transform;
+
+pub use error::RecordError;
+pub use geometry::{Planar, Pose, Quaternion, Vector3};
+pub use ground_truth::{GroundTruthMessage, WORLD_FRAME};
+pub use header::HeaderJson;
+pub use mcap_file::{CHUNK_BYTES, ChannelCount, FLUSH_PERIOD, McapFile};
+pub use own::{FeaturesMessage, MapMessage, OdometryMessage, WorldCornersMessage};
+pub use path::{PathChunks, PathMessage};
+pub use pose::{MAP_FRAME, PoseMessage};
+pub use recording::{RECORDING_FILE, Recording, RecordingSummary};
+pub use scan::ScanMessage;
+pub use schema::{ChannelMessage, MESSAGE_ENCODING, SCHEMA_ENCODING, schema_of};
+pub use stamp::Time;
+pub use transform::{BASE_FRAME, TransformMessage};

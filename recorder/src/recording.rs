@@ -1,0 +1,158 @@
+//! A run's recording: each pipeline message to its channel(s).
+
+use std::path::{Path, PathBuf};
+
+use ipc_types::{
+    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
+    WorldCorners,
+};
+
+use crate::error::RecordError;
+use crate::ground_truth::GroundTruthMessage;
+use crate::mcap_file::{ChannelCount, McapFile};
+use crate::own::{FeaturesMessage, MapMessage, OdometryMessage, WorldCornersMessage};
+use crate::path::{PathChunks, PathMessage};
+use crate::pose::{MAP_FRAME, PoseMessage};
+use crate::scan::ScanMessage;
+use crate::transform::{BASE_FRAME, TransformMessage};
+
+/// The recording's file name in the run's directory.
+pub const RECORDING_FILE: &str = "run.mcap";
+
+/// What a finished recording holds.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RecordingSummary {
+    pub path: PathBuf,
+    /// Per channel, in topic order.
+    pub channels: Vec<ChannelCount>,
+    /// Path chunks that did not continue the path (the path was then not recorded).
+    pub path_chunks_out_of_place: u64,
+}
+
+/// A recording being written. End-of-stream markers carry no data and are not recorded.
+#[derive(Debug)]
+pub struct Recording {
+    file: McapFile,
+    path: PathBuf,
+    chunks: PathChunks,
+    /// The scan frames already placed on the robot (`base_link` → frame).
+    sensor_frames: Vec<String>,
+}
+
+impl Recording {
+    /// Creates `dir/run.mcap`.
+    pub fn create(dir: &Path) -> Result<Self, RecordError> {
+        let path = dir.join(RECORDING_FILE);
+        Ok(Self {
+            file: McapFile::create(&path)?,
+            path,
+            chunks: PathChunks::default(),
+            sensor_frames: Vec::new(),
+        })
+    }
+
+    /// A scan on `/lidar/scan`; the first scan of a frame other than `base_link` also puts
+    /// that frame on the robot (identity: the lidar sits at the robot's origin,
+    /// docs/CONVENTIONS.md), so the viewer can draw the scan in the map.
+    pub fn scan(&mut self, scan: &LaserScan) -> Result<(), RecordError> {
+        if scan.header.is_end_of_stream() {
+            return Ok(());
+        }
+        let frame = scan.header.frame_id();
+        if frame != BASE_FRAME && !self.sensor_frames.iter().any(|f| f == frame) {
+            let tf = TransformMessage::planar(
+                scan.header.stamp_ns,
+                BASE_FRAME,
+                frame,
+                ipc_types::Pose2::default(),
+            );
+            self.file
+                .write(&tf, scan.header.stamp_ns, scan.header.sent_ns)?;
+            self.sensor_frames.push(frame.to_owned());
+        }
+        let h = scan.header;
+        self.file
+            .write(&ScanMessage::new(scan), h.stamp_ns, h.sent_ns)
+    }
+
+    pub fn odometry(&mut self, odometry: &Odometry) -> Result<(), RecordError> {
+        let h = odometry.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        self.file
+            .write(&OdometryMessage::new(odometry), h.stamp_ns, h.sent_ns)
+    }
+
+    pub fn features(&mut self, features: &Features) -> Result<(), RecordError> {
+        let h = features.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        self.file
+            .write(&FeaturesMessage::new(features), h.stamp_ns, h.sent_ns)
+    }
+
+    /// The estimate on `/slam/pose`, and `map → base_link` at it on `/tf`.
+    pub fn pose(&mut self, pose: &PoseEstimate) -> Result<(), RecordError> {
+        let h = pose.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        self.file
+            .write(&PoseMessage::new(pose), h.stamp_ns, h.sent_ns)?;
+        let tf = TransformMessage::planar(h.stamp_ns, MAP_FRAME, BASE_FRAME, pose.mean);
+        self.file.write(&tf, h.stamp_ns, h.sent_ns)
+    }
+
+    pub fn map(&mut self, map: &MapSnapshot) -> Result<(), RecordError> {
+        let h = map.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        self.file
+            .write(&MapMessage::new(map), h.stamp_ns, h.sent_ns)
+    }
+
+    /// A chunk of the final path; the path is recorded once all of it is in.
+    pub fn path_chunk(&mut self, chunk: &PathChunk) -> Result<(), RecordError> {
+        let h = chunk.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        if let Some(poses) = self.chunks.add(chunk) {
+            let stamp = poses.last().map_or(h.stamp_ns, |p| p.stamp_ns);
+            self.file
+                .write(&PathMessage::new(&poses), stamp, h.sent_ns)?;
+        }
+        Ok(())
+    }
+
+    pub fn ground_truth(&mut self, truth: &GroundTruthPose) -> Result<(), RecordError> {
+        let h = truth.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        self.file
+            .write(&GroundTruthMessage::new(truth), h.stamp_ns, h.sent_ns)
+    }
+
+    pub fn world_corners(&mut self, world: &WorldCorners) -> Result<(), RecordError> {
+        let h = world.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        self.file
+            .write(&WorldCornersMessage::new(world), h.stamp_ns, h.sent_ns)
+    }
+
+    /// Closes the file with its summary and indexes.
+    pub fn finish(self) -> Result<RecordingSummary, RecordError> {
+        let out_of_place = self.chunks.out_of_place;
+        Ok(RecordingSummary {
+            channels: self.file.finish()?,
+            path: self.path,
+            path_chunks_out_of_place: out_of_place,
+        })
+    }
+}

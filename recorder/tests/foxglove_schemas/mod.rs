@@ -1,0 +1,116 @@
+//! Foxglove's well-known schemas as JSON schemas, written from Foxglove's documented fields
+//! (foxglove.LaserScan, foxglove.FrameTransform, foxglove.PoseInFrame,
+//! foxglove.PosesInFrame): required fields, their types and the bounds of `time`. The
+//! recorder's messages must validate against these, not only against the schemas the
+//! recorder derives from its own structs.
+
+use serde_json::{Value, json};
+
+fn time() -> Value {
+    json!({
+        "type": "object",
+        "properties": {
+            "sec": { "type": "integer", "minimum": 0 },
+            "nsec": { "type": "integer", "minimum": 0, "maximum": 999_999_999 }
+        }
+    })
+}
+
+fn vector3() -> Value {
+    json!({
+        "type": "object",
+        "properties": {
+            "x": { "type": "number" }, "y": { "type": "number" }, "z": { "type": "number" }
+        },
+        "required": ["x", "y", "z"]
+    })
+}
+
+fn quaternion() -> Value {
+    json!({
+        "type": "object",
+        "properties": {
+            "x": { "type": "number" }, "y": { "type": "number" },
+            "z": { "type": "number" }, "w": { "type": "number" }
+        },
+        "required": ["x", "y", "z", "w"]
+    })
+}
+
+fn pose() -> Value {
+    json!({
+        "type": "object",
+        "properties": { "position": vector3(), "orientation": quaternion() },
+        "required": ["position", "orientation"]
+    })
+}
+
+pub fn laser_scan() -> Value {
+    json!({
+        "title": "foxglove.LaserScan",
+        "type": "object",
+        "properties": {
+            "timestamp": time(),
+            "frame_id": { "type": "string" },
+            "pose": pose(),
+            "start_angle": { "type": "number" },
+            "end_angle": { "type": "number" },
+            "ranges": { "type": "array", "items": { "type": "number" } },
+            "intensities": { "type": "array", "items": { "type": "number" } }
+        },
+        "required": ["timestamp", "frame_id", "pose", "start_angle", "end_angle", "ranges",
+                     "intensities"]
+    })
+}
+
+pub fn frame_transform() -> Value {
+    json!({
+        "title": "foxglove.FrameTransform",
+        "type": "object",
+        "properties": {
+            "timestamp": time(),
+            "parent_frame_id": { "type": "string" },
+            "child_frame_id": { "type": "string" },
+            "translation": vector3(),
+            "rotation": quaternion()
+        },
+        "required": ["timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"]
+    })
+}
+
+pub fn pose_in_frame() -> Value {
+    json!({
+        "title": "foxglove.PoseInFrame",
+        "type": "object",
+        "properties": {
+            "timestamp": time(),
+            "frame_id": { "type": "string" },
+            "pose": pose()
+        },
+        "required": ["timestamp", "frame_id", "pose"]
+    })
+}
+
+pub fn poses_in_frame() -> Value {
+    json!({
+        "title": "foxglove.PosesInFrame",
+        "type": "object",
+        "properties": {
+            "timestamp": time(),
+            "frame_id": { "type": "string" },
+            "poses": { "type": "array", "items": pose() }
+        },
+        "required": ["timestamp", "frame_id", "poses"]
+    })
+}
+
+/// Foxglove's schema of that name, if it is one of the four.
+pub fn by_name(name: &str) -> Option<Value> {
+    match name {
+        "foxglove.LaserScan" => Some(laser_scan()),
+        "foxglove.FrameTransform" => Some(frame_transform()),
+        "foxglove.PoseInFrame" => Some(pose_in_frame()),
+        "foxglove.PosesInFrame" => Some(poses_in_frame()),
+        _ => None,
+    }
+}
