@@ -2,6 +2,7 @@
 //! on simulated scans alike.
 
 use serde::{Deserialize, Serialize};
+use stage_kit::{SettingError, check};
 
 /// Extraction thresholds. Metres and radians throughout (docs/CONVENTIONS.md).
 ///
@@ -81,22 +82,10 @@ impl Default for FeatureConfig {
     }
 }
 
-/// A configuration value outside its meaningful range.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("feature config: {field} = {value} {reason}")]
-pub struct ConfigError {
-    /// The offending field.
-    pub field: &'static str,
-    /// Its value (counts converted to `f64`).
-    pub value: f64,
-    /// What it should be.
-    pub reason: &'static str,
-}
-
 impl FeatureConfig {
     /// Checks that every threshold is usable; [`crate::Extractor::extract`] refuses to run
     /// on a configuration that fails this.
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let half_pi = std::f64::consts::FRAC_PI_2;
         let positive = [
             ("max_range", self.max_range),
@@ -156,23 +145,6 @@ impl FeatureConfig {
         let gap = self.max_invalid_gap;
         check("max_invalid_gap", gap as f64, gap <= 100, "must be <= 100")?;
         Ok(())
-    }
-}
-
-fn check(
-    field: &'static str,
-    value: f64,
-    ok: bool,
-    reason: &'static str,
-) -> Result<(), ConfigError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(ConfigError {
-            field,
-            value,
-            reason,
-        })
     }
 }
 

@@ -3,13 +3,14 @@
 
 use std::ops::Range;
 
-use crate::config::{ConfigError, FeatureConfig};
+use crate::config::FeatureConfig;
 use crate::corner::corner_between;
 use crate::features::{FeatureSet, Line};
 use crate::line_fit::covariance;
 use crate::scan::{BeamDirections, ScanError, ScanInput, ScanPoint, to_points};
 use crate::segment::segment;
 use crate::split_merge::{Piece, absorb_stubs, merge, refine_boundaries, split};
+use stage_kit::SettingError;
 
 /// Extracts lines and corners from scans: segments (adaptive breakpoints), split-and-merge,
 /// total-least-squares lines with covariances, corners at the intersections of neighbouring
@@ -17,7 +18,7 @@ use crate::split_merge::{Piece, absorb_stubs, merge, refine_boundaries, split};
 #[derive(Debug, Clone)]
 pub struct Extractor {
     config: FeatureConfig,
-    config_error: Option<ConfigError>,
+    config_error: Option<SettingError>,
     directions: BeamDirections,
     points: Vec<ScanPoint>,
     segments: Vec<Range<usize>>,

@@ -33,8 +33,9 @@ pub mod seed_hall;
 mod segment;
 mod split_merge;
 
-pub use config::{ConfigError, FeatureConfig};
+pub use config::FeatureConfig;
 pub use extractor::Extractor;
 pub use features::{Corner, FeatureSet, Line};
 pub use odometry_join::{OdometryReading, OdometryTrack, RefusedReading};
 pub use scan::{MAX_BEAMS, ScanError, ScanInput};
+pub use stage_kit::SettingError;

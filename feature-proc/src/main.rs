@@ -47,32 +47,17 @@ const IDLE_WAIT: Duration = Duration::from_millis(100);
 const ODOMETRY_PROBE: Duration = Duration::from_secs(1);
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("feature-proc: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-/// A settings struct from a TOML file, or its defaults without one.
-fn load_config<T: Default + serde::de::DeserializeOwned>(path: Option<&PathBuf>) -> Result<T> {
-    let Some(path) = path else {
-        return Ok(T::default());
-    };
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    toml::from_str(&text).with_context(|| format!("config {}", path.display()))
+    stage_kit::main("feature-proc", run)
 }
 
 fn run() -> Result<()> {
     let args = Args::parse();
     shutdown::install().context("cannot install the Ctrl-C handler")?;
-    let config: FeatureConfig = load_config(args.config.as_ref())?;
+    let config: FeatureConfig = stage_kit::settings::load(args.config.as_deref())?;
     config.validate().context("feature configuration")?;
     let mut extractor = Extractor::new(config);
-    let front_end_config: FrontEndConfig = load_config(args.front_end_config.as_ref())?;
+    let front_end_config: FrontEndConfig =
+        stage_kit::settings::load(args.front_end_config.as_deref())?;
     let mut front_end = FrontEnd::new(front_end_config).context("front-end configuration")?;
 
     let domain = Domain::new(&args.domain)?;

@@ -2,7 +2,8 @@
 
 use std::f64::consts::TAU;
 
-use crate::config::{ConfigError, FeatureConfig};
+use crate::config::FeatureConfig;
+use stage_kit::SettingError;
 
 /// Most beams a scan may have (the `LaserScan` message's capacity).
 pub const MAX_BEAMS: usize = 8192;
@@ -40,7 +41,7 @@ pub enum ScanError {
     #[error("{valid} valid readings, at least {needed} needed")]
     TooFewValid { valid: usize, needed: usize },
     #[error(transparent)]
-    Config(#[from] ConfigError),
+    Config(#[from] SettingError),
 }
 
 /// A valid reading in the sensor frame.

@@ -3,20 +3,13 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+use stage_kit::SettingsFileError;
 
 /// Why a configuration file was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("cannot read config file {path}: {source}")]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("config file {path}: {source}")]
-    Parse {
-        path: PathBuf,
-        source: Box<toml::de::Error>,
-    },
+    #[error(transparent)]
+    File(#[from] SettingsFileError),
     #[error("{0}")]
     Invalid(String),
 }
@@ -219,19 +212,12 @@ impl Default for RunConfig {
 impl RunConfig {
     /// Reads a config file; unknown keys are errors so a typo never passes silently.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::parse(&text, path)
+        Ok(stage_kit::settings::load_file(path)?)
     }
 
     /// Parses the text of the config file at `path` (named in errors).
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        toml::from_str(text).map_err(|source| ConfigError::Parse {
-            path: path.to_owned(),
-            source: Box::new(source),
-        })
+        Ok(stage_kit::settings::parse(text, path)?)
     }
 
     /// Checks what the launcher itself relies on.

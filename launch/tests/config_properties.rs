@@ -11,6 +11,7 @@ use launch::config::{ConfigError, RunConfig};
 use proptest::collection::vec;
 use proptest::prelude::*;
 use serde::de::DeserializeOwned;
+use stage_kit::SettingsFileError;
 
 /// The keys a config type knows, from the error for one it does not (every section refuses
 /// unknown keys and lists the ones it takes).
@@ -116,9 +117,9 @@ fn check_run(text: &str) -> Result<(), TestCaseError> {
     let path = Path::new("run.toml");
     match RunConfig::parse(text, path) {
         Err(e) => {
-            let parse_error = matches!(e, ConfigError::Parse { .. });
+            let parse_error = matches!(e, ConfigError::File(SettingsFileError::Parse { .. }));
             prop_assert!(parse_error, "{}", e);
-            let message = e.to_string();
+            let message = format!("{:#}", anyhow::Error::new(e));
             prop_assert!(message.starts_with("config file run.toml: "), "{message}");
             prop_assert!(message.len() > "config file run.toml: ".len());
         }

@@ -53,13 +53,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("lidar-hokuyo: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    stage_kit::main("lidar-hokuyo", run)
 }
 
 fn run() -> Result<()> {

@@ -68,13 +68,7 @@ const ODOMETRY_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
 const REPORTED_LINES: u64 = 100;
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("lidar-replay: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    stage_kit::main("lidar-replay", run)
 }
 
 fn run() -> Result<()> {

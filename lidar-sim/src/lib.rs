@@ -15,7 +15,6 @@
 //! at the robot origin.
 
 mod builtin;
-mod config_error;
 mod corners;
 pub mod geometry;
 mod lidar;
@@ -32,7 +31,6 @@ mod visibility;
 mod world;
 mod world_error;
 
-pub use config_error::ConfigError;
 pub use corners::TrueCorner;
 pub use lidar::LidarModel;
 pub use odometry::{Odometer, OdometryConfig};
@@ -42,6 +40,7 @@ pub use sensor::SensorConfig;
 pub use sim_error::SimError;
 pub use simulation::{Frame, Simulation};
 pub use slam_geom::{Point2, Pose2, wrap_angle};
+pub use stage_kit::SettingError;
 pub use vehicle::{Vehicle, VehicleConfig};
 pub use visibility::visible_corners;
 pub use world::{BUILTIN_WORLDS, World};

@@ -4,7 +4,7 @@
 use rand::Rng;
 use rand_distr::StandardNormal;
 
-use crate::{ConfigError, Pose2, RayCaster, SensorConfig};
+use crate::{Pose2, RayCaster, SensorConfig, SettingError};
 
 /// A scanner with checked settings.
 #[derive(Debug, Clone)]
@@ -13,7 +13,7 @@ pub struct LidarModel {
 }
 
 impl LidarModel {
-    pub fn new(config: SensorConfig) -> Result<LidarModel, ConfigError> {
+    pub fn new(config: SensorConfig) -> Result<LidarModel, SettingError> {
         config.validate()?;
         Ok(LidarModel { config })
     }

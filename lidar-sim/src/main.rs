@@ -19,14 +19,6 @@ struct SimFileConfig {
     vehicle: VehicleConfig,
 }
 
-impl SimFileConfig {
-    fn load(path: &std::path::Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        toml::from_str(&text).with_context(|| format!("config {}", path.display()))
-    }
-}
-
 /// Simulated 2D lidar with ground truth, on the shared-memory scan topic of a domain.
 #[derive(Debug, Parser)]
 #[command(name = "lidar-sim", version)]
@@ -61,22 +53,13 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("lidar-sim: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    stage_kit::main("lidar-sim", run)
 }
 
 fn run() -> Result<()> {
     let args = Args::parse();
     shutdown::install().context("cannot install the Ctrl-C handler")?;
-    let settings = match &args.config {
-        Some(path) => SimFileConfig::load(path)?,
-        None => SimFileConfig::default(),
-    };
+    let settings: SimFileConfig = stage_kit::settings::load(args.config.as_deref())?;
     let world = World::resolve(&args.world).with_context(|| format!("world '{}'", args.world))?;
     let true_corners: Vec<TrueCorner> = world
         .true_corners()

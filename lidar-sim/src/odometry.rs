@@ -5,7 +5,7 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use crate::Pose2;
-use crate::config_error::{ConfigError, check};
+use stage_kit::{SettingError, check};
 
 /// Odometry error as random walks: each standard deviation grows with the square root of
 /// the distance travelled (or angle turned), so it does not depend on the time step.
@@ -34,7 +34,7 @@ impl Default for OdometryConfig {
 }
 
 impl OdometryConfig {
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         for (field, v) in [
             ("odometry.sigma_forward", self.sigma_forward),
             ("odometry.sigma_lateral", self.sigma_lateral),

@@ -4,7 +4,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use crate::config_error::{ConfigError, check};
+use stage_kit::{SettingError, check};
 
 /// Scanner geometry, timing and noise. Metres, radians, seconds.
 ///
@@ -79,7 +79,7 @@ impl SensorConfig {
     }
 
     /// Checks every setting; [`crate::LidarModel::new`] refuses what fails.
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let n = self.beams as f64;
         check(
             "beams",

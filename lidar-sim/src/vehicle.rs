@@ -3,9 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::config_error::{ConfigError, check};
 use crate::path::Path;
 use crate::{OdometryConfig, Point2, Pose2, SimError, World, wrap_angle};
+use stage_kit::{SettingError, check};
 
 /// Below this speed the vehicle may also turn on the spot towards the carrot, so that a
 /// heading error at a standstill is not stuck (pure pursuit alone turns only when moving).
@@ -44,7 +44,7 @@ impl Default for VehicleConfig {
 }
 
 impl VehicleConfig {
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         for (field, v) in [
             ("max_yaw_rate", self.max_yaw_rate),
             ("max_accel", self.max_accel),

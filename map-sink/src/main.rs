@@ -1,6 +1,5 @@
 //! `map-sink`: records a run (trajectory, map, picture, metrics) from the pipeline's topics.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -12,6 +11,7 @@ use ipc_types::prelude::*;
 use map_sink::{
     FrameCounts, GridConfig, PathAssembly, PathPose, Recorder, RecorderOptions, RelationsFile,
 };
+use stage_kit::{say, say_err};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
 /// trajectory.tum, ground_truth.tum, map_corners.csv, the saved map (map.yaml, map.pgm,
@@ -44,28 +44,7 @@ struct Args {
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            say_err(&format!("map-sink: {e:#}"));
-            ExitCode::FAILURE
-        }
-    }
-}
-
-// slam-launch reads our stdout and stderr through pipes, and when it is killed they break
-// while we are still writing the run's results (it sends us SIGTERM as it dies); println!
-// would panic there and lose them. A line nobody can read is no reason to stop: these
-// drop it.
-
-/// A line on stdout, for slam-launch.
-fn say(line: &str) {
-    let _ = writeln!(std::io::stdout(), "{line}");
-}
-
-/// A line on stderr (the run's log).
-fn say_err(line: &str) {
-    let _ = writeln!(std::io::stderr(), "{line}");
+    stage_kit::main("map-sink", run)
 }
 
 /// What the status line shows, from the latest pose.

@@ -1,6 +1,5 @@
 //! `slam-record`: records the pipeline's topics into DIR/run.mcap as the run goes.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -11,6 +10,7 @@ use iceoryx2::prelude::{CallbackProgression, Node, SignalHandlingMode, WaitSetBu
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use recorder::Recording;
+use stage_kit::{say, say_err};
 
 /// Subscribes to every topic of the pipeline (scans, odometry, features, pose estimates, map
 /// snapshots, the final path and, from a simulator, the ground truth and the world's
@@ -29,24 +29,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            say_err(&format!("slam-record: {e:#}"));
-            ExitCode::FAILURE
-        }
-    }
-}
-
-// slam-launch reads our output through pipes that break if it dies first; a line nobody
-// can read is no reason to leave the file without its summary.
-
-fn say(line: &str) {
-    let _ = writeln!(std::io::stdout(), "{line}");
-}
-
-fn say_err(line: &str) {
-    let _ = writeln!(std::io::stderr(), "{line}");
+    stage_kit::main("slam-record", run)
 }
 
 /// Longest sleep without a notification: a wake-up missed under load costs at most this.

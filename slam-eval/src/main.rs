@@ -33,13 +33,7 @@ struct Args {
 const LISTED_UNMATCHED: usize = 10;
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("slam-score: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    stage_kit::main("slam-score", run)
 }
 
 fn run() -> Result<()> {

@@ -2,6 +2,7 @@
 //! robot or a UAV (steps up to ~0.2 m and ~0.2 rad between scans).
 
 use serde::{Deserialize, Serialize};
+use stage_kit::{SettingError, check};
 
 use crate::pose_graph::GraphNoise;
 
@@ -214,35 +215,6 @@ impl Default for SlamConfig {
     }
 }
 
-/// A configuration value outside its meaningful range.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("slam config: {field} = {value} {reason}")]
-pub struct ConfigError {
-    /// The offending field.
-    pub field: &'static str,
-    /// Its value (counts converted to `f64`).
-    pub value: f64,
-    /// What it should be.
-    pub reason: &'static str,
-}
-
-fn check(
-    field: &'static str,
-    value: f64,
-    ok: bool,
-    reason: &'static str,
-) -> Result<(), ConfigError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(ConfigError {
-            field,
-            value,
-            reason,
-        })
-    }
-}
-
 impl SlamConfig {
     /// The variances the final path's smoothing gives its steps: the front end's drift, as
     /// the particles spread by it.
@@ -257,7 +229,7 @@ impl SlamConfig {
 
     /// Checks that every parameter is usable; [`crate::FastSlam::new`] refuses a
     /// configuration that fails this.
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let positive = [
             ("motion_max_translation", self.motion_max_translation),
             ("motion_max_rotation", self.motion_max_rotation),

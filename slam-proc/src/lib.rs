@@ -31,7 +31,7 @@
 //! let estimate = slam.process(0, &[corner], &[], None);
 //! assert_eq!((estimate.mean.x, estimate.mean.y), (0.0, 0.0));
 //! assert!(slam.best_map().is_empty()); // seen once: tentative, not yet published
-//! # Ok::<(), slam_proc::ConfigError>(())
+//! # Ok::<(), slam_proc::SettingError>(())
 //! ```
 
 mod chi2;
@@ -58,10 +58,11 @@ mod rigid_fit;
 mod rng;
 mod slam;
 
-pub use config::{ConfigError, SlamConfig};
+pub use config::SlamConfig;
 pub use estimate::{Estimate, StageTiming};
 pub use map::MapCorner;
 pub use observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
 pub use path::PathPose;
 pub use slam::{FastSlam, FilterStats};
 pub use slam_geom::Pose2;
+pub use stage_kit::SettingError;

@@ -38,28 +38,13 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("slam-proc: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn load_config(path: Option<&PathBuf>) -> Result<SlamConfig> {
-    let Some(path) = path else {
-        return Ok(SlamConfig::default());
-    };
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    toml::from_str(&text).with_context(|| format!("config {}", path.display()))
+    stage_kit::main("slam-proc", run)
 }
 
 fn run() -> Result<()> {
     let args = Args::parse();
     shutdown::install().context("cannot install the Ctrl-C handler")?;
-    let mut config = load_config(args.config.as_ref())?;
+    let mut config: SlamConfig = stage_kit::settings::load(args.config.as_deref())?;
     if let Some(particles) = args.particles {
         anyhow::ensure!(particles > 0, "--particles must be at least 1");
         config.particles = particles;
@@ -67,7 +52,7 @@ fn run() -> Result<()> {
     // Before the particles exist: a count the machine cannot hold would otherwise grow
     // until the kernel kills this process (or another one).
     slam_proc::memory::check(config.particles).context("refusing to start")?;
-    let mut slam = FastSlam::new(config, args.seed)?;
+    let mut slam = FastSlam::new(config, args.seed).context("slam configuration")?;
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("slam-proc")?;

@@ -6,7 +6,7 @@ use rand::Rng;
 use rayon::prelude::*;
 
 use crate::chi2::Gates;
-use crate::config::{ConfigError, SlamConfig};
+use crate::config::SlamConfig;
 use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
 use crate::jcbb::PoseUncertainty;
 use crate::map::{CornerMap, CornerState, MapCorner};
@@ -18,6 +18,7 @@ use crate::predict::{self, MotionNoise};
 use crate::resample::{effective_sample_size, log_sum_exp, normalise, systematic};
 use crate::rng::Streams;
 use slam_geom::Pose2;
+use stage_kit::SettingError;
 
 /// FastSLAM over corner maps. Feed it every scan's corners in order with [`FastSlam::process`].
 ///
@@ -104,7 +105,7 @@ const PARTICLES_PER_TASK: usize = 8;
 
 impl FastSlam {
     /// A filter with every particle at the origin and an empty map.
-    pub fn new(config: SlamConfig, seed: u64) -> Result<Self, ConfigError> {
+    pub fn new(config: SlamConfig, seed: u64) -> Result<Self, SettingError> {
         Self::with_prior_map(config, seed, &[])
     }
 
@@ -115,7 +116,7 @@ impl FastSlam {
         config: SlamConfig,
         seed: u64,
         corners: &[MapCorner],
-    ) -> Result<Self, ConfigError> {
+    ) -> Result<Self, SettingError> {
         config.validate()?;
         let mut map = CornerMap::new(config.grid_cell_size);
         for corner in corners {

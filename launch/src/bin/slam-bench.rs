@@ -50,13 +50,7 @@ const LOG_FORMAT: &str = "carmen";
 const REPORT_FILE: &str = "bench.json";
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("slam-bench: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    stage_kit::main("slam-bench", run)
 }
 
 fn run() -> Result<()> {

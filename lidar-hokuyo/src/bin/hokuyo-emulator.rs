@@ -44,13 +44,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("hokuyo-emulator: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    stage_kit::main("hokuyo-emulator", run)
 }
 
 fn run() -> Result<()> {

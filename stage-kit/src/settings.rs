@@ -1,0 +1,126 @@
+//! Settings files and the range checks of settings.
+//!
+//! Every library keeps its settings in a serde struct (`#[serde(default,
+//! deny_unknown_fields)]`, so a typo is an error rather than a default silently kept); a
+//! process reads one from a TOML file with [`load`] and checks it with the library's
+//! `validate`, built from [`check`].
+
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+
+/// Why a settings file was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum SettingsFileError {
+    #[error("cannot read config file {path}")]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("config file {path}")]
+    Parse {
+        path: PathBuf,
+        #[source]
+        source: Box<toml::de::Error>,
+    },
+}
+
+/// The settings in the TOML file at `path`, or their defaults without one.
+pub fn load<T: Default + DeserializeOwned>(path: Option<&Path>) -> Result<T, SettingsFileError> {
+    match path {
+        Some(path) => load_file(path),
+        None => Ok(T::default()),
+    }
+}
+
+/// The settings in the TOML file at `path`.
+pub fn load_file<T: DeserializeOwned>(path: &Path) -> Result<T, SettingsFileError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SettingsFileError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    parse(&text, path)
+}
+
+/// The settings in `text`, read from the file at `path` (named in the error).
+pub fn parse<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, SettingsFileError> {
+    toml::from_str(text).map_err(|source| SettingsFileError::Parse {
+        path: path.to_owned(),
+        source: Box::new(source),
+    })
+}
+
+/// A setting outside its meaningful range: names it, its value and what it should be.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field} = {value}: {reason}")]
+pub struct SettingError {
+    /// The offending setting.
+    pub field: &'static str,
+    /// Its value (counts converted to `f64`).
+    pub value: f64,
+    /// What it should be.
+    pub reason: &'static str,
+}
+
+/// `Err` naming `field`, `value` and `reason` unless `ok`.
+pub fn check(
+    field: &'static str,
+    value: f64,
+    ok: bool,
+    reason: &'static str,
+) -> Result<(), SettingError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(SettingError {
+            field,
+            value,
+            reason,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde::Deserialize;
+
+    #[derive(Debug, Default, PartialEq, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    struct Sample {
+        gain: f64,
+        count: u32,
+    }
+
+    #[test]
+    fn no_file_is_the_defaults_and_a_file_fills_in_the_rest() {
+        assert_eq!(load::<Sample>(None).unwrap(), Sample::default());
+        let read: Sample = parse("gain = 2.5", Path::new("x.toml")).unwrap();
+        assert_eq!(
+            read,
+            Sample {
+                gain: 2.5,
+                count: 0
+            }
+        );
+    }
+
+    #[test]
+    fn errors_name_the_file_and_the_key() {
+        let error = parse::<Sample>("gian = 2.5", Path::new("run.toml")).unwrap_err();
+        let shown = format!("{:#}", anyhow::Error::new(error));
+        assert!(shown.starts_with("config file run.toml: "), "{shown}");
+        assert!(shown.contains("unknown field `gian`"), "{shown}");
+        let missing = load::<Sample>(Some(Path::new("/nonexistent/run.toml"))).unwrap_err();
+        assert!(matches!(missing, SettingsFileError::Read { .. }));
+        assert!(missing.to_string().contains("/nonexistent/run.toml"));
+    }
+
+    #[test]
+    fn a_failed_check_names_the_setting() {
+        assert!(check("gain", 1.0, true, "must be positive").is_ok());
+        let error = check("gain", -1.0, false, "must be positive").unwrap_err();
+        assert_eq!(error.to_string(), "gain = -1: must be positive");
+    }
+}
