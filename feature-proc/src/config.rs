@@ -2,7 +2,7 @@
 //! on simulated scans alike.
 
 use serde::{Deserialize, Serialize};
-use stage_kit::{SettingError, check};
+use stage_kit::settings::{SettingError, check, check_positive};
 
 /// Extraction thresholds. Metres and radians throughout (docs/CONVENTIONS.md).
 ///
@@ -96,14 +96,7 @@ impl FeatureConfig {
             ("corner_max_gap", self.corner_max_gap),
             ("corner_max_extension", self.corner_max_extension),
         ];
-        for (field, value) in positive {
-            check(
-                field,
-                value,
-                value.is_finite() && value > 0.0,
-                "must be finite and > 0",
-            )?;
-        }
+        check_positive(&positive)?;
         let b = self.bearing_sigma;
         check(
             "bearing_sigma",

@@ -5,7 +5,7 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use crate::Pose2;
-use stage_kit::{SettingError, check};
+use stage_kit::settings::{SettingError, check_non_negative};
 
 /// Odometry error as random walks: each standard deviation grows with the square root of
 /// the distance travelled (or angle turned), so it does not depend on the time step.
@@ -35,19 +35,12 @@ impl Default for OdometryConfig {
 
 impl OdometryConfig {
     pub fn validate(&self) -> Result<(), SettingError> {
-        for (field, v) in [
+        check_non_negative(&[
             ("odometry.sigma_forward", self.sigma_forward),
             ("odometry.sigma_lateral", self.sigma_lateral),
             ("odometry.sigma_yaw_per_m", self.sigma_yaw_per_m),
             ("odometry.sigma_yaw_per_rad", self.sigma_yaw_per_rad),
-        ] {
-            check(
-                field,
-                v,
-                v.is_finite() && v >= 0.0,
-                "must be finite and >= 0",
-            )?;
-        }
+        ])?;
         Ok(())
     }
 }

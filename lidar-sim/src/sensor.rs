@@ -4,7 +4,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use stage_kit::{SettingError, check};
+use stage_kit::settings::{SettingError, check, check_non_negative};
 
 /// Scanner geometry, timing and noise. Metres, radians, seconds.
 ///
@@ -122,18 +122,11 @@ impl SensorConfig {
             r.is_finite() && (0.1..=1e6).contains(&r),
             "must be in [0.1, 1e6] Hz",
         )?;
-        for (field, v) in [
+        check_non_negative(&[
             ("noise_sigma", self.noise_sigma),
             ("noise_knee", self.noise_knee),
             ("noise_slope", self.noise_slope),
-        ] {
-            check(
-                field,
-                v,
-                v.is_finite() && v >= 0.0,
-                "must be finite and >= 0",
-            )?;
-        }
+        ])?;
         let p = self.dropout;
         check(
             "dropout",

@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 
-use crate::error::ConfigError;
+use stage_kit::settings::{SettingError, check, check_positive};
 
 /// Every setting of [`crate::FrontEnd`]. Deserialises from a TOML/JSON table where any field
 /// may be left out (its default is used) and an unknown field is an error.
@@ -115,7 +115,7 @@ impl Default for FrontEndConfig {
 
 impl FrontEndConfig {
     /// Checks every field; the error names the first that is out of range.
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let positive = [
             ("range_sigma", self.range_sigma),
             ("voxel_size", self.voxel_size),
@@ -140,48 +140,38 @@ impl FrontEndConfig {
             ("velocity_sigma_linear", self.velocity_sigma_linear),
             ("velocity_sigma_angular", self.velocity_sigma_angular),
         ];
-        for (name, value) in positive {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(ConfigError::NotPositive { name, value });
-            }
-        }
-        if self.degeneracy_ratio >= 1.0 {
-            return Err(ConfigError::OutOfRange {
-                name: "degeneracy_ratio",
-                value: self.degeneracy_ratio,
-                range: "(0, 1)",
-            });
-        }
-        if !(0.0..=1.0).contains(&self.min_inlier_fraction) {
-            return Err(ConfigError::OutOfRange {
-                name: "min_inlier_fraction",
-                value: self.min_inlier_fraction,
-                range: "[0, 1]",
-            });
-        }
-        if !(self.min_inlier_fraction..=1.0).contains(&self.strong_inlier_fraction) {
-            return Err(ConfigError::OutOfRange {
-                name: "strong_inlier_fraction",
-                value: self.strong_inlier_fraction,
-                range: "[min_inlier_fraction, 1]",
-            });
-        }
-        if self.max_correspondence < self.voxel_size {
-            return Err(ConfigError::OutOfRange {
-                name: "max_correspondence",
-                value: self.max_correspondence,
-                range: "at least voxel_size",
-            });
-        }
+        check_positive(&positive)?;
+        check(
+            "degeneracy_ratio",
+            self.degeneracy_ratio,
+            self.degeneracy_ratio < 1.0,
+            "must be in (0, 1)",
+        )?;
+        check(
+            "min_inlier_fraction",
+            self.min_inlier_fraction,
+            (0.0..=1.0).contains(&self.min_inlier_fraction),
+            "must be in [0, 1]",
+        )?;
+        check(
+            "strong_inlier_fraction",
+            self.strong_inlier_fraction,
+            (self.min_inlier_fraction..=1.0).contains(&self.strong_inlier_fraction),
+            "must be in [min_inlier_fraction, 1]",
+        )?;
+        check(
+            "max_correspondence",
+            self.max_correspondence,
+            self.max_correspondence >= self.voxel_size,
+            "must be at least voxel_size",
+        )?;
         let counts = [
             ("min_points", self.min_points),
             ("max_iterations", self.max_iterations),
             ("max_keyframes", self.max_keyframes),
         ];
         for (name, value) in counts {
-            if value == 0 {
-                return Err(ConfigError::ZeroCount { name });
-            }
+            check(name, value as f64, value > 0, "must be at least 1")?;
         }
         Ok(())
     }

@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Vector3};
 use slam_geom::Pose2;
 
 use crate::config::FrontEndConfig;
-use crate::error::{ConfigError, InputError};
+use crate::error::InputError;
 use crate::fusion::{Prediction, disagreement, fuse, predict, robot_to_map};
 use crate::input::{OdometryInput, ScanInput};
 use crate::local_map::LocalMap;
@@ -20,6 +20,7 @@ use crate::prior::{
 use crate::recovery::{RecoveryWindow, rank, recover};
 use crate::registration::{Registration, RegistrationParams, register};
 use crate::search::{Window, score_sample, search_sample, subsample};
+use stage_kit::SettingError;
 
 /// Steps closer in time than this (repeated or reordered stamps) are timed as this long,
 /// and teach nothing about the velocity.
@@ -67,7 +68,7 @@ pub struct FrontEnd {
 }
 
 impl FrontEnd {
-    pub fn new(config: FrontEndConfig) -> Result<Self, ConfigError> {
+    pub fn new(config: FrontEndConfig) -> Result<Self, SettingError> {
         config.validate()?;
         Ok(Self {
             params: RegistrationParams {

@@ -49,8 +49,9 @@ pub mod registration;
 pub mod search;
 
 pub use config::FrontEndConfig;
-pub use error::{ConfigError, InputError};
+pub use error::InputError;
 pub use front_end::FrontEnd;
 pub use input::{BeamGeometry, OdometryInput, ScanInput};
 pub use output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
 pub use prior::OdometryRejection;
+pub use stage_kit::SettingError;

@@ -2,7 +2,7 @@
 //! robot or a UAV (steps up to ~0.2 m and ~0.2 rad between scans).
 
 use serde::{Deserialize, Serialize};
-use stage_kit::{SettingError, check};
+use stage_kit::settings::{SettingError, check, check_non_negative, check_positive};
 
 use crate::pose_graph::GraphNoise;
 
@@ -249,14 +249,7 @@ impl SlamConfig {
             ("view_range", self.view_range),
             ("view_fov", self.view_fov),
         ];
-        for (field, value) in positive {
-            check(
-                field,
-                value,
-                value.is_finite() && value > 0.0,
-                "must be finite and > 0",
-            )?;
-        }
+        check_positive(&positive)?;
         let non_negative = [
             ("noise_xy_per_metre", self.noise_xy_per_metre),
             ("noise_xy_per_radian", self.noise_xy_per_radian),
@@ -303,14 +296,7 @@ impl SlamConfig {
             ("revisit_max_sigma_xy", self.revisit_max_sigma_xy),
             ("revisit_max_sigma_yaw", self.revisit_max_sigma_yaw),
         ];
-        for (field, value) in non_negative {
-            check(
-                field,
-                value,
-                value.is_finite() && value >= 0.0,
-                "must be finite and >= 0",
-            )?;
-        }
+        check_non_negative(&non_negative)?;
         let probabilities = [
             ("motion_gate_probability", self.motion_gate_probability),
             ("motion_inlier_probability", self.motion_inlier_probability),

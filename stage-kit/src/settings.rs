@@ -81,6 +81,30 @@ pub fn check(
     }
 }
 
+/// Checks that every `(field, value)` is finite and above zero.
+pub fn check_positive(fields: &[(&'static str, f64)]) -> Result<(), SettingError> {
+    fields.iter().try_for_each(|&(field, value)| {
+        check(
+            field,
+            value,
+            value.is_finite() && value > 0.0,
+            "must be finite and > 0",
+        )
+    })
+}
+
+/// Checks that every `(field, value)` is finite and not below zero.
+pub fn check_non_negative(fields: &[(&'static str, f64)]) -> Result<(), SettingError> {
+    fields.iter().try_for_each(|&(field, value)| {
+        check(
+            field,
+            value,
+            value.is_finite() && value >= 0.0,
+            "must be finite and >= 0",
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -122,5 +146,9 @@ mod tests {
         assert!(check("gain", 1.0, true, "must be positive").is_ok());
         let error = check("gain", -1.0, false, "must be positive").unwrap_err();
         assert_eq!(error.to_string(), "gain = -1: must be positive");
+        let fields = [("a", 1.0), ("b", 0.0), ("c", f64::NAN)];
+        assert_eq!(check_positive(&fields).unwrap_err().field, "b");
+        assert_eq!(check_non_negative(&fields).unwrap_err().field, "c");
+        assert!(check_non_negative(&fields[..2]).is_ok());
     }
 }
