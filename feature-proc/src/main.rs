@@ -13,9 +13,9 @@ use feature_proc::{
 };
 use ipc_types::prelude::*;
 use scan_match::{
-    BeamGeometry, FrontEnd, FrontEndConfig, FrontEndOutput, FrontEndStats, MatchStatus,
-    OdometryStatus,
+    FrontEnd, FrontEndConfig, FrontEndOutput, FrontEndStats, MatchStatus, OdometryStatus,
 };
+use slam_geom::ScanGeometry;
 
 /// Subscribes to scans (and odometry, when the source publishes it) and publishes their lines
 /// and corners with the odometry pose at each scan's stamp.
@@ -221,10 +221,7 @@ impl Counts {
 /// slots are free meanwhile.
 struct PendingScan {
     header: Header,
-    angle_min: f32,
-    angle_increment: f32,
-    range_min: f32,
-    range_max: f32,
+    geometry: ScanGeometry,
     ranges: Vec<f32>,
     arrived: Instant,
 }
@@ -236,10 +233,7 @@ impl PendingScan {
         buffer.extend_from_slice(scan.ranges());
         Self {
             header: scan.header,
-            angle_min: scan.angle_min,
-            angle_increment: scan.angle_increment,
-            range_min: scan.range_min,
-            range_max: scan.range_max,
+            geometry: scan.geometry(),
             ranges: buffer,
             arrived: Instant::now(),
         }
@@ -282,12 +276,7 @@ fn register(
 ) -> Option<ScanMotion> {
     let input = scan_match::ScanInput {
         stamp_ns: scan.header.stamp_ns,
-        geometry: BeamGeometry {
-            angle_min: f64::from(scan.angle_min),
-            angle_increment: f64::from(scan.angle_increment),
-            range_min: f64::from(scan.range_min),
-            range_max: f64::from(scan.range_max),
-        },
+        geometry: scan.geometry,
         ranges: &scan.ranges,
         odometry: odometry.map(|o| scan_match::OdometryInput {
             odom_from_robot: o.pose,
@@ -373,10 +362,7 @@ fn publish_features(
     } = work;
     let started = Instant::now();
     let input = ScanInput {
-        angle_min: f64::from(scan.angle_min),
-        angle_increment: f64::from(scan.angle_increment),
-        range_min: f64::from(scan.range_min),
-        range_max: f64::from(scan.range_max),
+        geometry: scan.geometry,
         ranges: &scan.ranges,
     };
     lines.clear();

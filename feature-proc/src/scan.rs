@@ -2,21 +2,19 @@
 
 use std::f64::consts::TAU;
 
-use crate::config::FeatureConfig;
+use slam_geom::ScanGeometry;
 use stage_kit::SettingError;
+
+use crate::config::FeatureConfig;
 
 /// Most beams a scan may have (the `LaserScan` message's capacity).
 pub const MAX_BEAMS: usize = 8192;
 
-/// One sweep, as in ROS `sensor_msgs/LaserScan`: beam `i` has bearing
-/// `angle_min + i * angle_increment` (the increment is negative for a clockwise sensor).
+/// One sweep, as in ROS `sensor_msgs/LaserScan`: the ranges of the beams `geometry` places.
 /// A range that is non-finite or outside `[range_min, range_max]` is invalid (REP 117).
 #[derive(Debug, Clone, Copy)]
 pub struct ScanInput<'a> {
-    pub angle_min: f64,
-    pub angle_increment: f64,
-    pub range_min: f64,
-    pub range_max: f64,
+    pub geometry: ScanGeometry,
     pub ranges: &'a [f32],
 }
 
@@ -67,7 +65,7 @@ impl ScanPoint {
 
 /// The beam pattern of a validated scan.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct BeamGeometry {
+pub(crate) struct BeamPattern {
     pub count: usize,
     /// Angle between neighbouring beams, radians, > 0.
     pub spacing: f64,
@@ -105,7 +103,7 @@ pub(crate) fn to_points(
     config: &FeatureConfig,
     directions: &mut BeamDirections,
     points: &mut Vec<ScanPoint>,
-) -> Result<BeamGeometry, ScanError> {
+) -> Result<BeamPattern, ScanError> {
     points.clear();
     let count = scan.ranges.len();
     if count == 0 {
@@ -117,7 +115,7 @@ pub(crate) fn to_points(
             max: MAX_BEAMS,
         });
     }
-    let (angle_min, increment) = (scan.angle_min, scan.angle_increment);
+    let (angle_min, increment) = (scan.geometry.angle_min, scan.geometry.angle_increment);
     if !angle_min.is_finite() || !increment.is_finite() || increment == 0.0 {
         return Err(ScanError::BadAngles {
             angle_min,
@@ -133,7 +131,7 @@ pub(crate) fn to_points(
             angle_increment: increment,
         });
     }
-    let (range_min, range_max) = (scan.range_min, scan.range_max);
+    let (range_min, range_max) = (scan.geometry.range_min, scan.geometry.range_max);
     if range_min.is_nan() || range_max.is_nan() || range_min > range_max {
         return Err(ScanError::BadRangeLimits {
             range_min,
@@ -162,7 +160,7 @@ pub(crate) fn to_points(
             needed: config.min_line_points,
         });
     }
-    Ok(BeamGeometry {
+    Ok(BeamPattern {
         count,
         spacing,
         // The wrap from the last beam to the first is no wider than one and a half steps.

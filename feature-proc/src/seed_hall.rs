@@ -4,6 +4,8 @@
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
+use slam_geom::ScanGeometry;
+
 use crate::scan::ScanInput;
 
 /// Beams per scan.
@@ -86,10 +88,14 @@ pub fn load(path: &Path) -> Result<Vec<Vec<f32>>, SeedHallError> {
 /// The recording's beam geometry around `ranges`.
 pub fn scan_input(ranges: &[f32]) -> ScanInput<'_> {
     ScanInput {
-        angle_min: ANGLE_MIN,
-        angle_increment: ANGLE_INCREMENT,
-        range_min: RANGE_MIN,
-        range_max: RANGE_MAX,
+        geometry: ScanGeometry {
+            angle_min: ANGLE_MIN,
+            angle_increment: ANGLE_INCREMENT,
+            time_increment: 0.0,
+            scan_time: 0.0,
+            range_min: RANGE_MIN,
+            range_max: RANGE_MAX,
+        },
         ranges,
     }
 }

@@ -5,7 +5,7 @@
 use std::ops::Range;
 
 use crate::config::FeatureConfig;
-use crate::scan::{BeamGeometry, ScanPoint};
+use crate::scan::{BeamPattern, ScanPoint};
 
 /// Cuts `points` (valid readings in beam order) into segments, ranges of `points` with at
 /// least `min_line_points` points each.
@@ -15,7 +15,7 @@ use crate::scan::{BeamGeometry, ScanPoint};
 /// is a vertex of the scanned outline (the farthest point of a polygon from any point is).
 pub(crate) fn segment(
     points: &mut [ScanPoint],
-    geometry: BeamGeometry,
+    geometry: BeamPattern,
     config: &FeatureConfig,
     segments: &mut Vec<Range<usize>>,
 ) {
@@ -88,7 +88,7 @@ impl Breakpoints {
     /// `max_invalid_gap` is validated to at most 100.
     const MAX_STEPS: usize = 101;
 
-    pub fn new(geometry: BeamGeometry, config: &FeatureConfig) -> Self {
+    pub fn new(geometry: BeamPattern, config: &FeatureConfig) -> Self {
         let lambda = config.breakpoint_lambda;
         let mut factors = [None; Self::MAX_STEPS + 1];
         let last = (config.max_invalid_gap + 1).min(Self::MAX_STEPS);

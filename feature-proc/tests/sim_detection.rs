@@ -32,10 +32,7 @@ fn score_world(name: &str, frames: usize) -> Score {
         let pose = frame.pose;
         let features = extractor
             .extract(&ScanInput {
-                angle_min: sensor.angle_min,
-                angle_increment: sensor.angle_increment,
-                range_min: sensor.range_min,
-                range_max: sensor.range_max,
+                geometry: sensor.scan_geometry(),
                 ranges: &frame.ranges,
             })
             .unwrap();

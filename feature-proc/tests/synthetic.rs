@@ -226,23 +226,17 @@ fn malformed_scans_are_typed_errors_never_panics() {
     assert!(check(input(&geometry, &mixed)).is_ok());
     let ones = vec![1.0f32; 1081];
     for (angle_min, angle_increment) in [(f64::NAN, 0.01), (0.0, f64::INFINITY), (0.0, 0.0)] {
-        let scan = ScanInput {
-            angle_min,
-            angle_increment,
-            ..input(&geometry, &ones)
-        };
+        let mut scan = input(&geometry, &ones);
+        scan.geometry.angle_min = angle_min;
+        scan.geometry.angle_increment = angle_increment;
         assert!(matches!(check(scan), Err(ScanError::BadAngles { .. })));
     }
-    let wide = ScanInput {
-        angle_increment: 0.1,
-        ..input(&geometry, &ones)
-    };
+    let mut wide = input(&geometry, &ones);
+    wide.geometry.angle_increment = 0.1;
     assert!(matches!(check(wide), Err(ScanError::SpanTooWide { .. })));
-    let limits = ScanInput {
-        range_min: 5.0,
-        range_max: 1.0,
-        ..input(&geometry, &ones)
-    };
+    let mut limits = input(&geometry, &ones);
+    limits.geometry.range_min = 5.0;
+    limits.geometry.range_max = 1.0;
     assert!(matches!(
         check(limits),
         Err(ScanError::BadRangeLimits { .. })
@@ -267,10 +261,14 @@ fn malformed_scans_are_typed_errors_never_panics() {
             _ => 0.0,
         };
         let scan = ScanInput {
-            angle_min: pick(&mut rng),
-            angle_increment: pick(&mut rng),
-            range_min: pick(&mut rng),
-            range_max: pick(&mut rng).abs() * 10.0,
+            geometry: slam_geom::ScanGeometry {
+                angle_min: pick(&mut rng),
+                angle_increment: pick(&mut rng),
+                time_increment: 0.0,
+                scan_time: 0.0,
+                range_min: pick(&mut rng),
+                range_max: pick(&mut rng).abs() * 10.0,
+            },
             ranges: &ranges,
         };
         if let Ok(found) = check(scan) {

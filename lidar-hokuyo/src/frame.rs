@@ -2,7 +2,7 @@
 
 use ipc_types::{CapacityError, Header, LaserScan};
 
-use crate::geometry::ScanGeometry;
+use crate::geometry::RangingPlan;
 
 /// A scan with everything a `LaserScan` needs.
 #[derive(Debug, Clone, Copy)]
@@ -12,7 +12,7 @@ pub struct Frame<'a> {
     /// Host time (CLOCK_REALTIME, ns) of the first beam.
     pub stamp_ns: u64,
     pub frame_id: &'a str,
-    pub geometry: &'a ScanGeometry,
+    pub plan: &'a RangingPlan,
     /// Metres, REP 117 codes for errors.
     pub ranges: &'a [f32],
     /// Sensor units; empty when the sensor sends none.
@@ -22,14 +22,8 @@ pub struct Frame<'a> {
 impl Frame<'_> {
     /// Writes the scan into a (zeroed) `LaserScan`.
     pub fn fill(&self, scan: &mut LaserScan) -> Result<(), CapacityError> {
-        let g = self.geometry;
         scan.header = Header::new(self.seq, self.stamp_ns, self.frame_id);
-        scan.angle_min = g.angle_min as f32;
-        scan.angle_increment = g.angle_increment as f32;
-        scan.time_increment = g.time_increment as f32;
-        scan.scan_time = g.scan_time as f32;
-        scan.range_min = g.range_min as f32;
-        scan.range_max = g.range_max as f32;
+        scan.set_geometry(&self.plan.geometry);
         scan.set_beams(self.ranges, self.intensities)
     }
 }
@@ -43,14 +37,13 @@ mod tests {
 
     #[test]
     fn fills_every_field() {
-        let geometry =
-            ScanGeometry::new(&SensorParams::utm_30lx(), &ScanRequest::default()).unwrap();
+        let plan = RangingPlan::new(&SensorParams::utm_30lx(), &ScanRequest::default()).unwrap();
         let ranges = vec![1.5f32; 1081];
         let frame = Frame {
             seq: 7,
             stamp_ns: 123_456_789,
             frame_id: "laser",
-            geometry: &geometry,
+            plan: &plan,
             ranges: &ranges,
             intensities: &[],
         };

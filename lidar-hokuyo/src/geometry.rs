@@ -7,7 +7,7 @@
 //! time are those of the cluster's middle, the best single guess for the step whose range the
 //! sensor reports (the shortest of the group). The window is cut to whole clusters.
 
-use slam_geom::wrap_angle;
+use slam_geom::{ScanGeometry, wrap_angle};
 use std::f64::consts::TAU;
 
 use crate::scip::{DataKind, MAX_CLUSTER, Ranging, SensorParams};
@@ -60,28 +60,20 @@ pub enum GeometryError {
 
 /// The ranging command for a request, and the geometry and timing of its scans.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ScanGeometry {
+pub struct RangingPlan {
     pub command: Ranging,
     /// Beams per scan.
     pub beams: usize,
-    /// Bearing of the first beam, radians, wrapped to [-pi, pi).
-    pub angle_min: f64,
-    /// Bearing step between beams, radians.
-    pub angle_increment: f64,
-    /// Time between beams, seconds.
-    pub time_increment: f64,
-    /// Time between scans, seconds.
-    pub scan_time: f64,
-    /// Shortest and longest valid range, metres.
-    pub range_min: f64,
-    pub range_max: f64,
+    /// The `LaserScan` angles (the first bearing wrapped to [-pi, pi)), timing and range
+    /// limits.
+    pub geometry: ScanGeometry,
     /// `DMIN` in millimetres: smaller values are error codes.
     pub dmin_mm: u32,
     /// Time from the sensor's time stamp (taken at step 0) to the first beam, seconds.
     pub first_beam_delay: f64,
 }
 
-impl ScanGeometry {
+impl RangingPlan {
     /// The geometry of `request` on the sensor `params` describes.
     pub fn new(params: &SensorParams, request: &ScanRequest) -> Result<Self, GeometryError> {
         if request.cluster == 0 || request.cluster > MAX_CLUSTER {
@@ -145,12 +137,14 @@ impl ScanGeometry {
         Ok(Self {
             command,
             beams,
-            angle_min: wrap_angle(params.step_angle(first_beam_step)),
-            angle_increment: cluster as f64 * TAU / f64::from(params.ares),
-            time_increment: cluster as f64 * params.step_time(),
-            scan_time: params.scan_time(),
-            range_min: f64::from(params.dmin_mm) / 1000.0,
-            range_max: f64::from(params.dmax_mm) / 1000.0,
+            geometry: ScanGeometry {
+                angle_min: wrap_angle(params.step_angle(first_beam_step)),
+                angle_increment: cluster as f64 * TAU / f64::from(params.ares),
+                time_increment: cluster as f64 * params.step_time(),
+                scan_time: params.scan_time(),
+                range_min: f64::from(params.dmin_mm) / 1000.0,
+                range_max: f64::from(params.dmax_mm) / 1000.0,
+            },
             dmin_mm: params.dmin_mm,
             first_beam_delay: first_beam_step * params.step_time(),
         })
@@ -164,8 +158,8 @@ mod tests {
 
     const STEP: f64 = TAU / 1440.0;
 
-    fn utm(request: ScanRequest) -> Result<ScanGeometry, GeometryError> {
-        ScanGeometry::new(&SensorParams::utm_30lx(), &request)
+    fn utm(request: ScanRequest) -> Result<RangingPlan, GeometryError> {
+        RangingPlan::new(&SensorParams::utm_30lx(), &request)
     }
 
     #[test]
@@ -174,11 +168,11 @@ mod tests {
         assert_eq!((g.command.start, g.command.end), (0, 1080));
         assert_eq!(g.command.kind, DataKind::Ranges3);
         assert_eq!(g.beams, 1081);
-        assert!((g.angle_min + 0.75 * PI).abs() < 1e-12);
-        assert!((g.angle_increment - PI / 720.0).abs() < 1e-15);
-        assert!((g.scan_time - 0.025).abs() < 1e-12);
-        assert!((g.time_increment - 0.025 / 1440.0).abs() < 1e-15);
-        assert_eq!((g.range_min, g.range_max), (0.023, 60.0));
+        assert!((g.geometry.angle_min + 0.75 * PI).abs() < 1e-12);
+        assert!((g.geometry.angle_increment - PI / 720.0).abs() < 1e-15);
+        assert!((g.geometry.scan_time - 0.025).abs() < 1e-12);
+        assert!((g.geometry.time_increment - 0.025 / 1440.0).abs() < 1e-15);
+        assert_eq!((g.geometry.range_min, g.geometry.range_max), (0.023, 60.0));
         assert_eq!(g.first_beam_delay, 0.0);
     }
 
@@ -193,8 +187,8 @@ mod tests {
         // 1 rad = 229.18 steps: from step 540 - 229 = 311 to 540 + 229 = 769.
         assert_eq!((g.command.start, g.command.end), (311, 769));
         assert_eq!(g.beams, 459);
-        assert!((g.angle_min - (-229.0 * STEP)).abs() < 1e-12);
-        assert!(g.angle_min >= -1.0);
+        assert!((g.geometry.angle_min - (-229.0 * STEP)).abs() < 1e-12);
+        assert!(g.geometry.angle_min >= -1.0);
         assert!((g.first_beam_delay - 311.0 * 0.025 / 1440.0).abs() < 1e-15);
         // Exact step bearings are kept despite rounding.
         let g = utm(ScanRequest {
@@ -221,15 +215,15 @@ mod tests {
         assert_eq!(g.command.beams(), 360);
         assert_eq!(g.command.kind, DataKind::RangesIntensities);
         // The first beam sits at the middle step of 0, 1, 2.
-        assert!((g.angle_min - (1.0 - 540.0) * STEP).abs() < 1e-12);
-        assert!((g.angle_increment - 3.0 * STEP).abs() < 1e-15);
-        assert!((g.time_increment - 3.0 * 0.025 / 1440.0).abs() < 1e-15);
+        assert!((g.geometry.angle_min - (1.0 - 540.0) * STEP).abs() < 1e-12);
+        assert!((g.geometry.angle_increment - 3.0 * STEP).abs() < 1e-15);
+        assert!((g.geometry.time_increment - 3.0 * 0.025 / 1440.0).abs() < 1e-15);
         let g = utm(ScanRequest {
             cluster: 2,
             ..Default::default()
         })
         .unwrap();
-        assert!((g.angle_min - (0.5 - 540.0) * STEP).abs() < 1e-12);
+        assert!((g.geometry.angle_min - (0.5 - 540.0) * STEP).abs() < 1e-12);
     }
 
     #[test]

@@ -9,7 +9,7 @@
 //! * [`Sensor`]: a client over any `Read + Write` stream: identify (`VV`, `PP`, `II`),
 //!   sync the clock (`TM0/1/2`), range (`MD` or `ME`), stop (`QT`).
 //! * [`SensorClock`]: the sensor's 24-bit millisecond counter in host time.
-//! * [`ScanGeometry`]: the ranging command and the `LaserScan` angles and timing for an
+//! * [`RangingPlan`]: the ranging command and the `LaserScan` angles and timing for an
 //!   angular window and cluster size on a given sensor.
 //! * [`ranges`]: millimetres to metres, error codes to REP 117.
 //! * [`Driver`]: the loop that publishes, reconnecting with back-off; what it cannot
@@ -35,7 +35,7 @@ mod test_stream;
 pub use backoff::Backoff;
 pub use connector::{AddressError, Connect, TcpConnector, resolve};
 pub use frame::Frame;
-pub use geometry::{GeometryError, ScanGeometry, ScanRequest};
+pub use geometry::{GeometryError, RangingPlan, ScanRequest};
 pub use notices::ConnectionNotices;
 pub use publisher::{Driver, DriverConfig, DriverError, DriverStats, Finish, ScanSink};
 pub use sensor::{Identity, Sensor, SensorError};

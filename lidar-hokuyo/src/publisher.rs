@@ -22,7 +22,7 @@ use ipc_types::{LaserScan, Outlet, PublishError};
 use crate::backoff::Backoff;
 use crate::connector::Connect;
 use crate::frame::Frame;
-use crate::geometry::{GeometryError, ScanGeometry, ScanRequest};
+use crate::geometry::{GeometryError, RangingPlan, ScanRequest};
 use crate::notices::ConnectionNotices;
 use crate::ranges::ranges_m;
 use crate::sensor::{Sensor, SensorError};
@@ -279,8 +279,8 @@ where
             p.dmax_mm,
             p.scan_rpm,
         ));
-        let geometry = match ScanGeometry::new(p, &self.config.request) {
-            Ok(geometry) => geometry,
+        let plan = match RangingPlan::new(p, &self.config.request) {
+            Ok(plan) => plan,
             Err(e) => return SessionEnd::Fatal(e.into()),
         };
         let mut clock = match sensor.sync_clock(self.config.time_samples, self.clock) {
@@ -290,15 +290,15 @@ where
         log(&format!(
             "sensor clock synced (round trip {:.2} ms); ranging {} beams",
             clock.round_trip_ns() as f64 / 1e6,
-            geometry.beams
+            plan.beams
         ));
-        if let Err(e) = sensor.start_ranging(geometry.command) {
+        if let Err(e) = sensor.start_ranging(plan.command) {
             return e.into();
         }
         // The sensor stamps a scan when it passes step 0; the first beam comes later.
-        let first_beam_ns = (geometry.first_beam_delay * 1e9).round() as u64;
+        let first_beam_ns = (plan.first_beam_delay * 1e9).round() as u64;
         let mut damaged_in_row = 0;
-        let mut ranges = Vec::with_capacity(geometry.beams);
+        let mut ranges = Vec::with_capacity(plan.beams);
         let mut intensities = Vec::new();
         loop {
             if self
@@ -329,7 +329,7 @@ where
             };
             damaged_in_row = 0;
             let stamp_ns = clock.host_ns(data.timestamp_ms) + first_beam_ns;
-            ranges_m(&data.ranges, geometry.dmin_mm, &mut ranges);
+            ranges_m(&data.ranges, plan.dmin_mm, &mut ranges);
             intensities.clear();
             // Intensities are at most 18 bits: exact in f32.
             intensities.extend(data.intensities.iter().map(|&i| i as f32));
@@ -337,7 +337,7 @@ where
                 seq: self.stats.published,
                 stamp_ns,
                 frame_id: &self.config.frame_id,
-                geometry: &geometry,
+                plan: &plan,
                 ranges: &ranges,
                 intensities: &intensities,
             };

@@ -11,14 +11,8 @@ pub const ODOMETRY_FRAME: &str = "odom";
 
 /// Writes `record` as scan number `seq` into a (zeroed) message.
 pub fn fill_scan(scan: &mut LaserScan, seq: u64, record: &ScanRecord) -> Result<(), CapacityError> {
-    let geometry = &record.geometry;
     scan.header = Header::new(seq, record.stamp_ns, SCAN_FRAME);
-    scan.angle_min = geometry.angle_min as f32;
-    scan.angle_increment = geometry.angle_increment as f32;
-    scan.time_increment = geometry.time_increment as f32;
-    scan.scan_time = geometry.scan_time as f32;
-    scan.range_min = geometry.range_min as f32;
-    scan.range_max = geometry.range_max as f32;
+    scan.set_geometry(&record.geometry);
     scan.set_beams(&record.ranges, &record.intensities)
 }
 

@@ -1,21 +1,6 @@
 //! What a log yields: scans and odometry, in log order, with the line they came from.
 
-/// Where the beams of a scan point and which ranges are valid, as in a `LaserScan`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ScanGeometry {
-    /// Bearing of the first beam in the sensor frame (x forward, y left), radians.
-    pub angle_min: f64,
-    /// Bearing step between beams, radians (counter-clockwise when positive).
-    pub angle_increment: f64,
-    /// Time between two beams, seconds (0 when the log does not say).
-    pub time_increment: f64,
-    /// Time between scans, seconds (0 when unknown, e.g. for a log's first scan).
-    pub scan_time: f64,
-    /// Shortest valid range, metres.
-    pub range_min: f64,
-    /// Longest valid range, metres; readings at or beyond it are published as +inf.
-    pub range_max: f64,
-}
+pub use slam_geom::ScanGeometry;
 
 /// One scan of a log, ranges already in REP 117 form (NaN = error, +inf = no return).
 #[derive(Debug, Clone, PartialEq)]

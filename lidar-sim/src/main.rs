@@ -72,6 +72,7 @@ fn run() -> Result<()> {
         })
         .collect();
     let sensor = settings.sensor.clone();
+    let geometry = sensor.scan_geometry();
     let odometry_noise = settings.vehicle.odometry.clone();
     let mut sim = Simulation::new(world, settings.sensor, settings.vehicle, args.seed)?;
 
@@ -171,13 +172,7 @@ fn run() -> Result<()> {
         let mut fill_error = None;
         scans.publish(|scan| {
             scan.header = header;
-            scan.angle_min = sensor.angle_min as f32;
-            scan.angle_increment = sensor.angle_increment as f32;
-            scan.scan_time = (1.0 / sensor.rate) as f32;
-            // A UTM-30LX sweeps 1440 steps per turn.
-            scan.time_increment = scan.scan_time / 1440.0;
-            scan.range_min = sensor.range_min as f32;
-            scan.range_max = sensor.range_max as f32;
+            scan.set_geometry(&geometry);
             fill_error = scan.set_beams(&frame.ranges, &[]).err();
         })?;
         if let Some(e) = fill_error {

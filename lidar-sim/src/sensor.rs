@@ -3,6 +3,7 @@
 use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
+use slam_geom::ScanGeometry;
 
 use stage_kit::settings::{SettingError, check, check_non_negative};
 
@@ -79,6 +80,20 @@ impl SensorConfig {
     }
 
     /// Checks every setting; [`crate::LidarModel::new`] refuses what fails.
+    /// The geometry of the scans it publishes. A UTM-30LX sweeps 1440 steps per turn, so
+    /// its beams are a 1440th of a scan period apart.
+    pub fn scan_geometry(&self) -> ScanGeometry {
+        let scan_time = 1.0 / self.rate;
+        ScanGeometry {
+            angle_min: self.angle_min,
+            angle_increment: self.angle_increment,
+            time_increment: scan_time / 1440.0,
+            scan_time,
+            range_min: self.range_min,
+            range_max: self.range_max,
+        }
+    }
+
     pub fn validate(&self) -> Result<(), SettingError> {
         let n = self.beams as f64;
         check(

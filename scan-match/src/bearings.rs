@@ -3,7 +3,7 @@
 
 use nalgebra::Vector2;
 
-use crate::input::BeamGeometry;
+use slam_geom::ScanGeometry;
 
 /// Beam directions `(cos, sin)` of the bearings `angle_min + i * angle_increment`, for the
 /// last geometry asked for; recomputed when it changes or more beams come.
@@ -15,7 +15,7 @@ pub struct Bearings {
 
 impl Bearings {
     /// The directions of the first `count` beams of `geometry`.
-    pub fn directions(&mut self, geometry: &BeamGeometry, count: usize) -> &[Vector2<f64>] {
+    pub fn directions(&mut self, geometry: &ScanGeometry, count: usize) -> &[Vector2<f64>] {
         let key = (
             geometry.angle_min.to_bits(),
             geometry.angle_increment.to_bits(),
@@ -39,9 +39,11 @@ mod tests {
     #[test]
     fn directions_follow_the_geometry() {
         let mut bearings = Bearings::default();
-        let mut geometry = BeamGeometry {
+        let mut geometry = ScanGeometry {
             angle_min: 0.0,
             angle_increment: std::f64::consts::FRAC_PI_2,
+            time_increment: 0.0,
+            scan_time: 0.0,
             range_min: 0.1,
             range_max: 10.0,
         };

@@ -6,8 +6,8 @@ use thiserror::Error;
 /// is a status of the output, not an error).
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum InputError {
-    #[error("beam geometry is not usable: {0}")]
-    Geometry(&'static str),
+    #[error("beam geometry is not usable")]
+    Geometry(#[from] slam_geom::ScanGeometryError),
     #[error("odometry covariance is not a 3x3 symmetric matrix with a finite diagonal")]
     OdometryCovariance,
 }

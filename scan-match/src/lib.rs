@@ -51,7 +51,7 @@ pub mod search;
 pub use config::FrontEndConfig;
 pub use error::InputError;
 pub use front_end::FrontEnd;
-pub use input::{BeamGeometry, OdometryInput, ScanInput};
+pub use input::{OdometryInput, ScanInput};
 pub use output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
 pub use prior::OdometryRejection;
 pub use stage_kit::SettingError;

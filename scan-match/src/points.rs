@@ -5,7 +5,7 @@ use nalgebra::{Matrix2, Vector2};
 
 use crate::bearings::Bearings;
 use crate::cell_hash::{CellSet, cell_key};
-use crate::input::BeamGeometry;
+use slam_geom::ScanGeometry;
 
 /// Fewest neighbouring beams on each side that a normal is fitted over.
 const NORMAL_HALF_WINDOW: usize = 3;
@@ -34,7 +34,7 @@ pub struct ScanPoints {
 /// isolated returns, the edges of depth jumps) get no normal and are dropped: a
 /// point-to-line residual needs one, and such points are the least repeatable.
 pub fn extract(
-    geometry: &BeamGeometry,
+    geometry: &ScanGeometry,
     ranges: &[f32],
     range_sigma: f64,
     voxel: f64,
@@ -54,7 +54,7 @@ impl Extractor {
     /// See [`extract`].
     pub fn extract(
         &mut self,
-        geometry: &BeamGeometry,
+        geometry: &ScanGeometry,
         ranges: &[f32],
         range_sigma: f64,
         voxel: f64,
@@ -77,7 +77,7 @@ impl Extractor {
 
 /// Normals for the valid beams `raw` (beam index, point, range), one point per voxel.
 fn thin(
-    geometry: &BeamGeometry,
+    geometry: &ScanGeometry,
     raw: &[(usize, Vector2<f64>, f64)],
     taken: &mut CellSet,
     range_sigma: f64,
@@ -189,9 +189,11 @@ mod tests {
     #[test]
     fn a_wall_gives_points_with_normals_towards_the_sensor() {
         // A wall at x = 2, seen over +-40 degrees.
-        let geometry = BeamGeometry {
+        let geometry = ScanGeometry {
             angle_min: -0.7,
             angle_increment: PI / 360.0,
+            time_increment: 0.0,
+            scan_time: 0.0,
             range_min: 0.1,
             range_max: 30.0,
         };
@@ -219,9 +221,11 @@ mod tests {
         // range noise from a fixed sequence: over the few centimetres seven beams span, the
         // noise would tilt the normals by tenths of a radian, and the wall would seem to fix
         // the motion along itself.
-        let geometry = BeamGeometry {
+        let geometry = ScanGeometry {
             angle_min: 0.3,
             angle_increment: PI / 720.0,
+            time_increment: 0.0,
+            scan_time: 0.0,
             range_min: 0.1,
             range_max: 30.0,
         };

@@ -16,7 +16,7 @@ const PERIOD_NS: u64 = 100_000_000;
 fn scan<'a>(
     stamp: u64,
     ranges: &'a [f32],
-    geometry: scan_match::BeamGeometry,
+    geometry: slam_geom::ScanGeometry,
     odometry: Option<OdometryInput>,
 ) -> ScanInput<'a> {
     ScanInput {

@@ -30,10 +30,14 @@ pub fn full_turn() -> ScanGeometry {
 
 pub fn input<'a>(geometry: &ScanGeometry, ranges: &'a [f32]) -> ScanInput<'a> {
     ScanInput {
-        angle_min: geometry.angle_min,
-        angle_increment: geometry.angle_increment,
-        range_min: 0.05,
-        range_max: geometry.range_max,
+        geometry: slam_geom::ScanGeometry {
+            angle_min: geometry.angle_min,
+            angle_increment: geometry.angle_increment,
+            time_increment: 0.0,
+            scan_time: 0.0,
+            range_min: 0.05,
+            range_max: geometry.range_max,
+        },
         ranges,
     }
 }

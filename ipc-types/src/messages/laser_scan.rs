@@ -4,6 +4,7 @@ use std::borrow::Cow;
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use slam_geom::ScanGeometry;
 
 use crate::capacity::{CapacityError, MAX_BEAMS, fill, used};
 use crate::header::Header;
@@ -42,6 +43,28 @@ pub struct LaserScan {
 }
 
 impl LaserScan {
+    /// Where the beams point and which ranges are valid, in `f64`.
+    pub fn geometry(&self) -> ScanGeometry {
+        ScanGeometry {
+            angle_min: f64::from(self.angle_min),
+            angle_increment: f64::from(self.angle_increment),
+            time_increment: f64::from(self.time_increment),
+            scan_time: f64::from(self.scan_time),
+            range_min: f64::from(self.range_min),
+            range_max: f64::from(self.range_max),
+        }
+    }
+
+    /// Sets the angles, timing and range limits (rounded to the message's `f32`).
+    pub fn set_geometry(&mut self, geometry: &ScanGeometry) {
+        self.angle_min = geometry.angle_min as f32;
+        self.angle_increment = geometry.angle_increment as f32;
+        self.time_increment = geometry.time_increment as f32;
+        self.scan_time = geometry.scan_time as f32;
+        self.range_min = geometry.range_min as f32;
+        self.range_max = geometry.range_max as f32;
+    }
+
     /// The ranges of the beams in use.
     pub fn ranges(&self) -> &[f32] {
         used(&self.ranges, self.beam_count)

@@ -10,15 +10,16 @@ use lidar_replay::{
     LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, ReorderConfig, open_log,
 };
 use nalgebra::Matrix3;
-use scan_match::{BeamGeometry, OdometryInput, ScanInput};
+use scan_match::{OdometryInput, ScanInput};
 use slam_geom::Pose2;
+use slam_geom::ScanGeometry;
 
 /// One scan of a log with the odometry paired to it: the latest odometry record at or
 /// before it (a FLASER line yields its odometry just before its scan, same stamp).
 #[derive(Debug, Clone)]
 pub struct LoggedScan {
     pub stamp_ns: u64,
-    pub geometry: BeamGeometry,
+    pub geometry: ScanGeometry,
     pub ranges: Vec<f32>,
     pub odometry: Option<OdometryInput>,
 }
@@ -63,12 +64,7 @@ pub fn load(path: &Path, format: LogFormat, limit: usize) -> Result<Vec<LoggedSc
             LogRecord::Scan(s) => {
                 scans.push(LoggedScan {
                     stamp_ns: s.stamp_ns,
-                    geometry: BeamGeometry {
-                        angle_min: s.geometry.angle_min,
-                        angle_increment: s.geometry.angle_increment,
-                        range_min: s.geometry.range_min,
-                        range_max: s.geometry.range_max,
-                    },
+                    geometry: s.geometry,
                     ranges: s.ranges,
                     odometry,
                 });

@@ -2,23 +2,27 @@
 
 #![allow(dead_code)]
 
-use scan_match::BeamGeometry;
 use slam_geom::Pose2;
+use slam_geom::ScanGeometry;
 
 pub type Segment = ((f64, f64), (f64, f64));
 
 /// A SICK-like sensor: 361 beams over 180 degrees, 30 m.
-pub const SICK: BeamGeometry = BeamGeometry {
+pub const SICK: ScanGeometry = ScanGeometry {
     angle_min: -std::f64::consts::FRAC_PI_2,
     angle_increment: std::f64::consts::PI / 360.0,
+    time_increment: 0.0,
+    scan_time: 0.0,
     range_min: 0.05,
     range_max: 30.0,
 };
 
 /// A Hokuyo-like sensor: 1081 beams over 270 degrees.
-pub const HOKUYO: BeamGeometry = BeamGeometry {
+pub const HOKUYO: ScanGeometry = ScanGeometry {
     angle_min: -0.75 * std::f64::consts::PI,
     angle_increment: std::f64::consts::PI / 720.0,
+    time_increment: 0.0,
+    scan_time: 0.0,
     range_min: 0.05,
     range_max: 30.0,
 };
@@ -63,7 +67,7 @@ fn square(cx: f64, cy: f64, half: f64) -> Vec<Segment> {
 pub fn raycast(
     walls: &[Segment],
     pose: &Pose2,
-    geometry: &BeamGeometry,
+    geometry: &ScanGeometry,
     beams: usize,
     noise: f64,
 ) -> Vec<f32> {
