@@ -1,49 +1,11 @@
 //! The true corners of a world, defined as in docs/CONVENTIONS.md.
 
-use serde::{Deserialize, Serialize};
-
-use crate::{Point2, World};
+use crate::{Point2, TrueCorner, World};
 
 /// Opening angles outside this range are not corners: nearly collinear segments are one
 /// wall, and spikes sharper than this do not give two fittable lines.
 const MIN_ANGLE_DEG: f64 = 20.0;
 const MAX_ANGLE_DEG: f64 = 160.0;
-
-/// A wall vertex where two straight walls meet.
-///
-/// With `d1`, `d2` the unit vectors from the tip along the two walls,
-/// `angle = acos(d1 . d2)` and `heading = atan2(-(d1 + d2))`. Both depend on the arms alone,
-/// not on the side the sensor is on, which is exactly what a feature extractor computes
-/// from the two fitted lines: a room corner (seen from inside) has its heading pointing
-/// into the wall, a pillar corner (seen from outside) pointing away from the pillar.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct TrueCorner {
-    pub x: f64,
-    pub y: f64,
-    pub heading: f64,
-    pub angle: f64,
-}
-
-impl TrueCorner {
-    /// The corner of the arms `d1`, `d2` (unit vectors from `tip`).
-    pub fn from_arms(tip: Point2, d1: Point2, d2: Point2) -> TrueCorner {
-        let s = -(d1 + d2);
-        TrueCorner {
-            x: tip.x,
-            y: tip.y,
-            heading: crate::wrap_angle(s.y.atan2(s.x)),
-            angle: d1.dot(&d2).clamp(-1.0, 1.0).acos(),
-        }
-    }
-
-    /// The unit arms back from `heading` and `angle`: the bisector opposite the heading,
-    /// turned by half the angle either way.
-    pub fn arms(&self) -> [Point2; 2] {
-        let back = self.heading + std::f64::consts::PI;
-        let h = 0.5 * self.angle;
-        [back - h, back + h].map(|a| Point2::new(a.cos(), a.sin()))
-    }
-}
 
 impl World {
     /// Every wall vertex where two segments of one polyline meet at an opening angle

@@ -31,7 +31,6 @@ mod visibility;
 mod world;
 mod world_error;
 
-pub use corners::TrueCorner;
 pub use lidar::LidarModel;
 pub use odometry::{Odometer, OdometryConfig};
 pub use rate::{RATE_RANGE, check_rate, parse_rate};
@@ -39,6 +38,7 @@ pub use ray_caster::RayCaster;
 pub use sensor::SensorConfig;
 pub use sim_error::SimError;
 pub use simulation::{Frame, Simulation};
+pub use slam_geom::TrueCorner;
 pub use slam_geom::{Point2, Pose2, wrap_angle};
 pub use stage_kit::SettingError;
 pub use vehicle::{Vehicle, VehicleConfig};

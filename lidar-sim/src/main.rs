@@ -64,12 +64,7 @@ fn run() -> Result<()> {
     let true_corners: Vec<TrueCorner> = world
         .true_corners()
         .iter()
-        .map(|c| TrueCorner {
-            x: c.x,
-            y: c.y,
-            heading: c.heading,
-            angle: c.angle,
-        })
+        .map(|&c| TrueCorner::from(c))
         .collect();
     let sensor = settings.sensor.clone();
     let geometry = sensor.scan_geometry();

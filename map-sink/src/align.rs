@@ -1,7 +1,6 @@
 //! Least-squares rigid SE(2) alignment of two paired point sets.
 
-use crate::corner::MapCorner;
-use slam_geom::{Pose2, wrap_angle};
+use slam_geom::{MapCorner, Pose2, wrap_angle};
 
 /// A rigid planar transform `p -> R(rotation) * p + translation`, taking estimate
 /// coordinates (the SLAM frame) into truth coordinates (the world frame).

@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use crate::corner::MapCorner;
+use slam_geom::MapCorner;
 
 /// The unique entries of the symmetric covariance over `(x, y, heading, angle)`, in the
 /// order of the CSV columns, with their index in the row-major 4x4 matrix.
@@ -38,7 +38,7 @@ pub fn corners_csv(corners: &[MapCorner]) -> String {
         // Writing to a String cannot fail.
         let _ = write!(csv, "{},{},{},{}", c.x, c.y, c.heading, c.angle);
         for (_, index) in COVARIANCE_COLUMNS {
-            let _ = write!(csv, ",{}", c.covariance[index]);
+            let _ = write!(csv, ",{}", c.covariance[(index / 4, index % 4)]);
         }
         let _ = writeln!(csv, ",{}", c.observations);
     }

@@ -26,7 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::corner::MapCorner;
+use slam_geom::MapCorner;
 
 /// The `format` name of the file.
 pub const LANDMARKS_FORMAT: &str = "lidar-slam-landmarks";
@@ -110,7 +110,7 @@ impl Landmarks {
                     heading: c.heading,
                     angle: c.angle,
                     covariance: std::array::from_fn(|r| {
-                        std::array::from_fn(|k| c.covariance[4 * r + k])
+                        std::array::from_fn(|k| c.covariance[(r, k)])
                     }),
                     observations: c.observations,
                 })
@@ -127,7 +127,7 @@ impl Landmarks {
                 y: c.y,
                 heading: c.heading,
                 angle: c.angle,
-                covariance: std::array::from_fn(|i| c.covariance[i / 4][i % 4]),
+                covariance: nalgebra::Matrix4::from_fn(|r, k| c.covariance[r][k]),
                 observations: c.observations,
             })
             .collect()
@@ -227,12 +227,10 @@ mod tests {
     use super::*;
 
     fn corner(x: f64) -> MapCorner {
-        let mut covariance = [0.0; 16];
-        for (i, v) in [1e-4, 2e-4, 3e-3, 4e-3].into_iter().enumerate() {
-            covariance[5 * i] = v;
-        }
-        covariance[1] = 1.5e-5;
-        covariance[4] = 1.5e-5;
+        let mut covariance =
+            nalgebra::Matrix4::from_diagonal(&nalgebra::Vector4::new(1e-4, 2e-4, 3e-3, 4e-3));
+        covariance[(0, 1)] = 1.5e-5;
+        covariance[(1, 0)] = 1.5e-5;
         MapCorner {
             x,
             y: -x / 3.0,

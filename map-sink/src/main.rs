@@ -267,18 +267,7 @@ fn drain_scans(
 }
 
 fn map_corners(snapshot: &MapSnapshot) -> Vec<map_sink::MapCorner> {
-    snapshot
-        .corners()
-        .iter()
-        .map(|c| map_sink::MapCorner {
-            x: c.corner.x,
-            y: c.corner.y,
-            heading: c.corner.heading,
-            angle: c.corner.angle,
-            covariance: c.corner.covariance,
-            observations: c.observations,
-        })
-        .collect()
+    snapshot.corners().iter().map(|&c| c.into()).collect()
 }
 
 /// This process's peak resident memory (Linux `VmHWM`), kilobytes; `None` elsewhere.

@@ -4,13 +4,13 @@
 use std::path::Path;
 
 use crate::atomic::write_atomic;
-use crate::corner::MapCorner;
 use crate::error::SinkError;
 use crate::grid_image::{encode_png, grid_pixels};
 use crate::landmarks::{GridReference, Landmarks};
 use crate::map_yaml::MapYaml;
 use crate::occupancy_grid::OccupancyGrid;
 use crate::pgm::encode_pgm;
+use slam_geom::MapCorner;
 
 /// The map_server description of the grid.
 pub const MAP_YAML_FILE: &str = "map.yaml";

@@ -10,7 +10,6 @@ use crate::align::Se2Alignment;
 use crate::ate::{AteStats, ate, distance};
 use crate::atomic::write_atomic;
 use crate::compact_scan::CompactScan;
-use crate::corner::MapCorner;
 use crate::corner_score::nearest_rmse;
 use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
@@ -23,6 +22,7 @@ use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, scor
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum::TumWriter;
+use slam_geom::MapCorner;
 use slam_geom::Pose2;
 use slam_geom::format_tum_line;
 

@@ -8,8 +8,8 @@
 use std::fmt::Write;
 
 use crate::align::Se2Alignment;
-use crate::corner::MapCorner;
 use crate::occupancy_grid::GridCell;
+use slam_geom::MapCorner;
 
 const MAX_MAP_W: f64 = 1400.0;
 const MAX_MAP_H: f64 = 1000.0;

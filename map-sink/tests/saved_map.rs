@@ -39,10 +39,7 @@ fn wall_above() -> Result<OccupancyGrid, Box<dyn std::error::Error>> {
 }
 
 fn corner() -> MapCorner {
-    let mut covariance = [0.0; 16];
-    for i in 0..4 {
-        covariance[5 * i] = 1e-4;
-    }
+    let covariance = nalgebra::Matrix4::identity() * 1e-4;
     MapCorner {
         x: 1.0,
         y: 2.0,

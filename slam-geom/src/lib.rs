@@ -7,17 +7,20 @@
 //! * [`Pose2`] is the planar transform `world_from_robot` (docs/CONVENTIONS.md): composition,
 //!   inverse, the increment between two poses, interpolation; its yaw is always wrapped;
 //! * [`Point2`] is a point or vector in the plane;
+//! * [`TrueCorner`] and [`MapCorner`] are a corner as it is and as a map estimates it;
 //! * [`parse_stamp_ns`] and [`format_stamp`] convert decimal seconds and nanoseconds exactly;
 //! * [`ScanGeometry`] says where a scan's beams point and which ranges are valid;
 //! * [`parse_tum`] and [`format_tum_line`] read and write TUM trajectories.
 
 mod angle;
+mod corner;
 mod pose;
 mod scan_geometry;
 mod stamp;
 mod tum;
 
 pub use angle::wrap_angle;
+pub use corner::{MapCorner, TrueCorner};
 pub use pose::Pose2;
 pub use scan_geometry::{ScanGeometry, ScanGeometryError};
 pub use stamp::{StampError, StampProblem, format_stamp, parse_stamp_ns};

@@ -60,9 +60,9 @@ mod slam;
 
 pub use config::SlamConfig;
 pub use estimate::{Estimate, StageTiming};
-pub use map::MapCorner;
 pub use observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
 pub use path::PathPose;
 pub use slam::{FastSlam, FilterStats};
+pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;
 pub use stage_kit::SettingError;

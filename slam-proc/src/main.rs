@@ -165,25 +165,7 @@ fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> R
     let corners: Vec<MapCorner> = slam
         .best_map()
         .iter()
-        .map(|c| {
-            let mut covariance = [0.0; 16];
-            for r in 0..4 {
-                for k in 0..4 {
-                    covariance[r * 4 + k] = c.covariance[(r, k)];
-                }
-            }
-            MapCorner {
-                corner: Corner {
-                    x: c.x,
-                    y: c.y,
-                    heading: c.heading,
-                    angle: c.angle,
-                    covariance,
-                },
-                observations: c.observations,
-                reserved: 0,
-            }
-        })
+        .map(|&c| MapCorner::from(c))
         .collect();
     let keep = corners.len().min(ipc_types::MAX_MAP_CORNERS);
     if keep < corners.len() {

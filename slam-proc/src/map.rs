@@ -8,26 +8,10 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix4, Vector2, Vector4};
 
-use slam_geom::Pose2;
-use slam_geom::wrap_angle;
+use slam_geom::{MapCorner, Pose2, wrap_angle};
 
 use crate::grid::SpatialGrid;
 use crate::persistent::PersistentArray;
-
-/// A corner of the published map, in the map frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MapCorner {
-    pub x: f64,
-    pub y: f64,
-    /// Bisector towards the tip, in `[-pi, pi)`.
-    pub heading: f64,
-    /// Opening angle, in `(0, pi)`.
-    pub angle: f64,
-    /// Covariance of `(x, y, heading, angle)`.
-    pub covariance: Matrix4<f64>,
-    /// Scans in which the corner was observed.
-    pub observations: u32,
-}
 
 /// A corner's Gaussian estimate in the world, `(x, y, heading, angle)`.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -9,7 +9,9 @@ use crate::chi2::Gates;
 use crate::config::SlamConfig;
 use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
 use crate::jcbb::PoseUncertainty;
-use crate::map::{CornerMap, CornerState, MapCorner};
+use slam_geom::MapCorner;
+
+use crate::map::{CornerMap, CornerState};
 use crate::motion::{Motion, MotionEstimator, MotionSource};
 use crate::observation::{LineObservation, MeasuredMotion, Observation, OdometryInput, Prepared};
 use crate::particle::{Particle, ScanContext, Scratch};

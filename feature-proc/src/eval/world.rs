@@ -6,14 +6,7 @@ use crate::config::FeatureConfig;
 use crate::features::Corner;
 use slam_geom::wrap_angle;
 
-/// A corner of the world (docs/CONVENTIONS.md), without covariance: it is the truth.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrueCorner {
-    pub x: f64,
-    pub y: f64,
-    pub heading: f64,
-    pub angle: f64,
-}
+pub use slam_geom::TrueCorner;
 
 /// The beam pattern of a simulated scan.
 #[derive(Debug, Clone, Copy, PartialEq)]

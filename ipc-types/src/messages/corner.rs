@@ -38,3 +38,83 @@ pub struct MapCorner {
     /// Keeps the layout free of implicit padding; always 0.
     pub reserved: u32,
 }
+
+impl From<slam_geom::TrueCorner> for TrueCorner {
+    fn from(c: slam_geom::TrueCorner) -> Self {
+        Self {
+            x: c.x,
+            y: c.y,
+            heading: c.heading,
+            angle: c.angle,
+        }
+    }
+}
+
+impl From<TrueCorner> for slam_geom::TrueCorner {
+    fn from(c: TrueCorner) -> Self {
+        Self {
+            x: c.x,
+            y: c.y,
+            heading: c.heading,
+            angle: c.angle,
+        }
+    }
+}
+
+impl From<slam_geom::MapCorner> for MapCorner {
+    /// The covariance goes row by row into the message.
+    fn from(c: slam_geom::MapCorner) -> Self {
+        Self {
+            corner: Corner {
+                x: c.x,
+                y: c.y,
+                heading: c.heading,
+                angle: c.angle,
+                covariance: std::array::from_fn(|i| c.covariance[(i / 4, i % 4)]),
+            },
+            observations: c.observations,
+            reserved: 0,
+        }
+    }
+}
+
+impl From<MapCorner> for slam_geom::MapCorner {
+    fn from(c: MapCorner) -> Self {
+        let corner = c.corner;
+        Self {
+            x: corner.x,
+            y: corner.y,
+            heading: corner.heading,
+            angle: corner.angle,
+            covariance: nalgebra::Matrix4::from_row_slice(&corner.covariance),
+            observations: c.observations,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_map_corner_keeps_its_covariance_row_by_row() {
+        let corner = slam_geom::MapCorner {
+            x: 1.0,
+            y: -2.0,
+            heading: 0.5,
+            angle: 1.2,
+            covariance: nalgebra::Matrix4::from_fn(|r, k| (4 * r + k) as f64),
+            observations: 9,
+        };
+        let message = MapCorner::from(corner);
+        assert_eq!(message.corner.covariance[1], 1.0, "row-major: (0, 1)");
+        assert_eq!(message.corner.covariance[4], 4.0, "row-major: (1, 0)");
+        assert_eq!(slam_geom::MapCorner::from(message), corner);
+        let truth = slam_geom::TrueCorner::from_arms(
+            slam_geom::Point2::new(1.0, 2.0),
+            slam_geom::Point2::x(),
+            slam_geom::Point2::y(),
+        );
+        assert_eq!(slam_geom::TrueCorner::from(TrueCorner::from(truth)), truth);
+    }
+}

@@ -103,10 +103,9 @@ impl World {
             .map(|(tip, d1, d2)| {
                 let p: [f64; 2] = t.transform((*tip).into()).into();
                 let heading = (-(d1[1] + d2[1])).atan2(-(d1[0] + d2[0]));
-                let mut covariance = [0.0; 16];
-                for (i, v) in [0.01, 0.01, 0.002, 0.003].iter().enumerate() {
-                    covariance[i * 5] = *v;
-                }
+                let covariance = nalgebra::Matrix4::from_diagonal(&nalgebra::Vector4::new(
+                    0.01, 0.01, 0.002, 0.003,
+                ));
                 MapCorner {
                     x: p[0] + sigma * rng.normal(),
                     y: p[1] + sigma * rng.normal(),

@@ -14,13 +14,7 @@ use rand_distr::StandardNormal;
 use slam_geom::wrap_angle;
 use slam_proc::{Observation, Pose2};
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrueCorner {
-    pub x: f64,
-    pub y: f64,
-    pub heading: f64,
-    pub angle: f64,
-}
+pub use slam_geom::TrueCorner;
 
 /// How observations are generated.
 #[derive(Debug, Clone, Copy)]
