@@ -49,7 +49,7 @@ pub use reader::{
     ODOMETRY_LOOKAHEAD, OpenRecordingError, RECORD_LENGTH_LIMIT, ReadError, RecordingInfo,
     RecordingReader, SNIFF_MESSAGES, open_recording,
 };
-pub use recording::{RECORDING_FILE, Recording, RecordingSummary};
+pub use recording::{MAP_PERIOD_NS, RECORDING_FILE, Recording, RecordingSummary};
 pub use scan::{FiniteRanges, ScanMessage};
 pub use schema::{ChannelMessage, MESSAGE_ENCODING, SCHEMA_ENCODING, schema_of};
 pub use stamp::Time;

@@ -31,38 +31,42 @@ pub const SNIFF_MESSAGES: u64 = 10_000;
 pub const ODOMETRY_LOOKAHEAD: u64 = 64;
 
 /// Why a recording cannot be replayed at all.
+///
+/// The underlying error is named `cause`, not `source`, and is part of the message: the
+/// message is complete on its own, and `{:#}` does not repeat it.
 #[derive(Debug, thiserror::Error)]
 pub enum OpenRecordingError {
-    #[error("cannot open {path}: {source}")]
+    #[error("cannot open {path}: {cause}")]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
-    #[error("{path} is not an MCAP file: {source}")]
-    NotMcap { path: PathBuf, source: McapError },
-    #[error("{path} is damaged before its first scan (after {messages} messages): {source}")]
+    #[error("{path} is not an MCAP file: {cause}")]
+    NotMcap { path: PathBuf, cause: McapError },
+    #[error("{path} is damaged before its first scan (after {messages} messages): {cause}")]
     Damaged {
         path: PathBuf,
         messages: u64,
-        source: McapError,
+        cause: McapError,
     },
     #[error("{path} is not a recording of slam-record: {reason}")]
     NotARecording { path: PathBuf, reason: String },
 }
 
-/// What reading the next replayed message can go wrong with.
+/// What reading the next replayed message can go wrong with (the underlying error is in
+/// the message, as for [`OpenRecordingError`]).
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
     /// The file cannot be read on (cut short, or a damaged chunk): everything before it was
     /// given out, nothing after it will be.
-    #[error("the recording cannot be read past its message {messages}: {source}")]
-    Cut { messages: u64, source: McapError },
+    #[error("the recording cannot be read past its message {messages}: {cause}")]
+    Cut { messages: u64, cause: McapError },
     /// One message could not be rebuilt: skip it, read on.
-    #[error("message {index} on '{topic}': {source}")]
+    #[error("message {index} on '{topic}': {cause}")]
     Message {
         index: u64,
         topic: &'static str,
-        source: DecodeError,
+        cause: DecodeError,
     },
     /// A message of a replayed topic on a channel of another schema or encoding: skip it.
     #[error("message {index}: {reason}")]
@@ -127,10 +131,10 @@ impl<R: Read> Iterator for RecordingReader<R> {
             let message = match self.messages.next()? {
                 Ok(message) => message,
                 // The reader gives nothing more after an error.
-                Err(source) => {
+                Err(cause) => {
                     return Some(Err(ReadError::Cut {
                         messages: self.read,
-                        source,
+                        cause,
                     }));
                 }
             };
@@ -148,10 +152,10 @@ impl<R: Read> Iterator for RecordingReader<R> {
             return Some(
                 replayed
                     .decode(&message.data)
-                    .map_err(|source| ReadError::Message {
+                    .map_err(|cause| ReadError::Message {
                         index,
                         topic: replayed.topic(),
-                        source,
+                        cause,
                     }),
             );
         }
@@ -166,20 +170,20 @@ pub fn open_recording(
     let open = || {
         File::open(path)
             .map(|f| RecordingReader::new(BufReader::new(f)))
-            .map_err(|source| OpenRecordingError::Io {
+            .map_err(|cause| OpenRecordingError::Io {
                 path: path.to_path_buf(),
-                source,
+                cause,
             })
     };
     let info = check_recording(open()?).map_err(|problem| match problem {
-        Problem::NotMcap(source) => OpenRecordingError::NotMcap {
+        Problem::NotMcap(cause) => OpenRecordingError::NotMcap {
             path: path.to_path_buf(),
-            source,
+            cause,
         },
-        Problem::Damaged { messages, source } => OpenRecordingError::Damaged {
+        Problem::Damaged { messages, cause } => OpenRecordingError::Damaged {
             path: path.to_path_buf(),
             messages,
-            source,
+            cause,
         },
         Problem::Foreign(reason) => OpenRecordingError::NotARecording {
             path: path.to_path_buf(),
@@ -194,7 +198,7 @@ pub fn open_recording(
 #[derive(Debug)]
 enum Problem {
     NotMcap(McapError),
-    Damaged { messages: u64, source: McapError },
+    Damaged { messages: u64, cause: McapError },
     Foreign(String),
 }
 
@@ -214,14 +218,14 @@ fn check_recording<R: Read>(mut reader: RecordingReader<R>) -> Result<RecordingI
                 }
             }
             Ok(Recorded::Odometry(_)) => has_odometry = true,
-            Err(ReadError::Cut { messages, source }) => {
+            Err(ReadError::Cut { messages, cause }) => {
                 if first_scan_ns.is_some() {
                     // Cut later on: the replay reads up to there and reports it.
                     break;
                 }
-                return Err(match source {
-                    McapError::BadMagic => Problem::NotMcap(source),
-                    source => Problem::Damaged { messages, source },
+                return Err(match cause {
+                    McapError::BadMagic => Problem::NotMcap(cause),
+                    cause => Problem::Damaged { messages, cause },
                 });
             }
             Err(e @ (ReadError::Message { .. } | ReadError::Channel { .. })) => {
