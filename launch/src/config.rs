@@ -67,7 +67,7 @@ pub enum SourceKind {
 pub struct ReplaySection {
     /// The log file.
     pub file: Option<PathBuf>,
-    /// `seed-csv` or `carmen`.
+    /// `seed-csv`, `carmen` or `mcap`.
     pub format: String,
     /// Scans per second relative to the log's timing (1 = as recorded); 0 = lockstep.
     pub rate: f64,
@@ -233,10 +233,9 @@ impl RunConfig {
                     "a replay needs a log file (--replay FILE)".into(),
                 ));
             }
-            if !matches!(self.replay.format.as_str(), "seed-csv" | "carmen") {
+            if let Err(e) = self.replay.format.parse::<lidar_replay::LogFormat>() {
                 return Err(ConfigError::Invalid(format!(
-                    "replay format must be seed-csv or carmen, not '{}'",
-                    self.replay.format
+                    "[replay] format (--format): {e}"
                 )));
             }
             if let Err(e) = lidar_replay::check_rate(self.replay.rate) {

@@ -37,7 +37,8 @@ struct Args {
     /// Replay this recorded log instead of simulating.
     #[arg(long, value_name = "FILE")]
     replay: Option<PathBuf>,
-    /// Format of the replayed log: seed-csv or carmen.
+    /// Format of the replayed log: seed-csv, carmen or mcap (a run.mcap of --record; the
+    /// default for a file named *.mcap).
     #[arg(long)]
     format: Option<String>,
     /// HOST:PORT of a live Hokuyo scanner (with --source hokuyo).
@@ -295,6 +296,10 @@ fn apply_overrides(config: &mut RunConfig, args: &Args) {
     }
     if let Some(format) = &args.format {
         config.replay.format = format.clone();
+    } else if let Some(file) = &args.replay
+        && file.extension().is_some_and(|e| e == "mcap")
+    {
+        config.replay.format = lidar_replay::LogFormat::Mcap.name().into();
     }
     if let Some(addr) = &args.addr {
         config.hokuyo.addr = addr.clone();
@@ -456,6 +461,7 @@ fn plan(
                 name: "lidar-replay".into(),
                 program: program("lidar-replay")?,
                 args,
+                expendable: false,
             }
         }
         SourceKind::Hokuyo => {
@@ -478,6 +484,7 @@ fn plan(
                 name: "lidar-hokuyo".into(),
                 program: program("lidar-hokuyo")?,
                 args,
+                expendable: false,
             }
         }
     };
@@ -493,6 +500,7 @@ fn plan(
                 "--out".into(),
                 out.display().to_string(),
             ],
+            expendable: true,
         });
     }
     stages.extend([
@@ -500,16 +508,19 @@ fn plan(
             name: "map-sink".into(),
             program: program("map-sink")?,
             args: sink,
+            expendable: false,
         },
         StagePlan {
             name: "slam-proc".into(),
             program: program("slam-proc")?,
             args: slam,
+            expendable: false,
         },
         StagePlan {
             name: "feature-proc".into(),
             program: program("feature-proc")?,
             args: features,
+            expendable: false,
         },
         source,
     ]);
@@ -546,6 +557,7 @@ fn sim_stage(
         name: "lidar-sim".into(),
         program: program("lidar-sim")?,
         args: sim,
+        expendable: false,
     })
 }
 

@@ -24,6 +24,9 @@ pub struct StagePlan {
     pub name: String,
     pub program: PathBuf,
     pub args: Vec<String>,
+    /// The run goes on without it if it dies (the recorder: the run's results matter more
+    /// than its recording); its death is reported, not a failure.
+    pub expendable: bool,
 }
 
 /// How a run ended.
@@ -93,6 +96,8 @@ pub fn run(
     let mut watch = StallWatch::new(&names, source, *stall, Instant::now());
     let mut all_ready = false;
     let mut losses = Losses::new(&names);
+    let expendable: Vec<bool> = plan.iter().map(|p| p.expendable).collect();
+    let mut lost = vec![false; stages.len()];
 
     let outcome = loop {
         while let Ok(event) = events.try_recv() {
@@ -133,10 +138,24 @@ pub fn run(
 
         let mut all_done = true;
         let mut failure = None;
-        for stage in &mut stages {
+        for (i, stage) in stages.iter_mut().enumerate() {
             match stage.poll_exit() {
                 None => all_done = false,
                 Some(status) if status.success() => {}
+                Some(_) if lost[i] => {}
+                Some(status) if expendable[i] => {
+                    lost[i] = true;
+                    // Its node is dead: clean it up at once so no publisher blocks on it.
+                    domain.cleanup_dead_nodes();
+                    let tail = stage.stderr_tail();
+                    printer.warn(&format!(
+                        "{} died ({}); the run goes on without it; last lines of its \
+                         stderr:\n  {}",
+                        stage.name,
+                        describe(status),
+                        tail.join("\n  ")
+                    ));
+                }
                 Some(status) => {
                     failure.get_or_insert_with(|| {
                         let tail = stage.stderr_tail();

@@ -25,6 +25,8 @@ pub enum Malformation {
     BeamCount,
     /// Angles or range limits that describe no scan.
     BadGeometry,
+    /// A message of a recording that cannot be rebuilt.
+    Undecodable,
 }
 
 impl std::fmt::Display for Malformation {
@@ -39,6 +41,7 @@ impl std::fmt::Display for Malformation {
             Self::BadStamp => "bad timestamp",
             Self::BeamCount => "impossible beam count",
             Self::BadGeometry => "impossible scan geometry",
+            Self::Undecodable => "message not as slam-record writes it",
         })
     }
 }
@@ -63,6 +66,21 @@ impl LineError {
             kind,
             record: None,
             reason: reason.into(),
+        }
+    }
+
+    /// A message of a recording that could not be rebuilt; its `line` is its place among
+    /// the recording's messages.
+    pub fn undecodable(error: &recorder::ReadError) -> Self {
+        let (index, topic) = match error {
+            recorder::ReadError::Message { index, topic, .. } => (*index, Some(*topic)),
+            recorder::ReadError::Channel { index, .. } => (*index, None),
+            recorder::ReadError::Cut { messages, .. } => (*messages, None),
+        };
+        let line = Self::new(index, Malformation::Undecodable, error.to_string());
+        match topic {
+            Some(topic) => line.in_record(topic),
+            None => line,
         }
     }
 
@@ -93,6 +111,9 @@ pub enum ReadError {
     /// The stop flag was raised (Ctrl-C): nothing more is read.
     #[error("reading stopped: a stop was requested")]
     Stopped,
+    /// [`crate::LogFormat::Mcap`] asked of the text readers.
+    #[error("an MCAP recording is not a text log: it is read with open_recording")]
+    NotText,
 }
 
 /// Why a log cannot be replayed at all.

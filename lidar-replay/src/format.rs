@@ -28,6 +28,9 @@ pub enum LogFormat {
     SeedCsv,
     /// CARMEN `.clf`: `FLASER`, `ROBOTLASER1` and `ODOM` lines.
     Carmen,
+    /// `run.mcap` of `slam-record`: the scans and odometry of a run, published again
+    /// exactly as they were. Not a text log: it is read with [`crate::open_recording`].
+    Mcap,
 }
 
 impl LogFormat {
@@ -36,6 +39,7 @@ impl LogFormat {
         match self {
             Self::SeedCsv => "seed-csv",
             Self::Carmen => "carmen",
+            Self::Mcap => "mcap",
         }
     }
 
@@ -43,7 +47,7 @@ impl LogFormat {
     pub fn can_have_odometry(self) -> bool {
         match self {
             Self::SeedCsv => false,
-            Self::Carmen => true,
+            Self::Carmen | Self::Mcap => true,
         }
     }
 }
@@ -61,7 +65,10 @@ impl std::str::FromStr for LogFormat {
         match s {
             "seed-csv" => Ok(Self::SeedCsv),
             "carmen" => Ok(Self::Carmen),
-            other => Err(format!("unknown log format '{other}' (seed-csv or carmen)")),
+            "mcap" => Ok(Self::Mcap),
+            other => Err(format!(
+                "unknown log format '{other}' (seed-csv, carmen or mcap)"
+            )),
         }
     }
 }
@@ -73,6 +80,10 @@ pub enum LogReader<R> {
     SeedCsv(SeedCsvReader<R>),
     // Boxed: it carries its reordering window, ten times the CSV reader's size.
     Carmen(Box<CarmenReader<R>>),
+    /// An MCAP recording asked for as a text log: yields [`ReadError::NotText`] once.
+    NotText {
+        told: bool,
+    },
 }
 
 impl<R: BufRead> LogReader<R> {
@@ -89,6 +100,7 @@ impl<R: BufRead> LogReader<R> {
             LogFormat::Carmen => {
                 Self::Carmen(Box::new(CarmenReader::with_reorder(reader, reorder)))
             }
+            LogFormat::Mcap => Self::NotText { told: false },
         }
     }
 
@@ -98,6 +110,7 @@ impl<R: BufRead> LogReader<R> {
         match self {
             Self::SeedCsv(reader) => Self::SeedCsv(reader.stop_when(stop)),
             Self::Carmen(reader) => Self::Carmen(Box::new(reader.stop_when(stop))),
+            not_text @ Self::NotText { .. } => not_text,
         }
     }
 
@@ -106,13 +119,14 @@ impl<R: BufRead> LogReader<R> {
         match self {
             Self::SeedCsv(reader) => reader.bytes_read(),
             Self::Carmen(reader) => reader.bytes_read(),
+            Self::NotText { .. } => 0,
         }
     }
 
     /// The reordering window and what it did so far; `None` for a format read in line order.
     pub fn reordering(&self) -> Option<(ReorderConfig, ReorderCounts)> {
         match self {
-            Self::SeedCsv(_) => None,
+            Self::SeedCsv(_) | Self::NotText { .. } => None,
             Self::Carmen(reader) => Some((reader.reorder_config(), *reader.reorder_counts())),
         }
     }
@@ -122,13 +136,14 @@ impl<R: BufRead> LogReader<R> {
         match self {
             Self::SeedCsv(reader) => reader.line_number(),
             Self::Carmen(reader) => reader.line_number(),
+            Self::NotText { .. } => 0,
         }
     }
 
     /// Record types the reader skipped as not its business, with their line counts.
     pub fn skipped_records(&self) -> Vec<(String, u64)> {
         match self {
-            Self::SeedCsv(_) => Vec::new(),
+            Self::SeedCsv(_) | Self::NotText { .. } => Vec::new(),
             Self::Carmen(reader) => reader
                 .skipped_records()
                 .iter()
@@ -145,6 +160,9 @@ impl<R: BufRead> Iterator for LogReader<R> {
         match self {
             Self::SeedCsv(reader) => reader.next(),
             Self::Carmen(reader) => reader.next(),
+            Self::NotText { told } => {
+                (!std::mem::replace(told, true)).then_some(Err(ReadError::NotText))
+            }
         }
     }
 }
@@ -173,6 +191,9 @@ pub fn check_format_until<R: BufRead>(
                 first_problem.get_or_insert(e);
             }
             Some(Err(ReadError::Io(e))) => return Err(e.into()),
+            Some(Err(ReadError::NotText)) => {
+                return Err(CheckError::Mismatch(ReadError::NotText.to_string()));
+            }
             Some(Err(ReadError::Stopped)) => return Err(CheckError::Stopped),
             None => break,
         }
@@ -311,9 +332,18 @@ mod tests {
     }
 
     #[test]
+    fn a_recording_is_not_opened_as_a_text_log() {
+        assert_eq!(
+            refusal(LogFormat::Mcap, "anything"),
+            "an MCAP recording is not a text log: it is read with open_recording"
+        );
+    }
+
+    #[test]
     fn formats_parse_from_their_names() {
         assert_eq!("seed-csv".parse(), Ok(LogFormat::SeedCsv));
         assert_eq!("carmen".parse(), Ok(LogFormat::Carmen));
+        assert_eq!("mcap".parse(), Ok(LogFormat::Mcap));
         assert!("csv".parse::<LogFormat>().is_err());
         assert_eq!(LogFormat::Carmen.to_string(), "carmen");
     }

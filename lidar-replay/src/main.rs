@@ -7,12 +7,14 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use clap::Parser;
+use iceoryx2::prelude::{Node, ipc};
 use ipc_types::prelude::*;
 use lidar_replay::reorder::{DEFAULT_REORDER_CAP, DEFAULT_REORDER_WINDOW_NS};
 use lidar_replay::{
     LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError, Pacer, ReadError,
     Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
 };
+use recorder::Recorded;
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
 /// log has it, Odometry (published before the scan it goes with, with the same stamp).
@@ -22,10 +24,14 @@ use lidar_replay::{
 /// later than that, or repeats a stamp, is dropped. Malformed lines are reported with their
 /// line numbers and skipped; a file that is not of the format is refused. The replay ends
 /// with a summary of everything not published, and why.
+///
+/// mcap replays the run.mcap of slam-record: its scans and odometry exactly as they were
+/// published, with their original stamps, sequence numbers and frames.
 #[derive(Debug, Parser)]
 #[command(name = "lidar-replay", version)]
 struct Args {
-    /// Log format: seed-csv (seed-hall scans.csv) or carmen (FLASER, ROBOTLASER1, ODOM).
+    /// Log format: seed-csv (seed-hall scans.csv), carmen (FLASER, ROBOTLASER1, ODOM) or mcap
+    /// (a run.mcap of slam-record).
     #[arg(long)]
     format: LogFormat,
     /// The log file.
@@ -73,6 +79,127 @@ fn main() -> ExitCode {
 
 fn run() -> Result<()> {
     let args = Args::parse();
+    shutdown::install().context("cannot install the Ctrl-C handler")?;
+    match args.format {
+        LogFormat::Mcap => replay_recording(&args),
+        LogFormat::SeedCsv | LogFormat::Carmen => replay_log(&args),
+    }
+}
+
+/// The replay's outlets and what went out on them.
+struct Streams {
+    scans: Outlet<LaserScan>,
+    odometry: Option<Outlet<Odometry>>,
+    odometry_waited: bool,
+    pacer: Pacer,
+    /// Scans published.
+    published: u64,
+    odometry_published: u64,
+    last_stamp: u64,
+    // The outlets' node and domain live as long as they do.
+    _node: Node<ipc::Service>,
+    _domain: Domain,
+}
+
+impl Streams {
+    /// Creates the topics, odometry first (consumers look for the scans and then for the
+    /// rest), and waits for the scans' subscribers.
+    fn open(args: &Args, odometry: bool) -> Result<Self> {
+        let pacer = Pacer::new(args.rate);
+        let delivery = if pacer.is_lockstep() {
+            Delivery::Lossless
+        } else {
+            Delivery::Latest
+        };
+        let domain = Domain::new(&args.domain)?;
+        let node = domain.node("lidar-replay")?;
+        let odometry = if odometry {
+            Some(Outlet::create(
+                &domain,
+                &node,
+                topic::ODOMETRY,
+                delivery,
+                0,
+            )?)
+        } else {
+            None
+        };
+        let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
+        println!("ready");
+
+        let wait = (!pacer.is_lockstep()).then_some(REAL_TIME_SUBSCRIBER_WAIT);
+        scans.wait_for_subscribers(args.subscribers, wait)?;
+        Ok(Self {
+            scans,
+            odometry,
+            odometry_waited: false,
+            pacer,
+            published: 0,
+            odometry_published: 0,
+            last_stamp: 0,
+            _node: node,
+            _domain: domain,
+        })
+    }
+
+    /// Publishes an odometry message stamped `stamp_ns` when it is due. `Ok(false)` when
+    /// Ctrl-C came first.
+    fn odometry(&mut self, stamp_ns: u64, fill: impl FnOnce(&mut Odometry)) -> Result<bool> {
+        let Some(outlet) = &self.odometry else {
+            return Ok(true);
+        };
+        if !self.odometry_waited {
+            self.odometry_waited = true;
+            if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
+                eprintln!(
+                    "lidar-replay: nobody subscribed to the odometry within {} s; \
+                     publishing it anyway",
+                    ODOMETRY_SUBSCRIBER_WAIT.as_secs()
+                );
+            }
+        }
+        if !sleep_until(self.pacer.due(stamp_ns, Instant::now())) {
+            return Ok(false);
+        }
+        outlet.publish(fill)?;
+        self.odometry_published += 1;
+        Ok(true)
+    }
+
+    /// Publishes a scan stamped `stamp_ns` when it is due. `Ok(false)` when Ctrl-C came
+    /// first.
+    fn scan(&mut self, stamp_ns: u64, fill: impl FnOnce(&mut LaserScan)) -> Result<bool> {
+        if !sleep_until(self.pacer.due(stamp_ns, Instant::now())) {
+            return Ok(false);
+        }
+        self.scans.publish(fill)?;
+        self.last_stamp = stamp_ns;
+        self.published += 1;
+        Ok(true)
+    }
+
+    /// Ends the streams: the odometry's end first, so a consumer that sees the scans' end
+    /// has all of it, and scans waiting for odometry after their stamp know that none will
+    /// come.
+    fn end(&self) -> Result<()> {
+        if let Some(outlet) = &self.odometry {
+            outlet.publish_end_of_stream(self.odometry_published, self.last_stamp)?;
+        }
+        self.scans
+            .publish_end_of_stream(self.published, self.last_stamp)?;
+        Ok(())
+    }
+
+    fn published(&self) -> Records {
+        Records {
+            scans: self.published,
+            odometry: self.odometry_published,
+        }
+    }
+}
+
+/// Replays a text log (seed-csv, CARMEN).
+fn replay_log(args: &Args) -> Result<()> {
     // An hour is far beyond any log's disorder, and keeps the nanoseconds within u64.
     anyhow::ensure!(
         args.reorder_window.is_finite() && (0.0..=3600.0).contains(&args.reorder_window),
@@ -83,7 +210,6 @@ fn run() -> Result<()> {
         window_ns: (args.reorder_window * 1e9).round() as u64,
         max_held: args.reorder_cap,
     };
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
     // Refuse a file that is not of the format before anyone sees a port.
     let mut log = match open_log_until(args.format, &args.file, reorder, shutdown::requested) {
         Ok(log) => log,
@@ -94,47 +220,17 @@ fn run() -> Result<()> {
         }
         Err(e) => return Err(e.into()),
     };
-
-    let mut pacer = Pacer::new(args.rate);
-    let delivery = if pacer.is_lockstep() {
-        Delivery::Lossless
-    } else {
-        Delivery::Latest
-    };
-    let domain = Domain::new(&args.domain)?;
-    let node = domain.node("lidar-replay")?;
-    // Consumers look for the scan topic and then for the rest, so the rest comes first.
-    let odometry = if args.format.can_have_odometry() && !args.no_odometry {
-        Some(Outlet::create(
-            &domain,
-            &node,
-            topic::ODOMETRY,
-            delivery,
-            0,
-        )?)
-    } else {
-        None
-    };
-    let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
-    println!("ready");
-
-    let wait = (!pacer.is_lockstep()).then_some(REAL_TIME_SUBSCRIBER_WAIT);
-    scans.wait_for_subscribers(args.subscribers, wait)?;
-
-    let mut published = 0u64;
-    let mut odometry_published = 0u64;
-    let mut odometry_waited = false;
+    let mut streams = Streams::open(args, args.format.can_have_odometry() && !args.no_odometry)?;
     let mut odometry_covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut summary = ReplaySummary {
         file: args.file.display().to_string(),
         ..ReplaySummary::default()
     };
-    let mut last_stamp = 0;
     for record in log.by_ref() {
         if shutdown::requested() {
             break;
         }
-        if args.frames > 0 && published == args.frames {
+        if args.frames > 0 && streams.published == args.frames {
             summary.stopped = Some(format!("--frames {} reached", args.frames));
             break;
         }
@@ -142,79 +238,135 @@ fn run() -> Result<()> {
             Ok(record) => record,
             Err(ReadError::Line(e)) => {
                 summary.malformed_line(&e);
-                let malformed = summary.malformed_total();
-                if malformed <= REPORTED_LINES {
-                    eprintln!("lidar-replay: {}: {e} (skipped)", args.file.display());
-                }
-                if malformed == REPORTED_LINES {
-                    eprintln!("lidar-replay: further malformed lines are only counted");
-                }
+                report_malformed(&summary, &args.file, &e);
                 continue;
             }
             Err(ReadError::Stopped) => break,
-            Err(e @ ReadError::Io(_)) => {
+            Err(e @ (ReadError::Io(_) | ReadError::NotText)) => {
                 return Err(e).with_context(|| format!("{}", args.file.display()));
             }
         };
         match record {
             LogRecord::Odometry(pose) => {
-                let Some(outlet) = &odometry else {
+                if streams.odometry.is_none() {
                     summary.odometry_unpublished += 1;
                     continue;
-                };
-                if !odometry_waited {
-                    odometry_waited = true;
-                    if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
-                        eprintln!(
-                            "lidar-replay: nobody subscribed to the odometry within {} s; \
-                             publishing it anyway",
-                            ODOMETRY_SUBSCRIBER_WAIT.as_secs()
-                        );
-                    }
                 }
-                if !sleep_until(pacer.due(pose.stamp_ns, Instant::now())) {
+                let seq = streams.published;
+                let covariance = odometry_covariance.update(&pose);
+                if !streams.odometry(pose.stamp_ns, |message| {
+                    fill_odometry(message, seq, &pose, covariance)
+                })? {
                     break;
                 }
-                let covariance = odometry_covariance.update(&pose);
-                outlet.publish(|message| fill_odometry(message, published, &pose, covariance))?;
-                odometry_published += 1;
             }
             LogRecord::Scan(scan) => {
-                if !sleep_until(pacer.due(scan.stamp_ns, Instant::now())) {
+                let seq = streams.published;
+                let mut fill_error = None;
+                if !streams.scan(scan.stamp_ns, |message| {
+                    fill_error = fill_scan(message, seq, &scan).err();
+                })? {
                     break;
                 }
-                let mut fill_error = None;
-                scans.publish(|message| fill_error = fill_scan(message, published, &scan).err())?;
                 if let Some(e) = fill_error {
                     anyhow::bail!("line {}: {e}", scan.line);
                 }
-                last_stamp = scan.stamp_ns;
-                published += 1;
             }
         }
     }
-    let interrupted = shutdown::requested();
-    if interrupted {
-        summary.stopped = Some(format!("interrupted after {published} scans"));
-    } else {
-        // The odometry's end first: a consumer that sees the scans' end has all of it, and
-        // scans waiting for odometry after their stamp know that none will come.
-        if let Some(outlet) = &odometry {
-            outlet.publish_end_of_stream(odometry_published, last_stamp)?;
-        }
-        scans.publish_end_of_stream(published, last_stamp)?;
-    }
+    finish(&streams, &mut summary)?;
     summary.lines_read = log.line_number();
-    summary.published = Records {
-        scans: published,
-        odometry: odometry_published,
-    };
     summary.reordering = log.reordering();
     summary.not_replayed = log.skipped_records();
-    // One block at the very end, so slam-launch can show it whole (see SUMMARY_HEAD).
+    report(&summary);
+    Ok(())
+}
+
+/// Replays a recording of slam-record: its scans and odometry as they were published.
+fn replay_recording(args: &Args) -> Result<()> {
+    // Refuse a file that is no recording before anyone sees a port.
+    let (mut recording, info) = recorder::open_recording(&args.file)?;
+    let mut streams = Streams::open(args, info.has_odometry && !args.no_odometry)?;
+    let mut summary = ReplaySummary {
+        file: args.file.display().to_string(),
+        recording: true,
+        ..ReplaySummary::default()
+    };
+    for next in recording.by_ref() {
+        if shutdown::requested() {
+            break;
+        }
+        if args.frames > 0 && streams.published == args.frames {
+            summary.stopped = Some(format!("--frames {} reached", args.frames));
+            break;
+        }
+        let published = match next {
+            Ok(Recorded::Scan(scan)) => {
+                streams.scan(scan.header.stamp_ns, |message| *message = *scan)?
+            }
+            Ok(Recorded::Odometry(odometry)) => {
+                if streams.odometry.is_none() {
+                    summary.odometry_unpublished += 1;
+                    continue;
+                }
+                streams.odometry(odometry.header.stamp_ns, |message| *message = *odometry)?
+            }
+            Err(
+                e @ (recorder::ReadError::Message { .. } | recorder::ReadError::Channel { .. }),
+            ) => {
+                let error = lidar_replay::LineError::undecodable(&e);
+                summary.malformed_line(&error);
+                report_malformed(&summary, &args.file, &error);
+                continue;
+            }
+            Err(e @ recorder::ReadError::Cut { .. }) => {
+                eprintln!("lidar-replay: {}: {e}", args.file.display());
+                summary.cut = Some(e.to_string());
+                break;
+            }
+        };
+        if !published {
+            break;
+        }
+    }
+    finish(&streams, &mut summary)?;
+    summary.lines_read = recording.messages_read();
+    summary.not_replayed = recording
+        .passed_over()
+        .iter()
+        .map(|(topic, count)| (topic.clone(), *count))
+        .collect();
+    report(&summary);
+    Ok(())
+}
+
+/// Says why a line (a message) was skipped, for the first [`REPORTED_LINES`].
+fn report_malformed(summary: &ReplaySummary, file: &std::path::Path, e: &lidar_replay::LineError) {
+    let malformed = summary.malformed_total();
+    if malformed <= REPORTED_LINES {
+        eprintln!("lidar-replay: {}: {e} (skipped)", file.display());
+    }
+    if malformed == REPORTED_LINES {
+        eprintln!("lidar-replay: further malformed lines are only counted");
+    }
+}
+
+/// Ends the streams unless Ctrl-C stopped the replay, and notes what was published.
+fn finish(streams: &Streams, summary: &mut ReplaySummary) -> Result<()> {
+    if shutdown::requested() {
+        summary.stopped = Some(format!("interrupted after {} scans", streams.published));
+    } else {
+        streams.end()?;
+    }
+    summary.published = streams.published();
+    Ok(())
+}
+
+/// The summary as one block at the very end, so slam-launch can show it whole (see
+/// SUMMARY_HEAD), and its losses for the launcher.
+fn report(summary: &ReplaySummary) {
     eprintln!("{summary}");
     ipc_types::losses::report(&summary.losses());
-    Ok(())
 }
 
 /// Sleeps until `due` (at once when `None` or past). Returns false when Ctrl-C came first.

@@ -18,7 +18,13 @@ pub const SUMMARY_HEAD: &str = "lidar-replay: summary";
 pub struct ReplaySummary {
     /// The log, as given.
     pub file: String,
+    /// A recording (`run.mcap`) rather than a text log: what was read are messages, and
+    /// what was not replayed are topics.
+    pub recording: bool,
+    /// Lines read, or a recording's messages.
     pub lines_read: u64,
+    /// Where a recording could not be read on (cut short, damaged), if it could not.
+    pub cut: Option<String>,
     pub published: Records,
     /// Odometry poses read but not published (`--no-odometry`).
     pub odometry_unpublished: u64,
@@ -48,6 +54,9 @@ impl ReplaySummary {
     /// no loss.
     pub fn losses(&self) -> Vec<(&'static str, u64)> {
         let mut counts = vec![("malformed_lines", self.malformed_total())];
+        if self.recording {
+            counts.push(("recording_cut_short", u64::from(self.cut.is_some())));
+        }
         if let Some((_, c)) = &self.reordering {
             counts.extend([
                 ("late_scans", c.late.scans),
@@ -79,12 +88,16 @@ impl fmt::Display for Counted {
 
 impl fmt::Display for ReplaySummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let read = if self.recording { "messages" } else { "lines" };
         writeln!(
             f,
-            "{SUMMARY_HEAD} of {} ({} lines read)",
+            "{SUMMARY_HEAD} of {} ({} {read} read)",
             self.file, self.lines_read
         )?;
         write!(f, "  published:       {}", Counted(self.published))?;
+        if let Some(cut) = &self.cut {
+            write!(f, "\n  cut short:       {cut}")?;
+        }
         if let Some(reason) = &self.stopped {
             write!(f, "\n  stopped early:   {reason}")?;
         }
@@ -115,7 +128,12 @@ impl fmt::Display for ReplaySummary {
                 )?;
             }
         }
-        write!(f, "\n  malformed lines: {}", self.malformed_total())?;
+        let malformed = if self.recording {
+            "bad messages:   "
+        } else {
+            "malformed lines:"
+        };
+        write!(f, "\n  {malformed} {}", self.malformed_total())?;
         if !self.malformed.is_empty() {
             write!(f, " skipped, by reason:")?;
         }

@@ -2,18 +2,18 @@
 //! from our planar poses.
 
 use schemars::JsonSchema;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use ipc_types::Pose2;
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Vector3 {
     pub x: f64,
     pub y: f64,
     pub z: f64,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Quaternion {
     pub x: f64,
     pub y: f64,
@@ -42,7 +42,7 @@ impl Quaternion {
 }
 
 /// A position and orientation in 3D; ours lie in the z = 0 plane.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Pose {
     pub position: Vector3,
     pub orientation: Quaternion,
@@ -74,7 +74,7 @@ impl From<Pose2> for Pose {
 
 /// Our planar pose as it is, for the fields Foxglove does not define (lossless: no trip
 /// through a quaternion).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Planar {
     pub x: f64,
     pub y: f64,
@@ -88,5 +88,12 @@ impl From<Pose2> for Planar {
             y: p.y,
             yaw: p.yaw,
         }
+    }
+}
+
+impl From<Planar> for Pose2 {
+    /// As it was recorded: the yaw was wrapped where it was made.
+    fn from(p: Planar) -> Self {
+        Pose2::new(p.x, p.y, p.yaw)
     }
 }

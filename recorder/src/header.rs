@@ -1,10 +1,10 @@
 //! Our message header, as every message of our own schemas carries it.
 
 use schemars::JsonSchema;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// `ipc_types::Header` with its frame as a string and its end-of-stream flag as it is.
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct HeaderJson {
     /// Sequence number of the source scan.
     pub seq: u64,
@@ -25,5 +25,15 @@ impl From<&ipc_types::Header> for HeaderJson {
             frame_id: h.frame_id().to_owned(),
             flags: h.flags,
         }
+    }
+}
+
+impl HeaderJson {
+    /// The header this was made from.
+    pub fn to_header(&self) -> ipc_types::Header {
+        let mut header = ipc_types::Header::new(self.seq, self.stamp_ns, &self.frame_id);
+        header.sent_ns = self.sent_ns;
+        header.flags = self.flags;
+        header
     }
 }

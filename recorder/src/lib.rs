@@ -12,10 +12,15 @@
 //! readable up to its last complete chunk. `slam-record` is the process; this library holds
 //! the encoding and the file, without shared memory.
 //!
+//! A recording replays ([`open_recording`], [`RecordingReader`]): the scans and odometry are
+//! rebuilt from their records exactly as they were published ([`ReplayedChannel::decode`],
+//! the inverse of their encoders).
+//!
 //! Why JSON with JSON schemas: it is MCAP's and Foxglove's simplest well-supported pairing
 //! (no code generation, no descriptor sets), every field is readable in Foxglove's raw
 //! message panel, and zstd takes most of its size back.
 
+mod decode;
 mod error;
 mod geometry;
 mod ground_truth;
@@ -24,12 +29,14 @@ mod mcap_file;
 mod own;
 mod path;
 mod pose;
+mod reader;
 mod recording;
 mod scan;
 mod schema;
 mod stamp;
 mod transform;
 
+pub use decode::{DecodeError, Recorded, ReplayedChannel};
 pub use error::RecordError;
 pub use geometry::{Planar, Pose, Quaternion, Vector3};
 pub use ground_truth::{GroundTruthMessage, WORLD_FRAME};
@@ -38,8 +45,12 @@ pub use mcap_file::{CHUNK_BYTES, ChannelCount, FLUSH_PERIOD, McapFile};
 pub use own::{FeaturesMessage, MapMessage, OdometryMessage, WorldCornersMessage};
 pub use path::{PathChunks, PathMessage};
 pub use pose::{MAP_FRAME, PoseMessage};
-pub use recording::{RECORDING_FILE, Recording, RecordingSummary};
-pub use scan::ScanMessage;
+pub use reader::{
+    ODOMETRY_LOOKAHEAD, OpenRecordingError, RECORD_LENGTH_LIMIT, ReadError, RecordingInfo,
+    RecordingReader, SNIFF_MESSAGES, open_recording,
+};
+pub use recording::{MAP_PERIOD_NS, RECORDING_FILE, Recording, RecordingSummary};
+pub use scan::{FiniteRanges, ScanMessage};
 pub use schema::{ChannelMessage, MESSAGE_ENCODING, SCHEMA_ENCODING, schema_of};
 pub use stamp::Time;
 pub use transform::{BASE_FRAME, TransformMessage};

@@ -216,6 +216,13 @@ fn run() -> Result<()> {
             channel.topic, channel.schema, channel.messages
         ));
     }
+    if summary.maps_left_out > 0 {
+        say_err(&format!(
+            "slam-record: {} map snapshots left out (one each {} s of data, and the last)",
+            summary.maps_left_out,
+            recorder::MAP_PERIOD_NS / 1_000_000_000
+        ));
+    }
     if summary.path_chunks_out_of_place > 0 {
         say_err(&format!(
             "slam-record: {} chunks of the final path came out of place; the path is not \

@@ -2,14 +2,14 @@
 //! (`slam.*`), so that nothing the pipeline said is lost.
 
 use schemars::JsonSchema;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::geometry::Planar;
 use crate::header::HeaderJson;
 use crate::schema::ChannelMessage;
 
 /// `ipc_types::Odometry`.
-#[derive(Debug, Serialize, JsonSchema)]
+#[derive(Debug, Serialize, Deserialize, JsonSchema)]
 pub struct OdometryMessage {
     pub header: HeaderJson,
     /// `odom_from_robot`.
@@ -34,6 +34,17 @@ impl OdometryMessage {
             linear_velocity: o.linear_velocity,
             angular_velocity: o.angular_velocity,
         }
+    }
+
+    /// The odometry this message was made from, bit for bit.
+    pub fn to_odometry(&self) -> Box<ipc_types::Odometry> {
+        let mut odometry = <ipc_types::Odometry as ipc_types::Zeroable>::boxed_zeroed();
+        odometry.header = self.header.to_header();
+        odometry.pose = self.pose.into();
+        odometry.covariance = self.covariance;
+        odometry.linear_velocity = self.linear_velocity;
+        odometry.angular_velocity = self.angular_velocity;
+        odometry
     }
 }
 

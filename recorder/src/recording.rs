@@ -19,6 +19,12 @@ use crate::transform::{BASE_FRAME, TransformMessage};
 /// The recording's file name in the run's directory.
 pub const RECORDING_FILE: &str = "run.mcap";
 
+/// A map snapshot is recorded at most once per this much data time, and the last one at
+/// the end: each holds the whole map, so a run's recording would otherwise grow with the
+/// square of its length (a 40 Hz run sends one every half second), and one every two
+/// seconds is plenty to watch the map grow.
+pub const MAP_PERIOD_NS: u64 = 2_000_000_000;
+
 /// What a finished recording holds.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RecordingSummary {
@@ -27,6 +33,8 @@ pub struct RecordingSummary {
     pub channels: Vec<ChannelCount>,
     /// Path chunks that did not continue the path (the path was then not recorded).
     pub path_chunks_out_of_place: u64,
+    /// Map snapshots left out as less than [`MAP_PERIOD_NS`] after the last one recorded.
+    pub maps_left_out: u64,
 }
 
 /// A recording being written. End-of-stream markers carry no data and are not recorded.
@@ -37,6 +45,12 @@ pub struct Recording {
     chunks: PathChunks,
     /// The scan frames already placed on the robot (`base_link` → frame).
     sensor_frames: Vec<String>,
+    /// Data time of the last map snapshot recorded.
+    last_map_ns: Option<u64>,
+    /// The newest snapshot left out, with its stamp and send time: written at the end if
+    /// no later one was recorded, so the file ends with the run's final map.
+    held_map: Option<(MapMessage, u64, u64)>,
+    maps_left_out: u64,
 }
 
 impl Recording {
@@ -48,6 +62,9 @@ impl Recording {
             path,
             chunks: PathChunks::default(),
             sensor_frames: Vec::new(),
+            last_map_ns: None,
+            held_map: None,
+            maps_left_out: 0,
         })
     }
 
@@ -105,13 +122,31 @@ impl Recording {
         self.file.write(&tf, h.stamp_ns, h.sent_ns)
     }
 
+    /// A map snapshot, at most one per [`MAP_PERIOD_NS`] of data time (and the last).
     pub fn map(&mut self, map: &MapSnapshot) -> Result<(), RecordError> {
         let h = map.header;
         if h.is_end_of_stream() {
             return Ok(());
         }
-        self.file
-            .write(&MapMessage::new(map), h.stamp_ns, h.sent_ns)
+        let message = MapMessage::new(map);
+        if self
+            .last_map_ns
+            .is_some_and(|last| h.stamp_ns < last.saturating_add(MAP_PERIOD_NS))
+        {
+            if self
+                .held_map
+                .replace((message, h.stamp_ns, h.sent_ns))
+                .is_some()
+            {
+                self.maps_left_out += 1;
+            }
+            return Ok(());
+        }
+        if self.held_map.take().is_some() {
+            self.maps_left_out += 1;
+        }
+        self.last_map_ns = Some(h.stamp_ns);
+        self.file.write(&message, h.stamp_ns, h.sent_ns)
     }
 
     /// A chunk of the final path; the path is recorded once all of it is in.
@@ -146,13 +181,18 @@ impl Recording {
             .write(&WorldCornersMessage::new(world), h.stamp_ns, h.sent_ns)
     }
 
-    /// Closes the file with its summary and indexes.
-    pub fn finish(self) -> Result<RecordingSummary, RecordError> {
+    /// Writes the last map snapshot if it was held back, and closes the file with its
+    /// summary and indexes.
+    pub fn finish(mut self) -> Result<RecordingSummary, RecordError> {
+        if let Some((message, stamp_ns, sent_ns)) = self.held_map.take() {
+            self.file.write(&message, stamp_ns, sent_ns)?;
+        }
         let out_of_place = self.chunks.out_of_place;
         Ok(RecordingSummary {
             channels: self.file.finish()?,
             path: self.path,
             path_chunks_out_of_place: out_of_place,
+            maps_left_out: self.maps_left_out,
         })
     }
 }

@@ -216,3 +216,27 @@ pub fn output_within(command: &mut Command, limit: std::time::Duration) -> Optio
     let _ = child.wait();
     None
 }
+
+/// An emulated Hokuyo (`hokuyo-emulator`) serving the scans of `file` on a free port, and
+/// its `HOST:PORT`. The caller kills and reaps it.
+pub fn start_hokuyo_emulator(file: &Path) -> (std::process::Child, String) {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let mut emulator = Command::new(bin("hokuyo-emulator"))
+        .args(["--port", "0", "--file"])
+        .arg(file)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("hokuyo-emulator");
+    let mut first = String::new();
+    BufReader::new(emulator.stdout.take().expect("the emulator's stdout"))
+        .read_line(&mut first)
+        .expect("the emulator's address");
+    let addr = first
+        .trim()
+        .strip_prefix("listening on ")
+        .unwrap_or_else(|| panic!("emulator said {first:?}"))
+        .to_owned();
+    (emulator, addr)
+}

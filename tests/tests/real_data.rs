@@ -1,9 +1,6 @@
 //! The pipeline on the real Hokuyo recording: replayed from the log, and served by an
 //! emulated sensor to the live driver.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Command, Stdio};
-
 use tests::*;
 
 #[test]
@@ -40,21 +37,7 @@ fn seed_hall_replay_maps_the_hall_without_duplicate_corners() {
 #[test]
 fn emulated_hokuyo_gives_the_same_map_as_the_replayed_log() {
     let log = data_dir().join("seed-hall/scans.csv");
-    let mut emulator = Command::new(bin("hokuyo-emulator"))
-        .args(["--port", "0", "--file", log.to_str().unwrap()])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("hokuyo-emulator");
-    let mut first = String::new();
-    BufReader::new(emulator.stdout.take().unwrap())
-        .read_line(&mut first)
-        .unwrap();
-    let addr = first
-        .trim()
-        .strip_prefix("listening on ")
-        .unwrap_or_else(|| panic!("emulator said {first:?}"))
-        .to_owned();
+    let (mut emulator, addr) = start_hokuyo_emulator(&log);
 
     let live_out = scratch("hokuyo-live");
     let config = live_out.join("hokuyo.toml");

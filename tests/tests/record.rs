@@ -116,7 +116,9 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(count("/sim/world_corners"), 1);
     assert_eq!(count("/slam/path"), 1);
     assert!(count("/robot/odometry") > 0);
-    assert!(count("/slam/map") >= FRAMES / 20, "a map every 20 scans");
+    // A map every 20 scans (0.5 s), recorded at most every 2 s of data, and the last.
+    let maps = count("/slam/map");
+    assert!((2..FRAMES / 20).contains(&maps), "{maps} maps");
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(tf_children.get("base_link"), Some(&processed));
     assert_eq!(tf_children.get("laser"), Some(&1));
@@ -170,7 +172,8 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     // A scan holds its beams.
     let scan = scans.last.as_ref().expect("a scan");
     let beams = scan["ranges"].as_array().map_or(0, Vec::len);
-    assert_eq!(scan["intensities"].as_array().map(Vec::len), Some(beams));
+    // The simulator gives no intensities: none are written (ROS's rule for LaserScan).
+    assert_eq!(scan["intensities"].as_array().map(Vec::len), Some(0));
     assert!(beams > 100, "{beams} beams");
     assert_eq!(scan["frame_id"], "laser");
 
