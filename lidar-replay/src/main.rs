@@ -48,6 +48,11 @@ struct Args {
     /// Scans to publish; 0 = the whole log.
     #[arg(long, default_value_t = 0)]
     frames: u64,
+    /// Start at this scan of the log (from 0): the scans before it and their odometry are
+    /// not published, but for the last odometry reading before it. Sequence numbers start
+    /// at 0 at that scan; stamps stay the log's.
+    #[arg(long, value_name = "SCANS", default_value_t = 0)]
+    skip: u64,
     /// Log time (seconds) a record waits for older ones read after it (CARMEN logs that go
     /// back in time); records later than that are dropped. 0 = nothing may go back further
     /// than behind the newest record.
@@ -136,6 +141,10 @@ fn run() -> Result<()> {
         ..ReplaySummary::default()
     };
     let mut last_stamp = 0;
+    let mut skipped = 0u64;
+    // The newest odometry reading while skipping: it goes out before the first scan, so
+    // that scan's stamp has a reading at or before it to pair with.
+    let mut odometry_before_start = None;
     for record in log.by_ref() {
         if shutdown::requested() {
             break;
@@ -162,44 +171,75 @@ fn run() -> Result<()> {
                 return Err(e).with_context(|| format!("{}", args.file.display()));
             }
         };
-        match record {
-            LogRecord::Odometry(pose) => {
-                let Some(outlet) = &odometry else {
-                    summary.odometry_unpublished += 1;
-                    continue;
-                };
-                if !odometry_waited {
-                    odometry_waited = true;
-                    if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
-                        eprintln!(
-                            "lidar-replay: nobody subscribed to the odometry within {} s; \
-                             publishing it anyway",
-                            ODOMETRY_SUBSCRIBER_WAIT.as_secs()
-                        );
-                    }
-                }
-                if !sleep_until(pacer.due(pose.stamp_ns, Instant::now())) {
-                    break;
-                }
-                let covariance = odometry_covariance.update(&pose);
-                outlet.publish(|message| fill_odometry(message, published, &pose, covariance))?;
-                odometry_published += 1;
+        if skipped < args.skip {
+            match record {
+                LogRecord::Scan(_) => skipped += 1,
+                LogRecord::Odometry(pose) => odometry_before_start = Some(pose),
             }
-            LogRecord::Scan(scan) => {
-                if !sleep_until(pacer.due(scan.stamp_ns, Instant::now())) {
-                    break;
+            continue;
+        }
+        let records = match (odometry_before_start.take(), record) {
+            (Some(before), record @ LogRecord::Scan(_)) => {
+                vec![LogRecord::Odometry(before), record]
+            }
+            (_, record) => vec![record],
+        };
+        // A `break` below (Ctrl-C) ends this loop; the outer one then sees the request.
+        for record in records {
+            match record {
+                LogRecord::Odometry(pose) => {
+                    let Some(outlet) = &odometry else {
+                        summary.odometry_unpublished += 1;
+                        continue;
+                    };
+                    if !odometry_waited {
+                        odometry_waited = true;
+                        if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
+                            eprintln!(
+                                "lidar-replay: nobody subscribed to the odometry within {} s; \
+                             publishing it anyway",
+                                ODOMETRY_SUBSCRIBER_WAIT.as_secs()
+                            );
+                        }
+                    }
+                    if !sleep_until(pacer.due(pose.stamp_ns, Instant::now())) {
+                        break;
+                    }
+                    let covariance = odometry_covariance.update(&pose);
+                    outlet
+                        .publish(|message| fill_odometry(message, published, &pose, covariance))?;
+                    odometry_published += 1;
                 }
-                let mut fill_error = None;
-                scans.publish(|message| fill_error = fill_scan(message, published, &scan).err())?;
-                if let Some(e) = fill_error {
-                    anyhow::bail!("line {}: {e}", scan.line);
+                LogRecord::Scan(scan) => {
+                    if !sleep_until(pacer.due(scan.stamp_ns, Instant::now())) {
+                        break;
+                    }
+                    let mut fill_error = None;
+                    scans.publish(|message| {
+                        fill_error = fill_scan(message, published, &scan).err()
+                    })?;
+                    if let Some(e) = fill_error {
+                        anyhow::bail!("line {}: {e}", scan.line);
+                    }
+                    last_stamp = scan.stamp_ns;
+                    published += 1;
                 }
-                last_stamp = scan.stamp_ns;
-                published += 1;
             }
         }
     }
     let interrupted = shutdown::requested();
+    anyhow::ensure!(
+        interrupted || skipped == args.skip,
+        "--skip {}: {} has only {skipped} scans",
+        args.skip,
+        args.file.display()
+    );
+    if args.skip > 0 {
+        eprintln!(
+            "lidar-replay: started at scan {} of the log (--skip)",
+            args.skip
+        );
+    }
     if interrupted {
         summary.stopped = Some(format!("interrupted after {published} scans"));
     } else {

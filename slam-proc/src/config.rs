@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::localize_config::LocalizeConfig;
 use crate::pose_graph::GraphNoise;
 
 /// FastSLAM parameters. Metres, radians, probabilities in `(0, 1)`.
@@ -154,6 +155,8 @@ pub struct SlamConfig {
     pub duplicate_radius: f64,
     /// Headings closer than this are similar for the duplicate test, radians.
     pub duplicate_heading: f64,
+    /// Localization on a saved map (`slam-proc --map DIR --localize`).
+    pub localize: LocalizeConfig,
 }
 
 impl Default for SlamConfig {
@@ -210,6 +213,7 @@ impl Default for SlamConfig {
             view_fov: 270f64.to_radians(),
             duplicate_radius: 0.5,
             duplicate_heading: 30f64.to_radians(),
+            localize: LocalizeConfig::default(),
         }
     }
 }
@@ -226,7 +230,7 @@ pub struct ConfigError {
     pub reason: &'static str,
 }
 
-fn check(
+pub(crate) fn check(
     field: &'static str,
     value: f64,
     ok: bool,
@@ -401,7 +405,7 @@ impl SlamConfig {
             fov <= std::f64::consts::TAU,
             "must be at most 2 pi",
         )?;
-        Ok(())
+        self.localize.validate()
     }
 }
 
