@@ -372,6 +372,33 @@ mod tests {
     }
 
     #[test]
+    fn localizing_needs_a_map_and_a_pose_that_reads() {
+        let config: RunConfig = toml::from_str(
+            "map = 'runs/office'\nlocalize = true\ninitial_pose = '1,-2,0.5'\n\
+             [replay]\nstart = 300\n[slam.localize]\nmax_particles = 5000",
+        )
+        .unwrap();
+        config.validate().unwrap();
+        assert_eq!(config.replay.start, 300);
+        assert!(config.slam.extra.contains_key("localize"));
+        let mut bad = config.clone();
+        bad.map = None;
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("--map DIR")
+        );
+        let mut bad = config;
+        bad.initial_pose = Some("1,2".into());
+        let message = bad.validate().unwrap_err().to_string();
+        assert!(
+            message.contains("--initial-pose") && message.contains("three"),
+            "{message}"
+        );
+    }
+
+    #[test]
     fn unknown_sections_are_refused() {
         assert!(toml::from_str::<RunConfig>("[simulation]\nworld = 'x'").is_err());
     }

@@ -18,14 +18,16 @@ use slam_eval::ScoreSummary;
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source`,
-/// `relations`, `stall_warning` and `stall_limit` and the sections [sim], [replay],
-/// [hokuyo], [features], [front_end], [slam], [grid] and [record]; options given here
-/// override the file. Keys a section does not know are refused by the process that reads it.
+/// `relations`, `stall_warning`, `stall_limit`, `map`, `localize` and `initial_pose` and the
+/// sections [sim], [replay], [hokuyo], [features], [front_end], [slam], [grid] and [record];
+/// options given here override the file. Keys a section does not know are refused by the
+/// process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
-    /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit` and [sim],
-    /// [replay], [hokuyo], [features], [front_end], [slam], [grid], [record] sections.
+    /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit`, `map`,
+    /// `localize`, `initial_pose` and [sim], [replay], [hokuyo], [features], [front_end],
+    /// [slam], [grid], [record] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
