@@ -145,6 +145,13 @@ fn run() -> Result<ExitCode> {
             "refusing to start: cannot localize on the map in {}: it has no occupancy grid",
             dir.display()
         );
+        let yaw = saved.grid.as_ref().map_or(0.0, |g| g.yaml.origin[2]);
+        anyhow::ensure!(
+            !config.localize || yaw == 0.0,
+            "refusing to start: cannot localize on the map in {}: its grid is rotated \
+             (origin yaw {yaw}), which is not supported",
+            dir.display()
+        );
     }
     // An address that names nothing would be retried for ever by lidar-hokuyo.
     if config.source == SourceKind::Hokuyo {

@@ -365,6 +365,13 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
             dir.display()
         )
     })?;
+    // The likelihood field reads the grid with its cells along the map's axes.
+    anyhow::ensure!(
+        grid.yaml.origin[2] == 0.0,
+        "cannot localize on the map in {}: its grid is rotated (origin yaw {}), which is not supported",
+        dir.display(),
+        grid.yaml.origin[2]
+    );
     let corners = prior_corners(saved);
     let start = args.initial_pose.map_or(Start::Global, Start::Known);
     let mut localizer = Localizer::new(config.localize, grid, start, args.seed, corners.len())
