@@ -23,8 +23,9 @@ const _: () = {
 
     assert!(size_of::<Odometry>() == 176);
     assert!(size_of::<GroundTruthPose>() == 88);
-    assert!(size_of::<PoseEstimate>() == 272);
+    assert!(size_of::<PoseEstimate>() == 280);
     assert!(offset_of!(PoseEstimate, timing) == 232);
+    assert!(offset_of!(PoseEstimate, localization) == 272);
 
     assert!(size_of::<ScanMotion>() == 136);
     assert!(offset_of!(Features, odometry) == 88);

@@ -227,6 +227,8 @@ fn small_messages_round_trip() {
             resample_ns: 4,
             total_ns: 10,
         },
+        localization: PoseEstimate::CONVERGED,
+        reserved: 0,
     };
     assert_eq!(decode::<PoseEstimate>(&encode(&estimate)), estimate);
 }

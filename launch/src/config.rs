@@ -75,6 +75,8 @@ pub struct ReplaySection {
     pub odometry: bool,
     /// Scans to publish; 0 = the whole log.
     pub frames: u64,
+    /// The log's scan to start at, from 0 (`--replay-start`, lidar-replay's `--skip`).
+    pub start: u64,
     /// Seconds of log time lidar-replay waits for lines written out of time order
     /// (`--reorder-window`); unset = its default.
     pub reorder_window: Option<f64>,
@@ -88,6 +90,7 @@ impl Default for ReplaySection {
             rate: 0.0,
             odometry: true,
             frames: 0,
+            start: 0,
             reorder_window: None,
         }
     }
@@ -179,6 +182,14 @@ pub struct RunConfig {
     /// Seconds a stage may make no progress before the run fails (`--stall-limit`); at least
     /// `stall_warning`.
     pub stall_limit: f64,
+    /// A saved map (a run's output directory) to map on top of, or with `localize` to
+    /// localize on (`--map`).
+    pub map: Option<PathBuf>,
+    /// Localize on `map` without changing it (`--localize`).
+    pub localize: bool,
+    /// Where the robot starts in the map, `x,y,yaw` (`--initial-pose`); localizing without
+    /// it searches the whole map.
+    pub initial_pose: Option<String>,
     pub sim: SimSection,
     pub replay: ReplaySection,
     pub hokuyo: HokuyoSection,
@@ -197,6 +208,9 @@ impl Default for RunConfig {
             relations: None,
             stall_warning: STALL_WARNING_S,
             stall_limit: STALL_LIMIT_S,
+            map: None,
+            localize: false,
+            initial_pose: None,
             sim: SimSection::default(),
             replay: ReplaySection::default(),
             hokuyo: HokuyoSection::default(),
@@ -241,6 +255,16 @@ impl RunConfig {
             if let Err(e) = lidar_replay::check_rate(self.replay.rate) {
                 return Err(ConfigError::Invalid(format!("[replay] rate (--rate) {e}")));
             }
+        }
+        if self.map.is_none() && (self.localize || self.initial_pose.is_some()) {
+            return Err(ConfigError::Invalid(
+                "--localize and --initial-pose need a saved map (--map DIR)".into(),
+            ));
+        }
+        if let Some(pose) = &self.initial_pose
+            && let Err(e) = slam_proc::parse_pose(pose)
+        {
+            return Err(ConfigError::Invalid(format!("--initial-pose: {e}")));
         }
         if self.slam.particles == 0 {
             return Err(ConfigError::Invalid("particles must be at least 1".into()));
@@ -330,6 +354,33 @@ mod tests {
         assert_eq!(config.slam.particles, 50);
         assert!(config.slam.extra.contains_key("resample_threshold"));
         config.validate().unwrap();
+    }
+
+    #[test]
+    fn localizing_needs_a_map_and_a_pose_that_reads() {
+        let config: RunConfig = toml::from_str(
+            "map = 'runs/office'\nlocalize = true\ninitial_pose = '1,-2,0.5'\n\
+             [replay]\nstart = 300\n[slam.localize]\nmax_particles = 5000",
+        )
+        .unwrap();
+        config.validate().unwrap();
+        assert_eq!(config.replay.start, 300);
+        assert!(config.slam.extra.contains_key("localize"));
+        let mut bad = config.clone();
+        bad.map = None;
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("--map DIR")
+        );
+        let mut bad = config;
+        bad.initial_pose = Some("1,2".into());
+        let message = bad.validate().unwrap_err().to_string();
+        assert!(
+            message.contains("--initial-pose") && message.contains("three"),
+            "{message}"
+        );
     }
 
     #[test]

@@ -18,14 +18,16 @@ use slam_eval::ScoreSummary;
 /// and writes trajectory, map, picture and metrics into the output directory.
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source`,
-/// `relations`, `stall_warning` and `stall_limit` and the sections [sim], [replay],
-/// [hokuyo], [features], [front_end], [slam], [grid] and [record]; options given here
-/// override the file. Keys a section does not know are refused by the process that reads it.
+/// `relations`, `stall_warning`, `stall_limit`, `map`, `localize` and `initial_pose` and the
+/// sections [sim], [replay], [hokuyo], [features], [front_end], [slam], [grid] and [record];
+/// options given here override the file. Keys a section does not know are refused by the
+/// process that reads it.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 struct Args {
-    /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit` and [sim],
-    /// [replay], [hokuyo], [features], [front_end], [slam], [grid], [record] sections.
+    /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit`, `map`,
+    /// `localize`, `initial_pose` and [sim], [replay], [hokuyo], [features], [front_end],
+    /// [slam], [grid], [record] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -91,6 +93,21 @@ struct Args {
     /// No progress output, only the final summary.
     #[arg(long)]
     quiet: bool,
+    /// A saved map (a run's output directory): the run maps on top of it, extending its
+    /// landmarks, or with --localize localizes on it.
+    #[arg(long, value_name = "DIR")]
+    map: Option<PathBuf>,
+    /// Localize on --map without changing it; the status line says whether the pose has
+    /// converged.
+    #[arg(long)]
+    localize: bool,
+    /// Where the robot starts in --map's frame, `x,y,yaw` (metres, radians); localizing
+    /// without it searches the whole map.
+    #[arg(long, value_name = "X,Y,YAW", allow_hyphen_values = true)]
+    initial_pose: Option<String>,
+    /// Start the replay at this scan of the log (from 0).
+    #[arg(long, value_name = "SCAN")]
+    replay_start: Option<u64>,
     /// Record every topic into OUT/run.mcap (slam-record), for Foxglove; in lockstep the
     /// run stays lossless and deterministic.
     #[arg(long)]
@@ -119,6 +136,24 @@ fn run() -> Result<ExitCode> {
     config.validate()?;
     // slam-proc refuses it too, but as a stage that dies once map-sink is up.
     slam_proc::memory::check(config.slam.particles).context("refusing to start")?;
+    // A map that cannot be used would only fail once the stages are up.
+    if let Some(dir) = &config.map {
+        let saved = map_sink::SavedMap::load(dir).with_context(|| {
+            format!("refusing to start: cannot use the map in {}", dir.display())
+        })?;
+        anyhow::ensure!(
+            !config.localize || saved.grid.is_some(),
+            "refusing to start: cannot localize on the map in {}: it has no occupancy grid",
+            dir.display()
+        );
+        let yaw = saved.grid.as_ref().map_or(0.0, |g| g.yaml.origin[2]);
+        anyhow::ensure!(
+            !config.localize || yaw == 0.0,
+            "refusing to start: cannot localize on the map in {}: its grid is rotated \
+             (origin yaw {yaw}), which is not supported",
+            dir.display()
+        );
+    }
     // An address that names nothing would be retried for ever by lidar-hokuyo.
     if config.source == SourceKind::Hokuyo {
         lidar_hokuyo::resolve(&config.hokuyo.addr)
@@ -345,6 +380,18 @@ fn apply_overrides(config: &mut RunConfig, args: &Args) {
     if args.record {
         config.record.enabled = true;
     }
+    if let Some(dir) = &args.map {
+        config.map = Some(dir.clone());
+    }
+    if args.localize {
+        config.localize = true;
+    }
+    if let Some(pose) = &args.initial_pose {
+        config.initial_pose = Some(pose.clone());
+    }
+    if let Some(start) = args.replay_start {
+        config.replay.start = start;
+    }
 }
 
 /// The processes of a simulated run, consumers first and the source last.
@@ -378,8 +425,9 @@ fn plan(
     let d = domain.name().to_owned();
     // The recorder subscribes to every topic: each publisher waits for it too.
     let recorder = config.record.extra_subscribers();
-    // feature-proc and map-sink take the scans.
-    let scan_subscribers = (2 + recorder).to_string();
+    // feature-proc and map-sink take the scans; slam-proc too when its beams weight the
+    // particles on a saved map.
+    let scan_subscribers = (2 + usize::from(config.localize) + recorder).to_string();
 
     let mut sink: Vec<String> = vec![
         "--domain".into(),
@@ -415,6 +463,16 @@ fn plan(
         "--subscribers".into(),
         (1 + recorder).to_string(),
     ];
+    if let Some(dir) = &config.map {
+        slam.push("--map".into());
+        slam.push(dir.display().to_string());
+    }
+    if config.localize {
+        slam.push("--localize".into());
+    }
+    if let Some(pose) = &config.initial_pose {
+        slam.push(format!("--initial-pose={pose}"));
+    }
     slam.extend(section("slam", &config.slam.extra)?);
     // slam-proc takes the features.
     let mut features = vec![
@@ -453,6 +511,9 @@ fn plan(
             ];
             if !config.replay.odometry {
                 args.push("--no-odometry".into());
+            }
+            if config.replay.start > 0 {
+                args.push(format!("--skip={}", config.replay.start));
             }
             if let Some(window) = config.replay.reorder_window {
                 args.push(format!("--reorder-window={window}"));

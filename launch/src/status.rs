@@ -46,6 +46,9 @@ impl Progress {
         if let Some(map) = self.get("map") {
             parts.push(format!("map {map} corners"));
         }
+        if let Some(state) = self.get("localization") {
+            parts.push(format!("localization {state}"));
+        }
         parts.join(" | ")
     }
 }
@@ -67,5 +70,11 @@ mod tests {
         );
         progress.update("frames=13");
         assert_eq!(progress.frames(), 13);
+        progress.update("localization=converged");
+        assert!(
+            progress
+                .render(None)
+                .ends_with("| map 7 corners | localization converged")
+        );
     }
 }

@@ -54,6 +54,11 @@ struct Args {
     /// Scans to publish; 0 = the whole log.
     #[arg(long, default_value_t = 0)]
     frames: u64,
+    /// Start at this scan of the log (from 0): the scans before it and their odometry are
+    /// not published, but for the last odometry reading before it. Sequence numbers start
+    /// at 0 at that scan; stamps stay the log's.
+    #[arg(long, value_name = "SCANS", default_value_t = 0)]
+    skip: u64,
     /// Log time (seconds) a record waits for older ones read after it (CARMEN logs that go
     /// back in time); records later than that are dropped. 0 = nothing may go back further
     /// than behind the newest record.
@@ -226,6 +231,10 @@ fn replay_log(args: &Args) -> Result<()> {
         file: args.file.display().to_string(),
         ..ReplaySummary::default()
     };
+    let mut skipped = 0u64;
+    // The newest odometry reading while skipping: it goes out before the first scan, so
+    // that scan's stamp has a reading at or before it to pair with.
+    let mut odometry_before_start = None;
     for record in log.by_ref() {
         if shutdown::requested() {
             break;
@@ -246,33 +255,61 @@ fn replay_log(args: &Args) -> Result<()> {
                 return Err(e).with_context(|| format!("{}", args.file.display()));
             }
         };
-        match record {
-            LogRecord::Odometry(pose) => {
-                if streams.odometry.is_none() {
-                    summary.odometry_unpublished += 1;
-                    continue;
-                }
-                let seq = streams.published;
-                let covariance = odometry_covariance.update(&pose);
-                if !streams.odometry(pose.stamp_ns, |message| {
-                    fill_odometry(message, seq, &pose, covariance)
-                })? {
-                    break;
-                }
+        if skipped < args.skip {
+            match record {
+                LogRecord::Scan(_) => skipped += 1,
+                LogRecord::Odometry(pose) => odometry_before_start = Some(pose),
             }
-            LogRecord::Scan(scan) => {
-                let seq = streams.published;
-                let mut fill_error = None;
-                if !streams.scan(scan.stamp_ns, |message| {
-                    fill_error = fill_scan(message, seq, &scan).err();
-                })? {
-                    break;
+            continue;
+        }
+        let records = match (odometry_before_start.take(), record) {
+            (Some(before), record @ LogRecord::Scan(_)) => {
+                vec![LogRecord::Odometry(before), record]
+            }
+            (_, record) => vec![record],
+        };
+        for record in records {
+            let published = match record {
+                LogRecord::Odometry(pose) => {
+                    if streams.odometry.is_none() {
+                        summary.odometry_unpublished += 1;
+                        continue;
+                    }
+                    let seq = streams.published;
+                    let covariance = odometry_covariance.update(&pose);
+                    streams.odometry(pose.stamp_ns, |message| {
+                        fill_odometry(message, seq, &pose, covariance)
+                    })?
                 }
-                if let Some(e) = fill_error {
-                    anyhow::bail!("line {}: {e}", scan.line);
+                LogRecord::Scan(scan) => {
+                    let seq = streams.published;
+                    let mut fill_error = None;
+                    let published = streams.scan(scan.stamp_ns, |message| {
+                        fill_error = fill_scan(message, seq, &scan).err();
+                    })?;
+                    if let Some(e) = fill_error {
+                        anyhow::bail!("line {}: {e}", scan.line);
+                    }
+                    published
                 }
+            };
+            // Ctrl-C: the outer loop sees the request and stops too.
+            if !published {
+                break;
             }
         }
+    }
+    anyhow::ensure!(
+        shutdown::requested() || skipped == args.skip,
+        "--skip {}: {} has only {skipped} scans",
+        args.skip,
+        args.file.display()
+    );
+    if args.skip > 0 {
+        eprintln!(
+            "lidar-replay: started at scan {} of the log (--skip)",
+            args.skip
+        );
     }
     finish(&streams, &mut summary)?;
     summary.lines_read = log.line_number();
@@ -284,6 +321,10 @@ fn replay_log(args: &Args) -> Result<()> {
 
 /// Replays a recording of slam-record: its scans and odometry as they were published.
 fn replay_recording(args: &Args) -> Result<()> {
+    anyhow::ensure!(
+        args.skip == 0,
+        "--skip starts a text log part-way; a recording replays whole"
+    );
     // Refuse a file that is no recording before anyone sees a port.
     let (mut recording, info) = recorder::open_recording(&args.file)?;
     let mut streams = Streams::open(args, info.has_odometry && !args.no_odometry)?;

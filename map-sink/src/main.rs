@@ -55,6 +55,8 @@ struct Progress {
     neff: f64,
     particles: u32,
     map: u32,
+    /// `PoseEstimate::localization` of the last pose.
+    localization: u32,
     first_pose: Option<Instant>,
 }
 
@@ -66,10 +68,16 @@ impl Progress {
         } else {
             0.0
         };
-        format!(
+        let mut line = format!(
             "status frames={} scans_per_s={rate:.1} latency_ms={:.2} neff={:.1} particles={} map={}",
             self.poses, self.latency_ms, self.neff, self.particles, self.map
-        )
+        );
+        match self.localization {
+            PoseEstimate::SEARCHING => line.push_str(" localization=searching"),
+            PoseEstimate::CONVERGED => line.push_str(" localization=converged"),
+            _ => {}
+        }
+        line
     }
 }
 
@@ -170,6 +178,10 @@ fn run() -> Result<()> {
             progress.neff = sample.effective_particles;
             progress.particles = sample.particle_count;
             progress.map = sample.map_corners;
+            progress.localization = sample.localization;
+            if sample.localization == PoseEstimate::CONVERGED {
+                recorder.record_converged(sample.header.seq, sample.header.stamp_ns);
+            }
         }
         if args.status && last_status.elapsed() >= STATUS_PERIOD {
             say(&progress.line());

@@ -53,4 +53,11 @@ pub struct Metrics {
     /// The trajectories scored against ground-truth relations, when there were any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative_pose_error: Option<RelativePoseErrors>,
+    /// Localizing on a saved map: the first scan (sequence number) whose pose had
+    /// converged, and its stamp (seconds, as in the TUM files); absent when it never did
+    /// or the run mapped.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub converged_at_scan: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub converged_at_stamp: Option<String>,
 }

@@ -124,6 +124,8 @@ pub struct Recorder {
     wall_s: Option<f64>,
     /// Earliest and latest pose stamps, for the duration the run covers.
     stamps_ns: Option<(u64, u64)>,
+    /// Localizing: the first converged pose's sequence number and stamp.
+    converged_at: Option<(u64, u64)>,
 }
 
 impl Recorder {
@@ -174,6 +176,7 @@ impl Recorder {
             last_message: None,
             wall_s: None,
             stamps_ns: None,
+            converged_at: None,
         })
     }
 
@@ -281,6 +284,12 @@ impl Recorder {
     /// difference.
     pub fn set_counts(&mut self, counts: FrameCounts) {
         self.counts = Some(counts);
+    }
+
+    /// Localizing on a saved map: the pose of scan `seq` has converged. The first call is
+    /// kept.
+    pub fn record_converged(&mut self, seq: u64, stamp_ns: u64) {
+        self.converged_at.get_or_insert((seq, stamp_ns));
     }
 
     /// Overrides the measured wall time (first to last message recorded), seconds.
@@ -464,6 +473,10 @@ impl Recorder {
             dead_reckoning_ate_rmse_m: dead_reckoning.map(|s| s.rmse_m),
             online_ate_rmse_m: None,
             relative_pose_error: None,
+            converged_at_scan: self.converged_at.map(|(seq, _)| seq),
+            converged_at_stamp: self
+                .converged_at
+                .map(|(_, stamp_ns)| slam_geom::format_stamp(stamp_ns)),
         }
     }
 

@@ -31,6 +31,8 @@ pub struct PoseMessage {
     pub particle_count: u32,
     pub map_corners: u32,
     pub timing: Timing,
+    /// `mapping`, or on a saved map `searching` / `converged`.
+    pub localization: &'static str,
 }
 
 /// `ipc_types::StageTiming`, nanoseconds.
@@ -71,6 +73,11 @@ impl PoseMessage {
                 update_ns: t.update_ns,
                 resample_ns: t.resample_ns,
                 total_ns: t.total_ns,
+            },
+            localization: match p.localization {
+                ipc_types::PoseEstimate::SEARCHING => "searching",
+                ipc_types::PoseEstimate::CONVERGED => "converged",
+                _ => "mapping",
             },
         }
     }

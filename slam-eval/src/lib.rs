@@ -15,9 +15,13 @@
 //! [`ScoreSummary`] is what a run's `metrics.json` keeps of a score (map-sink writes it,
 //! slam-launch and slam-bench read it back).
 //!
+//! [`position_gaps`] compares a localization on a saved map with a trajectory in the same
+//! frame (the mapping run's, or the truth moved into the map), pose by pose.
+//!
 //! Stamps are compared as integer nanoseconds, parsed exactly from their decimal text.
 
 mod error;
+mod gap;
 mod pose;
 mod relations;
 mod score;
@@ -27,6 +31,7 @@ mod text;
 mod trajectory;
 
 pub use error::EvalError;
+pub use gap::{Gaps, position_gaps};
 pub use pose::{Pose, from_tum, from_xyz_rpy, magnitude};
 pub use relations::{Relation, read_relations};
 pub use score::{DEFAULT_TOLERANCE_NS, Score, Unmatched, score};

@@ -76,6 +76,11 @@ impl Trajectory {
         self.poses.is_empty()
     }
 
+    /// Every pose with its stamp, in stamp order.
+    pub fn iter(&self) -> impl Iterator<Item = (u64, &Pose)> {
+        self.stamps_ns.iter().copied().zip(&self.poses)
+    }
+
     /// The pose whose stamp is nearest to `stamp_ns`, if it is within `tolerance_ns`.
     pub fn pose_at(&self, stamp_ns: u64, tolerance_ns: u64) -> Option<&Pose> {
         let after = self.stamps_ns.partition_point(|&s| s < stamp_ns);

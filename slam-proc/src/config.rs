@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 use stage_kit::settings::{SettingError, check, check_non_negative, check_positive};
 
+use crate::localize_config::LocalizeConfig;
 use crate::pose_graph::GraphNoise;
 
 /// FastSLAM parameters. Metres, radians, probabilities in `(0, 1)`.
@@ -155,6 +156,8 @@ pub struct SlamConfig {
     pub duplicate_radius: f64,
     /// Headings closer than this are similar for the duplicate test, radians.
     pub duplicate_heading: f64,
+    /// Localization on a saved map (`slam-proc --map DIR --localize`).
+    pub localize: LocalizeConfig,
 }
 
 impl Default for SlamConfig {
@@ -211,6 +214,7 @@ impl Default for SlamConfig {
             view_fov: 270f64.to_radians(),
             duplicate_radius: 0.5,
             duplicate_heading: 30f64.to_radians(),
+            localize: LocalizeConfig::default(),
         }
     }
 }
@@ -359,7 +363,7 @@ impl SlamConfig {
             fov <= std::f64::consts::TAU,
             "must be at most 2 pi",
         )?;
-        Ok(())
+        self.localize.validate()
     }
 }
 

@@ -1,14 +1,17 @@
 //! `slam-proc`: FastSLAM over corner maps, from the features topic to pose and map topics.
 
-use std::path::PathBuf;
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
+use map_sink::SavedMap;
 use slam_proc::{
-    FastSlam, FilterStats, LineObservation, MeasuredMotion, Observation, OdometryInput, SlamConfig,
+    FastSlam, FilterStats, LineObservation, LocalizeStats, Localizer, MeasuredMotion, Observation,
+    OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
 };
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
@@ -35,6 +38,19 @@ struct Args {
     /// Pose subscribers to wait for before the first lockstep publish.
     #[arg(long, default_value_t = 1)]
     subscribers: usize,
+    /// A saved map (a run's output directory): mapping extends its landmarks, and with
+    /// --localize the filter localizes on it without changing it.
+    #[arg(long, value_name = "DIR")]
+    map: Option<PathBuf>,
+    /// Localize on --map: the map stays fixed, the scans' beams weight the particles through
+    /// its occupancy grid ([slam.localize] in the config file).
+    #[arg(long, requires = "map")]
+    localize: bool,
+    /// Where the robot starts in the map's frame, `x,y,yaw` (metres, radians). Localizing
+    /// without it searches the whole map; mapping on a map without it starts at the map's
+    /// origin.
+    #[arg(long, value_name = "X,Y,YAW", value_parser = slam_proc::parse_pose, requires = "map", allow_hyphen_values = true)]
+    initial_pose: Option<Pose2>,
 }
 
 fn main() -> ExitCode {
@@ -52,7 +68,26 @@ fn run() -> Result<()> {
     // Before the particles exist: a count the machine cannot hold would otherwise grow
     // until the kernel kills this process (or another one).
     slam_proc::memory::check(config.particles).context("refusing to start")?;
-    let mut slam = FastSlam::new(config, args.seed).context("slam configuration")?;
+    let saved = match &args.map {
+        Some(dir) => Some(load_map(dir)?),
+        None => None,
+    };
+    if args.localize {
+        let (saved, dir) = saved
+            .zip(args.map.as_deref())
+            .context("--localize needs --map")?;
+        return localize(&args, config, &saved, dir);
+    }
+    let mut slam = match &saved {
+        Some(saved) => FastSlam::with_prior_map_from(
+            config,
+            args.seed,
+            &prior_corners(saved),
+            args.initial_pose.unwrap_or(Pose2::IDENTITY),
+        ),
+        None => FastSlam::new(config, args.seed),
+    }
+    .context("slam configuration")?;
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("slam-proc")?;
@@ -80,7 +115,7 @@ fn run() -> Result<()> {
         }
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
-                left_out = left_out.max(publish_map(&maps, &slam, last_header)?);
+                left_out = left_out.max(publish_map(&maps, &slam.best_map(), last_header)?);
                 publish_path(&path, &slam, last_header)?;
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
                 eprintln!("{}", summary(&slam.stats()));
@@ -113,34 +148,19 @@ fn run() -> Result<()> {
                 pose.header = header;
                 pose.header.set_frame_id("map");
                 pose.scan_sent_ns = sample.scan_sent_ns;
-                pose.best = estimate.best.into();
-                pose.mean = estimate.mean.into();
+                fill_estimate(pose, &estimate);
                 pose.dead_reckoning = dead_reckoning;
-                for r in 0..3 {
-                    for c in 0..3 {
-                        pose.covariance[r * 3 + c] = estimate.covariance[(r, c)];
-                    }
-                }
-                pose.effective_particles = estimate.effective_particles;
-                pose.particle_count = estimate.particle_count as u32;
-                pose.map_corners = estimate.map_size as u32;
-                pose.timing = StageTiming {
-                    motion_ns: estimate.timing.motion_ns,
-                    predict_ns: estimate.timing.predict_ns,
-                    update_ns: estimate.timing.update_ns,
-                    resample_ns: estimate.timing.resample_ns,
-                    total_ns: estimate.timing.total_ns,
-                };
+                pose.localization = PoseEstimate::MAPPING;
             })?;
             last_header = header;
             processed += 1;
             if processed.is_multiple_of(args.map_every) {
-                left_out = left_out.max(publish_map(&maps, &slam, header)?);
+                left_out = left_out.max(publish_map(&maps, &slam.best_map(), header)?);
             }
         }
     }
     // Stopped by a signal: leave the map and the path as far as they got.
-    left_out = left_out.max(publish_map(&maps, &slam, last_header)?);
+    left_out = left_out.max(publish_map(&maps, &slam.best_map(), last_header)?);
     publish_path(&path, &slam, last_header)?;
     eprintln!("slam-proc: stopped after {processed} scans");
     eprintln!("{}", summary(&slam.stats()));
@@ -160,13 +180,14 @@ fn summary(stats: &FilterStats) -> String {
     )
 }
 
-/// Publishes the best particle's map; returns how many corners did not fit the message.
-fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> Result<u64> {
-    let corners: Vec<MapCorner> = slam
-        .best_map()
-        .iter()
-        .map(|&c| MapCorner::from(c))
-        .collect();
+/// Publishes a map (the best particle's, or the saved one being localized on); returns
+/// how many corners did not fit the message.
+fn publish_map(
+    maps: &Outlet<MapSnapshot>,
+    map: &[slam_proc::MapCorner],
+    header: Header,
+) -> Result<u64> {
+    let corners: Vec<MapCorner> = map.iter().map(|&c| MapCorner::from(c)).collect();
     let keep = corners.len().min(ipc_types::MAX_MAP_CORNERS);
     if keep < corners.len() {
         eprintln!(
@@ -236,4 +257,220 @@ fn to_odometry(odometry: OdometryAtScan) -> OdometryInput {
         pose: odometry.pose.into(),
         covariance: nalgebra::Matrix3::from_row_slice(&odometry.covariance),
     }
+}
+
+/// The estimate's fields of a pose message.
+fn fill_estimate(pose: &mut PoseEstimate, estimate: &slam_proc::Estimate) {
+    pose.best = estimate.best.into();
+    pose.mean = estimate.mean.into();
+    pose.dead_reckoning = estimate.dead_reckoning.into();
+    for r in 0..3 {
+        for c in 0..3 {
+            pose.covariance[r * 3 + c] = estimate.covariance[(r, c)];
+        }
+    }
+    pose.effective_particles = estimate.effective_particles;
+    pose.particle_count = u32::try_from(estimate.particle_count).unwrap_or(u32::MAX);
+    pose.map_corners = u32::try_from(estimate.map_size).unwrap_or(u32::MAX);
+    pose.timing = StageTiming {
+        motion_ns: estimate.timing.motion_ns,
+        predict_ns: estimate.timing.predict_ns,
+        update_ns: estimate.timing.update_ns,
+        resample_ns: estimate.timing.resample_ns,
+        total_ns: estimate.timing.total_ns,
+    };
+}
+
+/// The saved map in `dir`, refused with the file and the reason when it cannot be used.
+fn load_map(dir: &Path) -> Result<SavedMap> {
+    SavedMap::load(dir).with_context(|| format!("cannot use the map in {}", dir.display()))
+}
+
+/// The saved landmarks as the filter's corners.
+fn prior_corners(saved: &SavedMap) -> Vec<slam_proc::MapCorner> {
+    saved.landmarks.map_corners()
+}
+
+/// A scan's beams kept until its features arrive.
+struct HeldScan {
+    seq: u64,
+    angle_min: f64,
+    angle_increment: f64,
+    range_min: f64,
+    range_max: f64,
+    ranges: Vec<f32>,
+}
+
+/// Scans held at most: feature-proc is never further behind than its queues hold.
+const HELD_SCANS: usize = 256;
+/// How long a features message waits for its scan in lockstep, where the scan cannot be
+/// lost (a bound all the same: a source that died must not hang the filter) ...
+const SCAN_WAIT_LOCKSTEP: Duration = Duration::from_secs(10);
+/// ... and in real time, where it may have been.
+const SCAN_WAIT_REAL_TIME: Duration = Duration::from_millis(5);
+
+/// Localization on the saved map: scans and features in, a pose per scan out, the map
+/// published as it is.
+fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Result<()> {
+    let grid = saved.grid.as_ref().with_context(|| {
+        format!(
+            "cannot localize on the map in {}: it has no occupancy grid",
+            dir.display()
+        )
+    })?;
+    // The likelihood field reads the grid with its cells along the map's axes.
+    anyhow::ensure!(
+        grid.yaml.origin[2] == 0.0,
+        "cannot localize on the map in {}: its grid is rotated (origin yaw {}), which is not supported",
+        dir.display(),
+        grid.yaml.origin[2]
+    );
+    let corners = prior_corners(saved);
+    let start = args.initial_pose.map_or(Start::Global, Start::Known);
+    let mut localizer = Localizer::new(config.localize, grid, start, args.seed, corners.len())
+        .with_context(|| format!("cannot localize on the map in {}", dir.display()))?;
+
+    let domain = Domain::new(&args.domain)?;
+    let node = domain.node("slam-proc")?;
+    let features = Inlet::open(&node, topic::FEATURES)?;
+    let scans = Inlet::open(&node, topic::SCAN)?;
+    let delivery = features.delivery();
+    let maps = Outlet::create(&domain, &node, topic::MAP, delivery, 1)?;
+    let poses = Outlet::create(&domain, &node, topic::POSE, delivery, 0)?;
+    // map-sink waits for the path's topic; no path comes (no particle keeps one here), so
+    // it writes the online estimate as the trajectory.
+    let _path = Outlet::<PathChunk>::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
+    println!("ready");
+    if delivery == Delivery::Lossless {
+        poses.wait_for_subscribers(args.subscribers, None)?;
+    }
+    let mut held: VecDeque<HeldScan> = VecDeque::new();
+    let mut last_header = Header::new(0, 0, "map");
+    let mut left_out = publish_map(&maps, &corners, last_header)?;
+    let mut step_ms: Vec<f64> = Vec::new();
+    loop {
+        if wait_any(&[&features, &scans], Duration::from_millis(100))? == Wake::Shutdown {
+            break;
+        }
+        hold_scans(&scans, &mut held)?;
+        while let Some(sample) = features.receive()? {
+            // Its scan was published before feature-proc could take it.
+            hold_scans(&scans, &mut held)?;
+            if sample.header.is_end_of_stream() {
+                left_out = left_out.max(publish_map(&maps, &corners, last_header)?);
+                poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
+                eprintln!("{}", localize_summary(&localizer.stats(), &step_ms));
+                ipc_types::losses::report(&[
+                    ("map_corners_not_published", left_out),
+                    ("scans_without_beams", localizer.stats().scans_without_beams),
+                ]);
+                return Ok(());
+            }
+            let seq = sample.header.seq;
+            // The scan goes to every subscriber in turn: feature-proc may have had it (and
+            // sent its features) before it reached this queue. In lockstep it is on its way;
+            // in real time it may have been lost, and waiting would only add latency.
+            let patience = match delivery {
+                Delivery::Lossless => SCAN_WAIT_LOCKSTEP,
+                Delivery::Latest => SCAN_WAIT_REAL_TIME,
+            };
+            let since = std::time::Instant::now();
+            while held.back().is_none_or(|s| s.seq < seq) && since.elapsed() < patience {
+                if shutdown::requested() {
+                    break;
+                }
+                wait_any(&[&scans], Duration::from_millis(10))?;
+                hold_scans(&scans, &mut held)?;
+            }
+            while held.front().is_some_and(|s| s.seq < seq) {
+                held.pop_front();
+            }
+            let scan = held.front().filter(|s| s.seq == seq).map(|s| ScanRanges {
+                angle_min: s.angle_min,
+                angle_increment: s.angle_increment,
+                range_min: s.range_min,
+                range_max: s.range_max,
+                ranges: &s.ranges,
+            });
+            // A first scan, or a source without a front end, brings no step: stand still.
+            let motion = sample.motion().map_or(
+                MeasuredMotion {
+                    increment: Pose2::IDENTITY,
+                    covariance: nalgebra::Matrix3::zeros(),
+                },
+                |m| to_motion(&m),
+            );
+            let located = localizer.step(&motion, scan.as_ref());
+            step_ms.push(located.estimate.timing.total_ns as f64 * 1e-6);
+            let front_end = sample.motion().map(|m| m.pose);
+            let header = sample.header;
+            poses.publish(|pose| {
+                pose.header = header;
+                pose.header.set_frame_id("map");
+                pose.scan_sent_ns = sample.scan_sent_ns;
+                fill_estimate(pose, &located.estimate);
+                if let Some(front_end) = front_end {
+                    pose.dead_reckoning = front_end;
+                }
+                pose.localization = if located.converged {
+                    PoseEstimate::CONVERGED
+                } else {
+                    PoseEstimate::SEARCHING
+                };
+            })?;
+            last_header = header;
+        }
+    }
+    publish_map(&maps, &corners, last_header)?;
+    eprintln!("slam-proc: stopped");
+    eprintln!("{}", localize_summary(&localizer.stats(), &step_ms));
+    ipc_types::losses::report(&[
+        ("map_corners_not_published", left_out),
+        ("scans_without_beams", localizer.stats().scans_without_beams),
+    ]);
+    Ok(())
+}
+
+/// Takes the scans that have come, keeping their beams for the features to come.
+fn hold_scans(scans: &Inlet<LaserScan>, held: &mut VecDeque<HeldScan>) -> Result<()> {
+    while let Some(scan) = scans.receive()? {
+        if scan.header.is_end_of_stream() {
+            continue;
+        }
+        if held.len() == HELD_SCANS {
+            held.pop_front();
+        }
+        held.push_back(HeldScan {
+            seq: scan.header.seq,
+            angle_min: f64::from(scan.angle_min),
+            angle_increment: f64::from(scan.angle_increment),
+            range_min: f64::from(scan.range_min),
+            range_max: f64::from(scan.range_max),
+            ranges: scan.ranges().to_vec(),
+        });
+    }
+    Ok(())
+}
+
+/// The closing summary of a localization run, with the time per scan.
+fn localize_summary(stats: &LocalizeStats, step_ms: &[f64]) -> String {
+    let at = |p: f64| map_sink::percentile(step_ms, p).unwrap_or(0.0);
+    format!(
+        "slam-proc: summary of the localization\n  \
+         scans:           {} ({} weighted the particles, {} of them tempered; {} without beams)\n  \
+         converged:       {}\n  \
+         particles:       at most {}\n  \
+         time per scan:   median {:.3} ms, 99th percentile {:.3} ms, max {:.3} ms",
+        stats.scans,
+        stats.updates,
+        stats.tempered_updates,
+        stats.scans_without_beams,
+        stats
+            .converged_at
+            .map_or("never".to_owned(), |scan| format!("at scan {scan}")),
+        stats.peak_particles,
+        at(50.0),
+        at(99.0),
+        at(100.0),
+    )
 }

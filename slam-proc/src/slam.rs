@@ -119,6 +119,17 @@ impl FastSlam {
         seed: u64,
         corners: &[MapCorner],
     ) -> Result<Self, SettingError> {
+        Self::with_prior_map_from(config, seed, corners, Pose2::IDENTITY)
+    }
+
+    /// As [`FastSlam::with_prior_map`], with the particles starting at `start` in the map's
+    /// frame: mapping on top of a saved map from where the robot stands in it.
+    pub fn with_prior_map_from(
+        config: SlamConfig,
+        seed: u64,
+        corners: &[MapCorner],
+        start: Pose2,
+    ) -> Result<Self, SettingError> {
         config.validate()?;
         let mut map = CornerMap::new(config.grid_cell_size);
         for corner in corners {
@@ -140,7 +151,13 @@ impl FastSlam {
         Ok(Self {
             streams: Streams::new(seed),
             scans: 0,
-            particles: vec![Particle::new(map); config.particles],
+            particles: vec![
+                Particle {
+                    pose: start,
+                    ..Particle::new(map)
+                };
+                config.particles
+            ],
             motion: MotionEstimator::new(&config),
             measured_track: OdometryInput {
                 pose: Pose2::IDENTITY,

@@ -217,6 +217,7 @@ pub fn output_within(command: &mut Command, limit: std::time::Duration) -> Optio
     None
 }
 
+
 /// An emulated Hokuyo (`hokuyo-emulator`) serving the scans of `file` on a free port, and
 /// its `HOST:PORT`. The caller kills and reaps it.
 pub fn start_hokuyo_emulator(file: &Path) -> (std::process::Child, String) {
@@ -239,4 +240,47 @@ pub fn start_hokuyo_emulator(file: &Path) -> (std::process::Child, String) {
         .unwrap_or_else(|| panic!("emulator said {first:?}"))
         .to_owned();
     (emulator, addr)
+}
+
+/// A localization run's `trajectory.tum` against `reference` (a TUM file) moved into the
+/// map's frame by `map_from_reference`, from the scan at which the run converged on
+/// (`converged_at_stamp` in metrics.json; every pose when `from_convergence` is false).
+/// Panics when the run never converged and `from_convergence` is set.
+pub fn localization_gaps(
+    run: &Path,
+    reference: &Path,
+    map_from_reference: &slam_eval::Pose,
+    from_convergence: bool,
+) -> slam_eval::Gaps {
+    let estimate = slam_eval::Trajectory::read_tum(&run.join("trajectory.tum"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let reference = slam_eval::Trajectory::read_tum(reference).unwrap_or_else(|e| panic!("{e}"));
+    let from_ns = if from_convergence {
+        let stamp = metrics(run)
+            .get("converged_at_stamp")
+            .and_then(serde_json::Value::as_str)
+            .map(str::to_owned)
+            .unwrap_or_else(|| panic!("{} never converged", run.display()));
+        slam_geom::parse_stamp_ns(&stamp).unwrap_or_else(|e| panic!("{stamp}: {e}"))
+    } else {
+        0
+    };
+    slam_eval::position_gaps(
+        &estimate,
+        &reference,
+        map_from_reference,
+        from_ns,
+        slam_eval::DEFAULT_TOLERANCE_NS,
+    )
+}
+
+/// The inverse of the first pose of a TUM file: the map frame of the run that wrote it
+/// (its first pose at the origin) from the file's frame.
+pub fn frame_of_first_pose(path: &Path) -> slam_eval::Pose {
+    let trajectory = slam_eval::Trajectory::read_tum(path).unwrap_or_else(|e| panic!("{e}"));
+    let (_, first) = trajectory
+        .iter()
+        .next()
+        .unwrap_or_else(|| panic!("{} has no pose", path.display()));
+    first.inverse()
 }

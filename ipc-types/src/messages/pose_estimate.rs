@@ -21,7 +21,7 @@ pub struct StageTiming {
 /// The pose estimate after one scan, in the map frame (the first pose is the origin).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("slam::PoseEstimate::v1")]
+#[type_name("slam::PoseEstimate::v2")]
 pub struct PoseEstimate {
     /// The source scan's header; `sent_ns` is this message's.
     pub header: Header,
@@ -41,4 +41,18 @@ pub struct PoseEstimate {
     /// Confirmed corners in the best particle's map.
     pub map_corners: u32,
     pub timing: StageTiming,
+    /// [`PoseEstimate::MAPPING`], or, localizing on a saved map,
+    /// [`PoseEstimate::SEARCHING`] until the particles have converged and
+    /// [`PoseEstimate::CONVERGED`] while they are.
+    pub localization: u32,
+    pub reserved: u32,
+}
+
+impl PoseEstimate {
+    /// SLAM: the map is being built.
+    pub const MAPPING: u32 = 0;
+    /// Localizing on a saved map; the particles are still spread (`covariance`).
+    pub const SEARCHING: u32 = 1;
+    /// Localizing on a saved map; the particles have converged on one pose.
+    pub const CONVERGED: u32 = 2;
 }

@@ -1,0 +1,652 @@
+//! Localization on a saved map: Monte Carlo localization (AMCL's scheme) over the map's
+//! occupancy grid. The particles move by the front end's measured steps, the scan's beams
+//! weight them through the grid's likelihood field, and KLD-sampling sizes the particle set
+//! at each resampling: many while the pose is uncertain, few once it is not. The map is
+//! shared and never changes.
+
+use std::f64::consts::PI;
+use std::time::Instant;
+
+use nalgebra::Matrix3;
+use rand::Rng;
+use rand_distr::StandardNormal;
+use rayon::prelude::*;
+
+use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
+use crate::kld::{Bins, kld_count};
+use crate::likelihood_field::{BeamModel, LikelihoodField};
+use crate::localize_config::LocalizeConfig;
+use crate::observation::MeasuredMotion;
+use crate::resample::{effective_sample_size, normalise};
+use crate::rng::Streams;
+use map_sink::GridMap;
+use slam_geom::Pose2;
+use stage_kit::SettingError;
+
+/// Bisection steps of the tempering exponent: 2^-12 of `beam_exponent` is fine enough.
+const TEMPERING_STEPS: usize = 12;
+
+/// Particles per parallel task of the refinement.
+const REFINE_PARTICLES_PER_TASK: usize = 256;
+/// The refinement's first steps, metres and radians; each level halves them.
+const REFINE_STEP_XY: f64 = 0.2;
+const REFINE_STEP_YAW: f64 = 0.1;
+const REFINE_LEVELS: usize = 4;
+/// Passes over the six moves at one level, at most.
+const REFINE_PASSES: usize = 3;
+
+/// The log-likelihood of beam ends `points` (sensor frame) seen from `pose`.
+fn scan_score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
+    let (s, c) = pose.yaw.sin_cos();
+    points
+        .iter()
+        .map(|[px, py]| field.score(pose.x + c * px - s * py, pose.y + s * px + c * py))
+        .sum()
+}
+
+/// `pose` moved uphill on the scan's likelihood, by steps that halve from
+/// `REFINE_STEP_XY` / `REFINE_STEP_YAW`: a particle spread at random lands at the best fit
+/// near it, so the true place is found with far fewer particles than would have to fall
+/// on it by chance (the grid's field is only centimetres wide around the walls).
+fn refine(field: &LikelihoodField, points: &[[f64; 2]], pose: Pose2) -> Pose2 {
+    let mut best = pose;
+    let mut best_score = scan_score(field, points, &best);
+    let (mut step_xy, mut step_yaw) = (REFINE_STEP_XY, REFINE_STEP_YAW);
+    for _ in 0..REFINE_LEVELS {
+        for _ in 0..REFINE_PASSES {
+            let mut moved = false;
+            for (dx, dy, dyaw) in [
+                (step_xy, 0.0, 0.0),
+                (-step_xy, 0.0, 0.0),
+                (0.0, step_xy, 0.0),
+                (0.0, -step_xy, 0.0),
+                (0.0, 0.0, step_yaw),
+                (0.0, 0.0, -step_yaw),
+            ] {
+                let candidate = Pose2::new(best.x + dx, best.y + dy, best.yaw + dyaw);
+                let score = scan_score(field, points, &candidate);
+                if score > best_score {
+                    (best, best_score) = (candidate, score);
+                    moved = true;
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        step_xy *= 0.5;
+        step_yaw *= 0.5;
+    }
+    best
+}
+
+/// Where the robot starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Start {
+    /// Near a known pose: the particles spread around it by the configured
+    /// `initial_sigma_xy` / `initial_sigma_yaw`.
+    Known(Pose2),
+    /// Anywhere: the particles spread uniformly over the grid's free cells, yaw uniform.
+    Global,
+}
+
+/// One scan's ranges with their geometry, as in `LaserScan` (docs/CONVENTIONS.md).
+#[derive(Debug, Clone, Copy)]
+pub struct ScanRanges<'a> {
+    pub angle_min: f64,
+    pub angle_increment: f64,
+    pub range_min: f64,
+    pub range_max: f64,
+    pub ranges: &'a [f32],
+}
+
+/// The estimate after one scan, with whether the particles have converged.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Localization {
+    pub estimate: Estimate,
+    /// The weighted particles' spread is under `converged_sigma_xy` and
+    /// `converged_sigma_yaw`.
+    pub converged: bool,
+}
+
+/// What the localizer did over a run, for its closing summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LocalizeStats {
+    pub scans: u64,
+    /// Scans whose beams weighted the particles.
+    pub updates: u64,
+    /// The first scan (from 0) at which the particles had converged.
+    pub converged_at: Option<u64>,
+    /// Scans that came without their beams (lost in a real-time run): moved, not weighted.
+    pub scans_without_beams: u64,
+    /// Front-end steps that were not usable: the particles stood still.
+    pub motions_not_usable: u64,
+    /// Scans without a valid beam.
+    pub scans_without_valid_beams: u64,
+    /// The most particles held at once.
+    pub peak_particles: usize,
+    /// Weightings whose likelihood was tempered to keep enough particles effective.
+    pub tempered_updates: u64,
+}
+
+/// Monte Carlo localization on a fixed grid. The result depends only on the configuration,
+/// the seed and the inputs.
+#[derive(Debug, Clone)]
+pub struct Localizer {
+    config: LocalizeConfig,
+    /// The grid's field for tracking, sharp ...
+    field: LikelihoodField,
+    /// ... and for the search, smooth: a particle some way off the true pose still scores
+    /// well there, and a map's small flaws do not decide between places that look alike.
+    search_field: LikelihoodField,
+    streams: Streams,
+    poses: Vec<Pose2>,
+    log_weights: Vec<f64>,
+    weights: Vec<f64>,
+    /// Path length and rotation since the beams last weighted the particles.
+    since_distance: f64,
+    since_rotation: f64,
+    dead_reckoning: Pose2,
+    /// This scan's beam ends in the sensor frame.
+    points: Vec<[f64; 2]>,
+    /// Each particle's log-likelihood of this scan's beams.
+    scan_log_likelihoods: Vec<f64>,
+    bins: Bins,
+    /// Corners of the map, reported with each estimate.
+    map_corners: usize,
+    stats: LocalizeStats,
+    /// Whether the last estimate had converged.
+    converged: bool,
+}
+
+/// Error of [`Localizer::new`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LocalizeError {
+    #[error(transparent)]
+    Config(#[from] SettingError),
+    #[error("the map's occupancy grid has no free cell to spread the particles over")]
+    NoFreeSpace,
+}
+
+impl Localizer {
+    /// Particles placed by `start` on `grid`, drawn from `seed`; `map_corners` is only
+    /// reported.
+    pub fn new(
+        config: LocalizeConfig,
+        grid: &GridMap,
+        start: Start,
+        seed: u64,
+        map_corners: usize,
+    ) -> Result<Self, LocalizeError> {
+        config.validate()?;
+        let model = |sigma_hit| BeamModel {
+            sigma_hit,
+            floor: config.beam_floor,
+        };
+        let field = LikelihoodField::new(grid, config.max_distance, model(config.sigma_hit));
+        let search_field =
+            LikelihoodField::new(grid, config.max_distance, model(config.search_sigma_hit));
+        let streams = Streams::new(seed);
+        let mut rng = streams.resample(u64::MAX);
+        let poses: Vec<Pose2> = match start {
+            Start::Known(pose) => (0..config.min_particles.max(1))
+                .map(|_| {
+                    let dx: f64 = rng.sample(StandardNormal);
+                    let dy: f64 = rng.sample(StandardNormal);
+                    let dyaw: f64 = rng.sample(StandardNormal);
+                    Pose2::new(
+                        pose.x + config.initial_sigma_xy * dx,
+                        pose.y + config.initial_sigma_xy * dy,
+                        pose.yaw + config.initial_sigma_yaw * dyaw,
+                    )
+                })
+                .collect(),
+            Start::Global => {
+                let cells = field.free_cells();
+                if cells == 0 {
+                    return Err(LocalizeError::NoFreeSpace);
+                }
+                let mut poses = Vec::with_capacity(config.max_particles);
+                while poses.len() < config.max_particles {
+                    let Some((centre, edge)) = field.free_cell(rng.random_range(0..cells)) else {
+                        continue;
+                    };
+                    poses.push(Pose2::new(
+                        centre[0] + edge * (rng.random::<f64>() - 0.5),
+                        centre[1] + edge * (rng.random::<f64>() - 0.5),
+                        rng.random_range(-PI..PI),
+                    ));
+                }
+                poses
+            }
+        };
+        let n = poses.len();
+        Ok(Self {
+            field,
+            search_field,
+            streams,
+            log_weights: vec![0.0; n],
+            weights: Vec::new(),
+            since_distance: 0.0,
+            since_rotation: 0.0,
+            dead_reckoning: Pose2::IDENTITY,
+            points: Vec::new(),
+            scan_log_likelihoods: Vec::new(),
+            bins: Bins::default(),
+            map_corners,
+            stats: LocalizeStats {
+                peak_particles: n,
+                ..LocalizeStats::default()
+            },
+            poses,
+            config,
+            converged: false,
+        })
+    }
+
+    /// What the localizer did so far.
+    pub fn stats(&self) -> LocalizeStats {
+        self.stats
+    }
+
+    /// Every particle's pose.
+    pub fn particle_poses(&self) -> &[Pose2] {
+        &self.poses
+    }
+
+    /// Moves the particles by the front end's step and, once the robot has moved enough
+    /// (and at the first scan), weights them by the scan's beams and resamples. `scan` is
+    /// `None` when the scan's beams did not arrive.
+    pub fn step(&mut self, motion: &MeasuredMotion, scan: Option<&ScanRanges<'_>>) -> Localization {
+        let start = Instant::now();
+        let first = self.stats.scans == 0;
+        let delta = if motion.is_usable() {
+            motion.increment
+        } else {
+            self.stats.motions_not_usable += 1;
+            Pose2::IDENTITY
+        };
+        self.dead_reckoning = self.dead_reckoning.compose(&delta);
+        let motion_done = Instant::now();
+        if !first {
+            self.predict(&delta);
+        }
+        self.since_distance += delta.translation_norm();
+        self.since_rotation += delta.yaw.abs();
+        let predict_done = Instant::now();
+
+        let due = first
+            || self.since_distance >= self.config.update_min_distance
+            || self.since_rotation >= self.config.update_min_rotation;
+        let weighted = match scan {
+            Some(scan) if due => self.weigh(scan),
+            Some(_) => false,
+            None => {
+                self.stats.scans_without_beams += 1;
+                false
+            }
+        };
+        let update_done = Instant::now();
+        if weighted {
+            self.since_distance = 0.0;
+            self.since_rotation = 0.0;
+        }
+        // Between weightings the statistics are those of the cloud as it moved.
+        let (best, mean, covariance, effective) = self.summarise_and_resample(weighted);
+        let converged = self.is_converged(&covariance);
+        self.converged = converged;
+        if converged && self.stats.converged_at.is_none() {
+            self.stats.converged_at = Some(self.stats.scans);
+        }
+        self.stats.scans += 1;
+        let end = Instant::now();
+        let ns =
+            |from: Instant, to: Instant| u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX);
+        Localization {
+            estimate: Estimate {
+                best,
+                mean,
+                covariance,
+                effective_particles: effective,
+                particle_count: self.poses.len(),
+                dead_reckoning: self.dead_reckoning,
+                map_size: self.map_corners,
+                timing: StageTiming {
+                    motion_ns: ns(start, motion_done),
+                    predict_ns: ns(motion_done, predict_done),
+                    update_ns: ns(predict_done, update_done),
+                    resample_ns: ns(update_done, end),
+                    total_ns: ns(start, end),
+                },
+            },
+            converged,
+        }
+    }
+
+    /// Each particle moves by `delta` in its own frame, spread by the configured drift.
+    fn predict(&mut self, delta: &Pose2) {
+        let c = &self.config;
+        let (t, r) = (delta.translation_norm(), delta.yaw.abs());
+        let sigma_xy = (c.xy_variance_per_metre * t + c.xy_variance_per_radian * r).sqrt();
+        let sigma_yaw = (c.yaw_variance_per_metre * t + c.yaw_variance_per_radian * r).sqrt();
+        let scan = self.stats.scans;
+        for (i, pose) in self.poses.iter_mut().enumerate() {
+            let mut rng = self.streams.particle(scan, i);
+            let nx: f64 = rng.sample(StandardNormal);
+            let ny: f64 = rng.sample(StandardNormal);
+            let nyaw: f64 = rng.sample(StandardNormal);
+            let noisy = Pose2::new(
+                delta.x + sigma_xy * nx,
+                delta.y + sigma_xy * ny,
+                delta.yaw + sigma_yaw * nyaw,
+            );
+            *pose = pose.compose(&noisy);
+        }
+    }
+
+    /// Adds every particle's log-likelihood of the scan's beams; false when the scan has
+    /// no valid beam.
+    fn weigh(&mut self, scan: &ScanRanges<'_>) -> bool {
+        self.points.clear();
+        let valid: Vec<usize> = scan
+            .ranges
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| {
+                let r = f64::from(**r);
+                r.is_finite() && r >= scan.range_min && r <= scan.range_max
+            })
+            .map(|(i, _)| i)
+            .collect();
+        if valid.is_empty() {
+            self.stats.scans_without_valid_beams += 1;
+            return false;
+        }
+        let take = self.config.beams.min(valid.len());
+        for k in 0..take {
+            // Evenly over the valid beams, the first and the last included.
+            let i = valid[k * valid.len() / take];
+            let bearing = scan.angle_min + i as f64 * scan.angle_increment;
+            let r = f64::from(scan.ranges[i]);
+            self.points.push([r * bearing.cos(), r * bearing.sin()]);
+        }
+        let field = if self.converged {
+            &self.field
+        } else {
+            &self.search_field
+        };
+        if self.config.refine_while_searching && !self.converged {
+            let points = &self.points;
+            let stride = self.config.refine_beam_stride.max(1);
+            let coarse: Vec<[f64; 2]> = points.iter().step_by(stride).copied().collect();
+            self.poses
+                .par_iter_mut()
+                .with_min_len(REFINE_PARTICLES_PER_TASK)
+                .for_each(|pose| *pose = refine(field, &coarse, *pose));
+        }
+        self.scan_log_likelihoods.clear();
+        for pose in &self.poses {
+            self.scan_log_likelihoods
+                .push(scan_score(field, &self.points, pose));
+        }
+        let exponent = self.tempering();
+        for (log_weight, ll) in self.log_weights.iter_mut().zip(&self.scan_log_likelihoods) {
+            *log_weight += exponent * ll;
+        }
+        self.stats.updates += 1;
+        true
+    }
+
+    /// The exponent of this scan's likelihood: `beam_exponent`, or, while the particles
+    /// have not converged, less when that would leave fewer than `min_effective_fraction` of the particles effective. One scan
+    /// then cannot collapse a spread cloud onto whichever wrong place happens to match it
+    /// best: the cloud narrows over several scans, as the robot moves and places that
+    /// looked alike stop looking alike.
+    fn tempering(&mut self) -> f64 {
+        let full = self.config.beam_exponent;
+        // Converged, the cloud is one place: every scan counts in full, or the estimate
+        // would lag behind the front end's drift.
+        if self.converged {
+            return full;
+        }
+        let target = self.config.min_effective_fraction * self.poses.len() as f64;
+        let effective = |beta: f64, work: &mut Vec<f64>, weights: &mut Vec<f64>| {
+            work.clear();
+            work.extend(
+                self.log_weights
+                    .iter()
+                    .zip(&self.scan_log_likelihoods)
+                    .map(|(w, ll)| w + beta * ll),
+            );
+            normalise(work, weights);
+            effective_sample_size(weights)
+        };
+        let (mut work, mut weights) = (Vec::new(), Vec::new());
+        if effective(full, &mut work, &mut weights) >= target {
+            return full;
+        }
+        // The effective count falls as the exponent grows: bisect.
+        let (mut low, mut high) = (0.0, full);
+        for _ in 0..TEMPERING_STEPS {
+            let mid = 0.5 * (low + high);
+            if effective(mid, &mut work, &mut weights) >= target {
+                low = mid;
+            } else {
+                high = mid;
+            }
+        }
+        self.stats.tempered_updates += 1;
+        low
+    }
+
+    /// The weighted statistics; after a weighting, a KLD-sized resampling. Returns the
+    /// best pose, the mean, the covariance and the effective particle count.
+    fn summarise_and_resample(&mut self, resample: bool) -> (Pose2, Pose2, Matrix3<f64>, f64) {
+        normalise(&self.log_weights, &mut self.weights);
+        let effective = effective_sample_size(&self.weights);
+        let mut best = 0;
+        for (i, w) in self.weights.iter().enumerate() {
+            if *w > self.weights[best] {
+                best = i;
+            }
+        }
+        let best_pose = self.poses.get(best).copied().unwrap_or(Pose2::IDENTITY);
+        let (mean, covariance) = weighted_mean_and_covariance(
+            self.poses.iter().copied().zip(self.weights.iter().copied()),
+        );
+        if resample {
+            self.resample();
+        }
+        (best_pose, mean, covariance, effective)
+    }
+
+    /// Draws the next particle set from the weighted one, as many as KLD-sampling asks for
+    /// the bins the draws fill, within `[min_particles, max_particles]`.
+    fn resample(&mut self) {
+        let c = &self.config;
+        let mut cumulative = Vec::with_capacity(self.weights.len());
+        let mut total = 0.0;
+        for w in &self.weights {
+            total += w;
+            cumulative.push(total);
+        }
+        if total.is_nan() || total <= 0.0 {
+            return;
+        }
+        let mut rng = self.streams.resample(self.stats.scans);
+        self.bins.clear();
+        let mut drawn = Vec::with_capacity(self.poses.len());
+        while drawn.len() < c.max_particles {
+            let u = rng.random::<f64>() * total;
+            let i = cumulative
+                .partition_point(|&c| c < u)
+                .min(self.poses.len() - 1);
+            let pose = self.poses[i];
+            drawn.push(pose);
+            let bins = self
+                .bins
+                .insert(pose.x, pose.y, pose.yaw, c.kld_bin_xy, c.kld_bin_yaw);
+            if drawn.len() >= c.min_particles
+                && drawn.len() >= kld_count(bins, c.kld_epsilon, c.kld_z)
+            {
+                break;
+            }
+        }
+        self.poses = drawn;
+        self.log_weights.clear();
+        self.log_weights.resize(self.poses.len(), 0.0);
+        normalise(&self.log_weights, &mut self.weights);
+        self.stats.peak_particles = self.stats.peak_particles.max(self.poses.len());
+    }
+
+    fn is_converged(&self, covariance: &Matrix3<f64>) -> bool {
+        let (a, b, d) = (covariance[(0, 0)], covariance[(0, 1)], covariance[(1, 1)]);
+        // The larger eigenvalue of the x-y block.
+        let largest = 0.5 * (a + d) + (0.25 * (a - d).powi(2) + b * b).sqrt();
+        largest.sqrt() < self.config.converged_sigma_xy
+            && covariance[(2, 2)].sqrt() < self.config.converged_sigma_yaw
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use map_sink::{CellState, MapYaml};
+
+    const RESOLUTION: f64 = 0.05;
+    const WIDTH: usize = 240;
+    const HEIGHT: usize = 140;
+
+    /// A 12 m x 7 m room, walls on its border, an L-shaped wall and a pillar inside so that
+    /// no two places look alike.
+    fn room() -> GridMap {
+        let mut cells = vec![CellState::Free; WIDTH * HEIGHT];
+        let mut wall = |c0: usize, r0: usize, c1: usize, r1: usize| {
+            for row in r0..=r1 {
+                for col in c0..=c1 {
+                    cells[row * WIDTH + col] = CellState::Occupied;
+                }
+            }
+        };
+        wall(0, 0, WIDTH - 1, 1);
+        wall(0, HEIGHT - 2, WIDTH - 1, HEIGHT - 1);
+        wall(0, 0, 1, HEIGHT - 1);
+        wall(WIDTH - 2, 0, WIDTH - 1, HEIGHT - 1);
+        wall(60, 40, 61, 100);
+        wall(60, 40, 120, 41);
+        wall(170, 90, 180, 100);
+        GridMap {
+            yaml: MapYaml::trinary("map.pgm", RESOLUTION, [0.0, 0.0]),
+            width: WIDTH,
+            height: HEIGHT,
+            cells,
+        }
+    }
+
+    /// The ranges a 270-degree scanner at `pose` measures in `grid`, by marching each beam.
+    fn scan(grid: &GridMap, pose: Pose2) -> Vec<f32> {
+        (0..271)
+            .map(|i| {
+                let bearing = pose.yaw - 0.75 * PI + f64::from(i) * 1.5 * PI / 270.0;
+                let (s, c) = bearing.sin_cos();
+                let mut r = 0.0;
+                while r < 20.0 {
+                    r += 0.01;
+                    let (col, row) = (
+                        ((pose.x + r * c) / RESOLUTION).floor(),
+                        ((pose.y + r * s) / RESOLUTION).floor(),
+                    );
+                    if col < 0.0 || row < 0.0 || col >= WIDTH as f64 || row >= HEIGHT as f64 {
+                        return f32::INFINITY;
+                    }
+                    if grid.state(col as usize, row as usize) == CellState::Occupied {
+                        return r as f32;
+                    }
+                }
+                f32::INFINITY
+            })
+            .collect()
+    }
+
+    fn ranges(ranges: &[f32]) -> ScanRanges<'_> {
+        ScanRanges {
+            angle_min: -0.75 * PI,
+            angle_increment: 1.5 * PI / 270.0,
+            range_min: 0.1,
+            range_max: 30.0,
+            ranges,
+        }
+    }
+
+    /// Drives `steps` steps of 5 cm along a loop through the room, returning the final
+    /// error and the first step at which the localizer said it had converged.
+    fn drive(localizer: &mut Localizer, grid: &GridMap, steps: usize) -> (f64, Option<usize>) {
+        // Round the room: 3 m along x, a quarter turn, and so on, starting at (2, 1.2).
+        let mut truth = Pose2::new(2.0, 1.2, 0.0);
+        let mut converged = None;
+        let mut error = f64::INFINITY;
+        for k in 0..steps {
+            let increment = if k == 0 {
+                Pose2::IDENTITY
+            } else if k % 80 == 0 {
+                Pose2::new(0.0, 0.0, 0.5 * PI)
+            } else {
+                Pose2::new(0.05, 0.0, 0.0)
+            };
+            truth = truth.compose(&increment);
+            let beams = scan(grid, truth);
+            let motion = MeasuredMotion {
+                increment,
+                covariance: Matrix3::identity() * 1e-6,
+            };
+            let located = localizer.step(&motion, Some(&ranges(&beams)));
+            if located.converged && converged.is_none() {
+                converged = Some(k);
+            }
+            let mean = located.estimate.mean;
+            error = (mean.x - truth.x).hypot(mean.y - truth.y);
+        }
+        (error, converged)
+    }
+
+    #[test]
+    fn a_known_start_is_tracked_and_corrected() {
+        let grid = room();
+        let config = LocalizeConfig::default();
+        // Started 15 cm and 3 degrees off.
+        let start = Start::Known(Pose2::new(2.1, 1.3, 0.05));
+        let mut localizer = Localizer::new(config.clone(), &grid, start, 1, 0).unwrap();
+        let (error, converged) = drive(&mut localizer, &grid, 200);
+        assert!(error < 0.05, "{error}");
+        assert!(converged.is_some());
+        // Converged, KLD keeps the fewest particles allowed or near it.
+        assert!(localizer.particle_poses().len() < 1000);
+    }
+
+    #[test]
+    fn a_global_start_converges_on_the_true_pose_with_fewer_particles() {
+        let grid = room();
+        let config = LocalizeConfig {
+            max_particles: 20_000,
+            ..LocalizeConfig::default()
+        };
+        let mut localizer = Localizer::new(config.clone(), &grid, Start::Global, 3, 0).unwrap();
+        assert_eq!(localizer.particle_poses().len(), 20_000);
+        let (error, converged) = drive(&mut localizer, &grid, 200);
+        assert!(converged.is_some_and(|k| k < 150), "{converged:?}");
+        assert!(error < 0.1, "{error}");
+        assert!(localizer.particle_poses().len() < 2_000);
+        assert_eq!(localizer.stats().peak_particles, 20_000);
+    }
+
+    #[test]
+    fn a_grid_without_free_space_is_refused_for_a_global_start() {
+        let mut grid = room();
+        grid.cells.iter_mut().for_each(|c| *c = CellState::Unknown);
+        let config = LocalizeConfig::default();
+        assert_eq!(
+            Localizer::new(config, &grid, Start::Global, 1, 0).err(),
+            Some(LocalizeError::NoFreeSpace)
+        );
+    }
+}

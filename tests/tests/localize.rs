@@ -1,0 +1,283 @@
+//! Localization on a saved map and mapping on top of one, through `slam-launch` (issue 15):
+//! map a run, then localize another run on its map from a known and from an unknown start,
+//! and refuse a damaged map.
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use tests::*;
+
+/// Maps the whole office loop (seed 1): the map the office tests localize on.
+fn office_map(tag: &str) -> PathBuf {
+    let out = scratch(&format!("office-map-{tag}"));
+    let output = launch(
+        &domain(&format!("map-{tag}")),
+        &out,
+        &["--world", "office", "--seed", "1", "--rate", "0"],
+    );
+    assert_success(&output);
+    out
+}
+
+/// Localizes the office loop of `seed` on `map`, from `initial_pose` or searching.
+fn localize_office(map: &Path, seed: u64, initial_pose: Option<&str>, tag: &str) -> PathBuf {
+    let out = scratch(&format!("office-localize-{tag}"));
+    let seed = seed.to_string();
+    let mut args = vec![
+        "--world",
+        "office",
+        "--seed",
+        &seed,
+        "--rate",
+        "0",
+        "--map",
+        map.to_str().unwrap(),
+        "--localize",
+    ];
+    let pose_arg;
+    if let Some(pose) = initial_pose {
+        pose_arg = format!("--initial-pose={pose}");
+        args.push(&pose_arg);
+    }
+    let output = launch(&domain(&format!("loc-{tag}")), &out, &args);
+    assert_success(&output);
+    out
+}
+
+/// The truth of a localization run, moved into the map's frame (the mapping run's first
+/// true pose at the origin), against the run's trajectory.
+fn office_gaps(map: &Path, run: &Path, from_convergence: bool) -> slam_eval::Gaps {
+    localization_gaps(
+        run,
+        &run.join("ground_truth.tum"),
+        &frame_of_first_pose(&map.join("ground_truth.tum")),
+        from_convergence,
+    )
+}
+
+#[test]
+fn the_office_map_localizes_another_run_from_a_known_and_an_unknown_start() {
+    let map = office_map("known-unknown");
+    let landmarks = std::fs::read(map.join("landmarks.json")).unwrap();
+    let grid = std::fs::read(map.join("map.pgm")).unwrap();
+
+    // Another seed's run from the map's origin, where both runs start.
+    let known = localize_office(&map, 2, Some("0,0,0"), "known");
+    let gaps = office_gaps(&map, &known, false);
+    eprintln!(
+        "office seed 2, known start: {} poses, RMSE {:.4} m, max {:.4} m",
+        gaps.matched, gaps.rmse_m, gaps.stats.max
+    );
+    assert!(gaps.matched > 3900, "{gaps:?}");
+    // ATE as the project scores it (aligned, docs/CONVENTIONS.md): the acceptance's figure.
+    let ate = number(&metrics(&known), "ate_rmse_m");
+    eprintln!("office seed 2, known start: ATE RMSE {ate:.4} m");
+    assert!(ate <= 0.03, "ATE {ate} m");
+    // Unaligned, in the map's frame, the map's own error counts too (the mapping run is
+    // 0.018 m from its truth so): a looser bound.
+    assert!(gaps.rmse_m <= 0.05, "{gaps:?}");
+    assert_eq!(number(&metrics(&known), "converged_at_scan"), 0.0);
+
+    let unknown = localize_office(&map, 2, None, "unknown");
+    let converged = number(&metrics(&unknown), "converged_at_scan");
+    let gaps = office_gaps(&map, &unknown, true);
+    eprintln!(
+        "office seed 2, unknown start: converged at scan {converged}, then RMSE {:.4} m, max {:.4} m",
+        gaps.rmse_m, gaps.stats.max
+    );
+    assert!(converged <= 200.0, "converged at scan {converged}");
+    assert!(gaps.rmse_m <= 0.05, "{gaps:?}");
+
+    // Localizing leaves the map as it was.
+    assert_eq!(
+        std::fs::read(map.join("landmarks.json")).unwrap(),
+        landmarks
+    );
+    assert_eq!(std::fs::read(map.join("map.pgm")).unwrap(), grid);
+}
+
+/// The acceptance figures over seeds 1-5 (slow: ten runs); run with `--ignored`.
+#[test]
+#[ignore]
+fn office_convergence_over_seeds() {
+    let map = office_map("seeds");
+    for seed in 1..=5 {
+        let known = localize_office(&map, seed, Some("0,0,0"), &format!("known-{seed}"));
+        let known_gaps = office_gaps(&map, &known, false);
+        let unknown = localize_office(&map, seed, None, &format!("unknown-{seed}"));
+        let converged = metrics(&unknown)
+            .get("converged_at_scan")
+            .and_then(serde_json::Value::as_u64);
+        let gaps = office_gaps(&map, &unknown, true);
+        eprintln!(
+            "seed {seed}: known start RMSE {:.4} m | unknown start converged at scan {converged:?}, then RMSE {:.4} m, max {:.4} m",
+            known_gaps.rmse_m, gaps.rmse_m, gaps.stats.max
+        );
+    }
+}
+
+#[test]
+fn mapping_on_a_saved_map_extends_its_landmarks() {
+    // The first 1200 scans, then the whole loop on top of them.
+    let first = scratch("office-first-part");
+    let output = launch(
+        &domain("map-first"),
+        &first,
+        &["--world", "office", "--frames", "1200", "--rate", "0"],
+    );
+    assert_success(&output);
+    let saved = read_map_corners(&first).len();
+    let out = scratch("office-on-top");
+    let output = launch(
+        &domain("map-on-top"),
+        &out,
+        &[
+            "--world",
+            "office",
+            "--seed",
+            "2",
+            "--rate",
+            "0",
+            "--map",
+            first.to_str().unwrap(),
+        ],
+    );
+    assert_success(&output);
+    let corners = read_map_corners(&out);
+    assert!(corners.len() > saved + 40, "{saved} -> {}", corners.len());
+    let duplicates = duplicate_corners(&corners, 0.5, 0.5);
+    assert!(duplicates.is_empty(), "duplicated corners: {duplicates:?}");
+    let ate = number(&metrics(&out), "ate_rmse_m");
+    assert!(ate < 0.05, "ATE {ate} m");
+}
+
+fn refused(output: &Output, names: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "stderr:\n{stderr}");
+    assert!(
+        stderr.contains("refusing to start: cannot use the map in") && stderr.contains(names),
+        "stderr does not name {names}:\n{stderr}"
+    );
+}
+
+#[test]
+fn a_damaged_map_is_refused_before_anything_starts() {
+    let map = scratch("small-map");
+    let output = launch(
+        &domain("small-map"),
+        &map,
+        &["--world", "hall", "--frames", "100", "--rate", "0"],
+    );
+    assert_success(&output);
+    let try_map = |dir: &Path, tag: &str| {
+        launch(
+            &domain(tag),
+            &scratch(tag),
+            &[
+                "--world",
+                "hall",
+                "--frames",
+                "10",
+                "--map",
+                dir.to_str().unwrap(),
+                "--localize",
+            ],
+        )
+    };
+    // Missing.
+    refused(
+        &try_map(&map.join("nothing-here"), "missing"),
+        "landmarks.json",
+    );
+    // Truncated image.
+    let damaged = scratch("damaged-map");
+    for file in ["landmarks.json", "map.yaml", "map.pgm"] {
+        std::fs::copy(map.join(file), damaged.join(file)).unwrap();
+    }
+    let pgm = std::fs::read(map.join("map.pgm")).unwrap();
+    std::fs::write(damaged.join("map.pgm"), &pgm[..pgm.len() / 2]).unwrap();
+    refused(&try_map(&damaged, "truncated"), "map.pgm");
+    // A YAML whose image is another one.
+    std::fs::copy(map.join("map.pgm"), damaged.join("map.pgm")).unwrap();
+    let yaml = std::fs::read_to_string(map.join("map.yaml")).unwrap();
+    std::fs::write(damaged.join("other.pgm"), &pgm).unwrap();
+    std::fs::write(
+        damaged.join("map.yaml"),
+        yaml.replace("map.pgm", "other.pgm"),
+    )
+    .unwrap();
+    refused(&try_map(&damaged, "mismatch"), "other.pgm");
+    // Foreign landmarks.
+    std::fs::write(
+        damaged.join("landmarks.json"),
+        "{\"format\": \"something-else\"}",
+    )
+    .unwrap();
+    refused(&try_map(&damaged, "foreign"), "landmarks.json");
+    // A bad initial pose is named too.
+    let output = launch(
+        &domain("bad-pose"),
+        &scratch("bad-pose"),
+        &[
+            "--world",
+            "hall",
+            "--map",
+            map.to_str().unwrap(),
+            "--localize",
+            "--initial-pose",
+            "1,2",
+        ],
+    );
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("--initial-pose"));
+}
+
+#[test]
+fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
+    let log = data_dir().join("carmen/aces.clf");
+    let log = log.to_str().unwrap();
+    let map = scratch("aces-map");
+    let output = launch(
+        &domain("aces-map"),
+        &map,
+        &["--replay", log, "--rate", "0", "--seed", "1"],
+    );
+    assert_success(&output);
+    for start in ["1000", "3000", "5000"] {
+        let out = scratch(&format!("aces-from-{start}"));
+        let output = launch(
+            &domain(&format!("aces-{start}")),
+            &out,
+            &[
+                "--replay",
+                log,
+                "--rate",
+                "0",
+                "--map",
+                map.to_str().unwrap(),
+                "--localize",
+                "--replay-start",
+                start,
+            ],
+        );
+        assert_success(&output);
+        let converged = number(&metrics(&out), "converged_at_scan");
+        // The mapping run's path is in the map's frame already.
+        let gaps = localization_gaps(
+            &out,
+            &map.join("trajectory.tum"),
+            &slam_eval::Pose::identity(),
+            true,
+        );
+        eprintln!(
+            "aces from scan {start}: converged at scan {converged}, then {} poses, RMSE {:.3} m, mean {:.3} m, max {:.3} m",
+            gaps.matched, gaps.rmse_m, gaps.stats.mean, gaps.stats.max
+        );
+        assert!(converged <= 300.0, "converged at scan {converged}");
+        // Converged in the right place: a wrong one is metres off. The map's own loops
+        // are open by 0.2-0.3 m in places (README), which bounds the agreement with the
+        // mapping run's path; a known start from scan 0 agrees no better.
+        assert!(gaps.rmse_m <= 0.25, "{gaps:?}");
+        assert!(gaps.stats.mean <= 0.12, "{gaps:?}");
+    }
+}
