@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::incomplete::IncompleteOutput;
 use crate::rpe::RelativePoseErrors;
 
 /// How many scans the pipeline published, processed and dropped.
@@ -53,4 +54,8 @@ pub struct Metrics {
     /// The trajectories scored against ground-truth relations, when there were any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative_pose_error: Option<RelativePoseErrors>,
+    /// The run's files that stopped short or were not written (a full disk); absent when
+    /// every file is whole.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub incomplete_outputs: Vec<IncompleteOutput>,
 }
