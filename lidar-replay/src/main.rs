@@ -13,6 +13,7 @@ use lidar_replay::{
     LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError, Pacer, ReadError,
     Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
 };
+use stage_kit::{say, say_err};
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
 /// log has it, Odometry (published before the scan it goes with, with the same stamp).
@@ -89,7 +90,7 @@ fn run() -> Result<()> {
         Ok(log) => log,
         // Ctrl-C is how a user ends a replay, before its first scan as after it.
         Err(e @ OpenError::Stopped { .. }) => {
-            eprintln!("lidar-replay: {e}");
+            say_err(&format!("lidar-replay: {e}"));
             return Ok(());
         }
         Err(e) => return Err(e.into()),
@@ -116,7 +117,7 @@ fn run() -> Result<()> {
         None
     };
     let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
-    println!("ready");
+    say("ready");
 
     let wait = (!pacer.is_lockstep()).then_some(REAL_TIME_SUBSCRIBER_WAIT);
     scans.wait_for_subscribers(args.subscribers, wait)?;
@@ -144,10 +145,13 @@ fn run() -> Result<()> {
                 summary.malformed_line(&e);
                 let malformed = summary.malformed_total();
                 if malformed <= REPORTED_LINES {
-                    eprintln!("lidar-replay: {}: {e} (skipped)", args.file.display());
+                    say_err(&format!(
+                        "lidar-replay: {}: {e} (skipped)",
+                        args.file.display()
+                    ));
                 }
                 if malformed == REPORTED_LINES {
-                    eprintln!("lidar-replay: further malformed lines are only counted");
+                    say_err("lidar-replay: further malformed lines are only counted");
                 }
                 continue;
             }
@@ -165,11 +169,11 @@ fn run() -> Result<()> {
                 if !odometry_waited {
                     odometry_waited = true;
                     if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
-                        eprintln!(
+                        say_err(&format!(
                             "lidar-replay: nobody subscribed to the odometry within {} s; \
                              publishing it anyway",
                             ODOMETRY_SUBSCRIBER_WAIT.as_secs()
-                        );
+                        ));
                     }
                 }
                 if !sleep_until(pacer.due(pose.stamp_ns, Instant::now())) {
@@ -212,7 +216,7 @@ fn run() -> Result<()> {
     summary.reordering = log.reordering();
     summary.not_replayed = log.skipped_records();
     // One block at the very end, so slam-launch can show it whole (see SUMMARY_HEAD).
-    eprintln!("{summary}");
+    say_err(&summary.to_string());
     ipc_types::losses::report(&summary.losses());
     Ok(())
 }

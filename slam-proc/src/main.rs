@@ -10,6 +10,7 @@ use ipc_types::prelude::*;
 use slam_proc::{
     FastSlam, FilterStats, LineObservation, MeasuredMotion, Observation, OdometryInput, SlamConfig,
 };
+use stage_kit::{say, say_err};
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
 /// publishes a pose estimate for every scan, the best particle's map every few scans and at
@@ -63,7 +64,7 @@ fn run() -> Result<()> {
     // The path goes out once, at the end, in many chunks: lossless whatever the run's
     // delivery, or a real-time run would keep only the last few.
     let path = Outlet::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
-    println!("ready");
+    say("ready");
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
     }
@@ -83,7 +84,7 @@ fn run() -> Result<()> {
                 left_out = left_out.max(publish_map(&maps, &slam, last_header)?);
                 publish_path(&path, &slam, last_header)?;
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
-                eprintln!("{}", summary(&slam.stats()));
+                say_err(&summary(&slam.stats()));
                 ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
                 return Ok(());
             }
@@ -142,8 +143,8 @@ fn run() -> Result<()> {
     // Stopped by a signal: leave the map and the path as far as they got.
     left_out = left_out.max(publish_map(&maps, &slam, last_header)?);
     publish_path(&path, &slam, last_header)?;
-    eprintln!("slam-proc: stopped after {processed} scans");
-    eprintln!("{}", summary(&slam.stats()));
+    say_err(&format!("slam-proc: stopped after {processed} scans"));
+    say_err(&summary(&slam.stats()));
     ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
     Ok(())
 }
@@ -169,10 +170,10 @@ fn publish_map(maps: &Outlet<MapSnapshot>, slam: &FastSlam, header: Header) -> R
         .collect();
     let keep = corners.len().min(ipc_types::MAX_MAP_CORNERS);
     if keep < corners.len() {
-        eprintln!(
+        say_err(&format!(
             "slam-proc: the map has {} corners; publishing {keep}",
             corners.len()
-        );
+        ));
     }
     maps.publish(|message| {
         message.header = header;
