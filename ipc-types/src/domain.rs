@@ -46,14 +46,16 @@ pub enum DomainError {
 pub enum NodeError {
     #[error("node name '{0}' is not a valid iceoryx2 node name")]
     BadName(String),
-    #[error("cannot prepare the iceoryx2 directory {path}: {source}")]
+    // The cause is the source, not part of the message: `{:#}` would print it twice.
+    #[error("cannot prepare the iceoryx2 directory {}", path.display())]
     RootDir {
         path: std::path::PathBuf,
         source: std::io::Error,
     },
     #[error(
-        "the iceoryx2 directory {path} is not this user's own (owner uid {owner}, mode \
-         {mode:o}, a link: {link}); remove it, or run as its owner"
+        "the iceoryx2 directory {} is not this user's own (owner uid {owner}, mode \
+         {mode:o}, a link: {link}); remove it, or run as its owner",
+        path.display()
     )]
     RootNotPrivate {
         path: std::path::PathBuf,
@@ -61,7 +63,7 @@ pub enum NodeError {
         mode: u32,
         link: bool,
     },
-    #[error("cannot make {path} owner-only: {source}")]
+    #[error("cannot make {} owner-only", path.display())]
     Restrict {
         path: std::path::PathBuf,
         source: std::io::Error,
@@ -466,5 +468,68 @@ fn owner_at(path: &std::path::Path) -> std::io::Result<Owner> {
         Ok(()) => Ok(Owner::Gone),
         Err(std::fs::TryLockError::WouldBlock) => Ok(Owner::Alive),
         Err(std::fs::TryLockError::Error(e)) => Err(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(tag: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "ipc-types-root-{tag}-{}-{}",
+            std::process::id(),
+            crate::now_ns()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn the_root_is_made_owner_only_and_an_open_one_of_ours_is_closed() {
+        let base = scratch("ours");
+        let made = base.join("made");
+        prepare_private_dir(&made).unwrap();
+        let mode = std::fs::metadata(&made).unwrap().mode() & 0o777;
+        assert_eq!(mode, OWNER_ONLY_DIR);
+        std::fs::set_permissions(&made, std::fs::Permissions::from_mode(0o755)).unwrap();
+        prepare_private_dir(&made).unwrap();
+        assert_eq!(
+            std::fs::metadata(&made).unwrap().mode() & 0o777,
+            OWNER_ONLY_DIR
+        );
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[test]
+    fn a_link_a_file_or_another_user_s_directory_is_refused() {
+        let base = scratch("refused");
+        let target = base.join("target");
+        std::fs::create_dir(&target).unwrap();
+        let link = base.join("link");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let error = prepare_private_dir(&link).unwrap_err();
+        assert!(
+            matches!(error, NodeError::RootNotPrivate { link: true, .. }),
+            "{error}"
+        );
+        let file = base.join("file");
+        std::fs::write(&file, b"").unwrap();
+        assert!(matches!(
+            prepare_private_dir(&file),
+            Err(NodeError::RootNotPrivate { link: false, .. })
+        ));
+        // Only root can give a directory away.
+        if effective_uid() == 0 {
+            let theirs = base.join("theirs");
+            std::fs::create_dir(&theirs).unwrap();
+            std::os::unix::fs::chown(&theirs, Some(65534), Some(65534)).unwrap();
+            let error = prepare_private_dir(&theirs).unwrap_err().to_string();
+            assert!(
+                error.contains("is not this user's own (owner uid 65534"),
+                "{error}"
+            );
+        }
+        std::fs::remove_dir_all(&base).unwrap();
     }
 }
