@@ -16,6 +16,7 @@ use scan_match::{
     FrontEnd, FrontEndConfig, FrontEndOutput, FrontEndStats, MatchStatus, OdometryStatus,
 };
 use slam_geom::ScanGeometry;
+use stage_kit::{say, say_err};
 
 /// Subscribes to scans (and odometry, when the source publishes it) and publishes their lines
 /// and corners with the odometry pose at each scan's stamp.
@@ -69,7 +70,7 @@ fn run() -> Result<()> {
     // The source chose lockstep or real time; the features follow it.
     let lockstep = scans.delivery() == Delivery::Lossless;
     let features = Outlet::create(&domain, &node, topic::FEATURES, scans.delivery(), 0)?;
-    println!("ready");
+    say("ready");
     if lockstep {
         features.wait_for_subscribers(args.subscribers, None)?;
     }
@@ -158,14 +159,14 @@ fn run() -> Result<()> {
             && pending.is_empty()
         {
             features.publish_end_of_stream(seq, stamp_ns)?;
-            eprintln!("feature-proc: {}", counts.summary());
-            eprintln!("{}", front_end_summary(&front_end.stats()));
+            say_err(&format!("feature-proc: {}", counts.summary()));
+            say_err(&front_end_summary(&front_end.stats()));
             ipc_types::losses::report(&counts.losses());
             return Ok(());
         }
     }
-    eprintln!("feature-proc: stopped; {}", counts.summary());
-    eprintln!("{}", front_end_summary(&front_end.stats()));
+    say_err(&format!("feature-proc: stopped; {}", counts.summary()));
+    say_err(&front_end_summary(&front_end.stats()));
     ipc_types::losses::report(&counts.losses());
     Ok(())
 }
@@ -287,7 +288,10 @@ fn register(
         Ok(output) => Some(scan_motion(&output)),
         Err(e) => {
             counts.unregistered += 1;
-            eprintln!("feature-proc: scan {} not registered: {e}", scan.header.seq);
+            say_err(&format!(
+                "feature-proc: scan {} not registered: {e}",
+                scan.header.seq
+            ));
             None
         }
     }
@@ -376,7 +380,10 @@ fn publish_features(
             // A malformed scan is counted and dropped; the slot still goes downstream
             // (empty) so every scan has its features message and the stream has no gap.
             counts.skipped += 1;
-            eprintln!("feature-proc: scan {} skipped: {e}", scan.header.seq);
+            say_err(&format!(
+                "feature-proc: scan {} skipped: {e}",
+                scan.header.seq
+            ));
         }
     }
     let processing_ns = started.elapsed().as_nanos() as u64;
@@ -396,10 +403,10 @@ fn publish_features(
         let _ = message.set(&lines[..keep_lines], &corners[..keep_corners]);
     })?;
     if let Some((l, c)) = overflow {
-        eprintln!(
+        say_err(&format!(
             "feature-proc: scan {} had {l} lines and {c} corners; kept what fits",
             scan.header.seq
-        );
+        ));
     }
     counts.processed += 1;
     Ok(())

@@ -1,4 +1,13 @@
 //! A run's own iceoryx2 domain, so two pipelines or two tests on one machine never cross.
+//!
+//! A domain is also its user's: iceoryx2 keeps node and service files under one root
+//! directory (`/tmp/iceoryx2/` by default, made by the first user with mode 0750, which
+//! every other user then cannot write: "cannot create node ... InternalError") and its
+//! shared memory in /dev/shm under a prefix. Each user gets a root of their own, made
+//! owner-only, and a prefix with their uid, so runs of two users never share a file and
+//! neither's sweep of abandoned runs touches the other's.
+
+use std::os::unix::fs::{DirBuilderExt, MetadataExt, OpenOptionsExt, PermissionsExt};
 
 use iceoryx2::config::Config;
 use iceoryx2::prelude::*;
@@ -9,10 +18,17 @@ use crate::shm::SHM_DIR;
 const MAX_DOMAIN_LEN: usize = 40;
 /// A domain with no live node whose files are this old is abandoned.
 const ABANDONED_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
-/// Prefix of every file a domain leaves in /dev/shm and /tmp/iceoryx2.
+/// Prefix of every file a domain leaves in /dev/shm and in its iceoryx2 root; the user's
+/// uid follows (see [`user_prefix`]).
 pub const FILE_PREFIX: &str = "slam_";
 /// The file a launcher keeps locked in /dev/shm while its run lives (see [`Domain::claim`]).
 const OWNER_FILE: &str = "owner.lock";
+/// Mode of every file of a domain: its user's alone.
+const OWNER_ONLY_FILE: u32 = 0o600;
+/// Mode of the user's iceoryx2 root directory.
+const OWNER_ONLY_DIR: u32 = 0o700;
+/// Bits that let anyone but the owner in.
+const GROUP_OTHER_BITS: u32 = 0o077;
 
 /// Why a domain name was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -30,6 +46,28 @@ pub enum DomainError {
 pub enum NodeError {
     #[error("node name '{0}' is not a valid iceoryx2 node name")]
     BadName(String),
+    // The cause is the source, not part of the message: `{:#}` would print it twice.
+    #[error("cannot prepare the iceoryx2 directory {}", path.display())]
+    RootDir {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error(
+        "the iceoryx2 directory {} is not this user's own (owner uid {owner}, mode \
+         {mode:o}, a link: {link}); remove it, or run as its owner",
+        path.display()
+    )]
+    RootNotPrivate {
+        path: std::path::PathBuf,
+        owner: u32,
+        mode: u32,
+        link: bool,
+    },
+    #[error("cannot make {} owner-only", path.display())]
+    Restrict {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
     #[error("cannot create node '{name}' in domain '{domain}': {cause:?}")]
     Create {
         name: String,
@@ -72,12 +110,13 @@ enum Owner {
     Alive,
 }
 
-/// A run's domain: its name and the iceoryx2 configuration whose prefix keeps its shared
-/// memory apart from every other run's.
+/// A run's domain: its name and the iceoryx2 configuration whose root and prefix keep its
+/// files apart from every other run's and every other user's.
 #[derive(Debug, Clone)]
 pub struct Domain {
     name: String,
     config: Config,
+    root: std::path::PathBuf,
 }
 
 impl Domain {
@@ -96,9 +135,16 @@ impl Domain {
         // Validated above: letters, digits, '-' and '_' always make a valid file name.
         config.global.prefix = FileName::new(Self::prefix_of(name).as_bytes())
             .map_err(|_| DomainError::BadCharacter(name.to_owned()))?;
+        let root = user_root();
+        // Trailing '/' as iceoryx2's own default has it; the path is ASCII by construction.
+        let root_text = format!("{}/", root.display());
+        let root_path = iceoryx2::prelude::Path::new(root_text.as_bytes())
+            .map_err(|_| DomainError::BadCharacter(name.to_owned()))?;
+        config.global.set_root_path(&root_path);
         Ok(Self {
             name: name.to_owned(),
             config,
+            root,
         })
     }
 
@@ -115,7 +161,13 @@ impl Domain {
     fn prefix_of(name: &str) -> String {
         // '_' cannot occur in a name, so the prefix of one domain is never the start of
         // another's.
-        format!("{FILE_PREFIX}{name}_")
+        format!("{}{name}_", user_prefix())
+    }
+
+    /// The directory under which iceoryx2 keeps this domain's node and service files: the
+    /// user's own.
+    pub fn root(&self) -> &std::path::Path {
+        &self.root
     }
 
     /// The iceoryx2 configuration of this domain.
@@ -123,10 +175,13 @@ impl Domain {
         &self.config
     }
 
-    /// Creates a node in this domain. Signal handling is ours ([`crate::shutdown`]).
+    /// Creates a node in this domain. Signal handling is ours ([`crate::shutdown`]). The
+    /// user's iceoryx2 root is made first if need be (owner-only), and the domain's files in
+    /// /dev/shm are owner-only once the node exists.
     pub fn node(&self, name: &str) -> Result<Node<ipc::Service>, NodeError> {
         let node_name = NodeName::new(name).map_err(|_| NodeError::BadName(name.to_owned()))?;
-        NodeBuilder::new()
+        prepare_private_dir(&self.root)?;
+        let node = NodeBuilder::new()
             .name(&node_name)
             .config(&self.config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
@@ -135,7 +190,40 @@ impl Domain {
                 name: name.to_owned(),
                 domain: self.name.clone(),
                 cause,
-            })
+            })?;
+        self.restrict_shm_files()?;
+        Ok(node)
+    }
+
+    /// Takes group and other access away from this user's files of the domain in /dev/shm.
+    /// iceoryx2 0.10 makes one of them, the global management segment its first node
+    /// creates, readable and writable by everyone (`enable_global_access(true)`, whatever
+    /// the configuration says); the others it makes owner-only already.
+    fn restrict_shm_files(&self) -> Result<(), NodeError> {
+        let restrict = |path: std::path::PathBuf, source| NodeError::Restrict { path, source };
+        let dir = std::path::Path::new(SHM_DIR);
+        let files = self
+            .leftovers_in(dir)
+            .map_err(|e| restrict(dir.to_path_buf(), e))?;
+        let uid = effective_uid();
+        for path in files {
+            let metadata = match std::fs::symlink_metadata(&path) {
+                Ok(metadata) => metadata,
+                // Removed meanwhile by the process that made it.
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(restrict(path, e)),
+            };
+            if metadata.uid() != uid || metadata.mode() & GROUP_OTHER_BITS == 0 {
+                continue;
+            }
+            let mode = std::fs::Permissions::from_mode(metadata.mode() & !GROUP_OTHER_BITS);
+            match std::fs::set_permissions(&path, mode) {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(restrict(path, e)),
+            }
+        }
+        Ok(())
     }
 
     fn owner_path(&self) -> std::path::PathBuf {
@@ -159,7 +247,12 @@ impl Domain {
             std::process::id(),
             crate::now_ns()
         ));
-        let file = std::fs::File::create_new(&temp).map_err(io)?;
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .mode(OWNER_ONLY_FILE)
+            .open(&temp)
+            .map_err(io)?;
         let claimed = file
             .try_lock()
             .map_err(|e| io(std::io::Error::other(e.to_string())))
@@ -251,20 +344,22 @@ impl Domain {
         alive
     }
 
-    /// Cleans up every domain in /dev/shm that no live process uses any more: dead nodes are
-    /// removed and, where no node is alive, the domain's files too. Returns the domains
-    /// cleaned. Run at start so crashed runs do not pile up shared memory. A domain claimed
-    /// by a live launcher is left to it; one whose launcher died is cleaned at once, one
-    /// never claimed once its files are a minute old.
+    /// Cleans up every domain of this user in /dev/shm that no live process uses any more:
+    /// dead nodes are removed and, where no node is alive, the domain's files too. Returns
+    /// the domains cleaned. Run at start so crashed runs do not pile up shared memory. A
+    /// domain claimed by a live launcher is left to it; one whose launcher died is cleaned
+    /// at once, one never claimed once its files are a minute old. Other users' domains are
+    /// theirs to clean.
     pub fn sweep_abandoned() -> Vec<String> {
         let Ok(entries) = std::fs::read_dir(SHM_DIR) else {
             return Vec::new();
         };
+        let prefix = user_prefix();
         let mut names: Vec<String> = entries
             .filter_map(|entry| entry.ok())
             .filter_map(|entry| {
                 let file = entry.file_name().to_string_lossy().into_owned();
-                let rest = file.strip_prefix(FILE_PREFIX)?;
+                let rest = file.strip_prefix(&prefix)?;
                 Some(rest.split('_').next()?.to_owned())
             })
             .collect();
@@ -312,6 +407,55 @@ impl Domain {
     }
 }
 
+/// The effective uid of this process: the owner of every file it makes.
+fn effective_uid() -> u32 {
+    // SAFETY: geteuid(2) has no preconditions and cannot fail.
+    unsafe { libc::geteuid() }
+}
+
+/// The start of every file name of this user's domains: [`FILE_PREFIX`], `u`, the uid, `_`.
+pub fn user_prefix() -> String {
+    format!("{FILE_PREFIX}u{}_", effective_uid())
+}
+
+/// This user's iceoryx2 root directory (see the module's documentation). In /tmp, where
+/// iceoryx2's default is, and not under `$TMPDIR`: every process of a run must find the same
+/// one whatever its environment.
+pub fn user_root() -> std::path::PathBuf {
+    std::path::PathBuf::from(format!("/tmp/slam-iceoryx2-{}", effective_uid()))
+}
+
+/// Makes `dir` (mode 0700) unless it exists, and checks that it is this user's own: a real
+/// directory, owned by this user, open to nobody else. One that another user made first in a
+/// shared /tmp could watch or disturb every run, so it is refused, not used.
+fn prepare_private_dir(dir: &std::path::Path) -> Result<(), NodeError> {
+    let io = |source| NodeError::RootDir {
+        path: dir.to_path_buf(),
+        source,
+    };
+    match std::fs::DirBuilder::new().mode(OWNER_ONLY_DIR).create(dir) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+        Err(e) => return Err(io(e)),
+    }
+    let metadata = std::fs::symlink_metadata(dir).map_err(io)?;
+    let link = metadata.file_type().is_symlink();
+    if link || !metadata.is_dir() || metadata.uid() != effective_uid() {
+        return Err(NodeError::RootNotPrivate {
+            path: dir.to_path_buf(),
+            owner: metadata.uid(),
+            mode: metadata.mode() & 0o7777,
+            link,
+        });
+    }
+    // Ours, but perhaps made by an older version or under another umask: close it.
+    if metadata.mode() & GROUP_OTHER_BITS != 0 {
+        std::fs::set_permissions(dir, std::fs::Permissions::from_mode(OWNER_ONLY_DIR))
+            .map_err(io)?;
+    }
+    Ok(())
+}
+
 /// Who holds the owner file at `path`.
 fn owner_at(path: &std::path::Path) -> std::io::Result<Owner> {
     let file = match std::fs::File::open(path) {
@@ -324,5 +468,68 @@ fn owner_at(path: &std::path::Path) -> std::io::Result<Owner> {
         Ok(()) => Ok(Owner::Gone),
         Err(std::fs::TryLockError::WouldBlock) => Ok(Owner::Alive),
         Err(std::fs::TryLockError::Error(e)) => Err(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(tag: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "ipc-types-root-{tag}-{}-{}",
+            std::process::id(),
+            crate::now_ns()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn the_root_is_made_owner_only_and_an_open_one_of_ours_is_closed() {
+        let base = scratch("ours");
+        let made = base.join("made");
+        prepare_private_dir(&made).unwrap();
+        let mode = std::fs::metadata(&made).unwrap().mode() & 0o777;
+        assert_eq!(mode, OWNER_ONLY_DIR);
+        std::fs::set_permissions(&made, std::fs::Permissions::from_mode(0o755)).unwrap();
+        prepare_private_dir(&made).unwrap();
+        assert_eq!(
+            std::fs::metadata(&made).unwrap().mode() & 0o777,
+            OWNER_ONLY_DIR
+        );
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[test]
+    fn a_link_a_file_or_another_user_s_directory_is_refused() {
+        let base = scratch("refused");
+        let target = base.join("target");
+        std::fs::create_dir(&target).unwrap();
+        let link = base.join("link");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let error = prepare_private_dir(&link).unwrap_err();
+        assert!(
+            matches!(error, NodeError::RootNotPrivate { link: true, .. }),
+            "{error}"
+        );
+        let file = base.join("file");
+        std::fs::write(&file, b"").unwrap();
+        assert!(matches!(
+            prepare_private_dir(&file),
+            Err(NodeError::RootNotPrivate { link: false, .. })
+        ));
+        // Only root can give a directory away.
+        if effective_uid() == 0 {
+            let theirs = base.join("theirs");
+            std::fs::create_dir(&theirs).unwrap();
+            std::os::unix::fs::chown(&theirs, Some(65534), Some(65534)).unwrap();
+            let error = prepare_private_dir(&theirs).unwrap_err().to_string();
+            assert!(
+                error.contains("is not this user's own (owner uid 65534"),
+                "{error}"
+            );
+        }
+        std::fs::remove_dir_all(&base).unwrap();
     }
 }

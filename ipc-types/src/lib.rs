@@ -53,7 +53,9 @@ pub use capacity::{
     CapacityError, MAX_BEAMS, MAX_FEATURE_CORNERS, MAX_LINES, MAX_MAP_CORNERS,
     MAX_PATH_CHUNK_POSES, MAX_WORLD_CORNERS,
 };
-pub use domain::{Claim, ClaimError, Domain, DomainError, FILE_PREFIX, NodeError};
+pub use domain::{
+    Claim, ClaimError, Domain, DomainError, FILE_PREFIX, NodeError, user_prefix, user_root,
+};
 pub use header::{FLAG_END_OF_STREAM, FRAME_ID_LEN, Header, now_ns};
 pub use message::Message;
 pub use messages::*;

@@ -6,6 +6,7 @@
 //! data), and travels downstream: a stage reads its input's mode and creates its output with
 //! the same one.
 
+use std::io::Write as _;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -327,7 +328,11 @@ fn wait_for_service<T: Message>(
             return Err(OpenError::Stopped(name.to_owned()));
         }
         if start.elapsed() >= next_log {
-            eprintln!("waiting for a publisher to create '{name}'");
+            // Not eprintln!: it panics on a closed pipe (a launcher that has gone).
+            let _ = writeln!(
+                std::io::stderr(),
+                "waiting for a publisher to create '{name}'"
+            );
             next_log += Duration::from_secs(5);
         }
         std::thread::sleep(Duration::from_millis(10));
@@ -355,7 +360,7 @@ fn wait_for_publisher<T: Message>(
             return Ok(());
         }
         if start.elapsed() >= next_log {
-            eprintln!("waiting for a publisher on '{name}'");
+            let _ = writeln!(std::io::stderr(), "waiting for a publisher on '{name}'");
             next_log += Duration::from_secs(5);
         }
         std::thread::sleep(Duration::from_millis(5));

@@ -10,8 +10,9 @@ use launch::config::{RunConfig, SourceKind};
 use launch::relations::relations_beside;
 use launch::stall::StallLimits;
 use launch::supervisor::{self, Display, Outcome, StagePlan};
-use map_sink::{METRICS_FILE, Metrics};
+use map_sink::{METRICS_FILE, Metrics, write_atomic};
 use slam_eval::ScoreSummary;
+use stage_kit::{say, say_err};
 
 /// Runs a scan source (lidar-sim, lidar-replay or lidar-hokuyo) -> feature-proc -> slam-proc
 /// -> map-sink as separate processes over iceoryx2 shared memory in a domain of their own,
@@ -118,7 +119,7 @@ fn main() -> ExitCode {
     match run() {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("slam-launch: {e:#}");
+            say_err(&format!("slam-launch: {e:#}"));
             ExitCode::from(2)
         }
     }
@@ -164,7 +165,10 @@ fn run() -> Result<ExitCode> {
         && let Some(found) = config.replay.file.as_deref().and_then(relations_beside)
     {
         if !args.quiet {
-            eprintln!("scoring against {} (beside the log)", found.display());
+            say_err(&format!(
+                "scoring against {} (beside the log)",
+                found.display()
+            ));
         }
         config.relations = Some(found);
     }
@@ -173,7 +177,11 @@ fn run() -> Result<ExitCode> {
         let relations = slam_eval::read_relations(path)
             .context("refusing to start: the relations file cannot be used")?;
         if !args.quiet {
-            eprintln!("{} relations in {}", relations.len(), path.display());
+            say_err(&format!(
+                "{} relations in {}",
+                relations.len(),
+                path.display()
+            ));
         }
     }
 
@@ -196,18 +204,17 @@ fn run() -> Result<ExitCode> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create directory {}", dir.display()))?;
     }
-    std::fs::write(
-        out.join("config.toml"),
-        toml::to_string(&config).context("cannot write the effective configuration")?,
-    )?;
+    let effective = toml::to_string(&config).context("cannot write the effective configuration")?;
+    // Atomically, like every small result of a run: a full disk leaves no half file.
+    write_atomic(&out.join("config.toml"), effective.as_bytes())?;
 
     let cleaned = Domain::sweep_abandoned();
     if !cleaned.is_empty() {
-        eprintln!(
+        say_err(&format!(
             "cleaned up shared memory of {} abandoned run(s): {}",
             cleaned.len(),
             cleaned.join(", ")
-        );
+        ));
     }
     // After the sweep, which may have freed some: a stage that finds /dev/shm full dies of
     // SIGBUS wherever it is, so the run must fit before it starts.
@@ -261,12 +268,12 @@ fn run() -> Result<ExitCode> {
     }
     // Even in quiet mode, like the stages' closing summaries: lost data is part of the result.
     for line in losses.lines() {
-        eprintln!("{line}");
+        say_err(&line);
     }
 
     domain.cleanup_dead_nodes();
     if let Err(e) = domain.remove_leftovers() {
-        eprintln!("cannot remove the run's shared memory: {e}");
+        say_err(&format!("cannot remove the run's shared memory: {e}"));
     }
 
     match outcome {
@@ -279,23 +286,26 @@ fn run() -> Result<ExitCode> {
         Outcome::Interrupted { source_failure } if config.source == SourceKind::Hokuyo => {
             // lidar-hokuyo knows whether it published; it fails a run that got no scan.
             if let Some(why) = source_failure {
-                eprintln!(
+                say_err(&format!(
                     "slam-launch: no scan arrived from the Hokuyo at {}: {why}",
                     config.hokuyo.addr
-                );
-                eprintln!("logs in {}", log_dir.display());
+                ));
+                say_err(&format!("logs in {}", log_dir.display()));
                 return Ok(ExitCode::FAILURE);
             }
             print_summary(&out)?;
             Ok(ExitCode::SUCCESS)
         }
         Outcome::Interrupted { .. } => {
-            eprintln!("interrupted; partial results in {}", out.display());
+            say_err(&format!(
+                "interrupted; partial results in {}",
+                out.display()
+            ));
             Ok(ExitCode::from(130))
         }
         Outcome::Failed(message) => {
-            eprintln!("slam-launch: {message}");
-            eprintln!("logs in {}", log_dir.display());
+            say_err(&format!("slam-launch: {message}"));
+            say_err(&format!("logs in {}", log_dir.display()));
             Ok(ExitCode::FAILURE)
         }
     }
@@ -417,8 +427,7 @@ fn plan(
             return Ok(Vec::new());
         }
         let path = config_dir.join(format!("{name}.toml"));
-        std::fs::write(&path, RunConfig::section_text(table))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        write_atomic(&path, RunConfig::section_text(table).as_bytes())?;
         Ok(vec![flag.into(), path.display().to_string()])
     };
     let section = |name: &str, table: &toml::Table| section_as(name, table, "--config");
@@ -635,7 +644,7 @@ fn print_summary(out: &Path) -> Result<()> {
         .with_context(|| format!("the run finished but {} is missing", path.display()))?;
     let metrics: Metrics = serde_json::from_str(&text)
         .with_context(|| format!("{} is not the metrics map-sink writes", path.display()))?;
-    println!("{}", summary(out, &metrics));
+    say(&summary(out, &metrics));
     Ok(())
 }
 

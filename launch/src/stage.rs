@@ -1,11 +1,14 @@
 //! One child process of the pipeline: started, watched through its output, stopped.
 
 use std::collections::VecDeque;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
+
+use map_sink::{IncompleteOutput, LineFile};
+use stage_kit::say_err;
 
 use crate::closing::ClosingSummary;
 
@@ -38,11 +41,8 @@ pub enum StageError {
         program: String,
         source: std::io::Error,
     },
-    #[error("cannot create log file {path}: {source}")]
-    Log {
-        path: String,
-        source: std::io::Error,
-    },
+    #[error("cannot create the stage's log file")]
+    Log(#[source] map_sink::SinkError),
 }
 
 /// A running child.
@@ -52,6 +52,7 @@ pub struct Stage {
     child: Child,
     stderr_tail: Arc<Mutex<VecDeque<String>>>,
     summary: Arc<Mutex<ClosingSummary>>,
+    log_stopped: Arc<Mutex<Option<IncompleteOutput>>>,
     stdout_reader: Option<std::thread::JoinHandle<()>>,
     stderr_reader: Option<std::thread::JoinHandle<()>>,
     exit: Option<ExitStatus>,
@@ -59,8 +60,9 @@ pub struct Stage {
 
 impl Stage {
     /// Starts `program args` as stage `index`; stdout lines become events, stderr goes to
-    /// `log_dir/<name>.log` and its last lines are kept. The child is sent SIGTERM when the
-    /// calling thread ends (see [`die_with_launcher`]): call it from the thread that lives
+    /// `log_dir/<name>.log` (whole lines; a log that cannot be written, a full disk, stops
+    /// there and says so on the console) and its last lines are kept. The child is sent SIGTERM when the
+    /// calling thread ends (see [`die_with_parent`]): call it from the thread that lives
     /// as long as the run, the main thread.
     pub fn spawn(
         index: usize,
@@ -71,11 +73,28 @@ impl Stage {
         events: Sender<StageEvent>,
     ) -> Result<Self, StageError> {
         let log_path = log_dir.join(format!("{name}.log"));
-        let mut log = std::fs::File::create(&log_path).map_err(|source| StageError::Log {
-            path: log_path.display().to_string(),
-            source,
-        })?;
-        let _ = writeln!(log, "$ {} {}", program.display(), args.join(" "));
+        let mut log = LineFile::create(&log_path).map_err(StageError::Log)?;
+        let log_stopped = Arc::new(Mutex::new(None));
+        let mut log_line = {
+            let log_stopped = Arc::clone(&log_stopped);
+            let file_name = format!("logs/{name}.log");
+            let mut writing = true;
+            move |line: &str| {
+                if !writing {
+                    return;
+                }
+                if let Err(e) = log.append(&format!("{line}\n")) {
+                    writing = false;
+                    let what = format!("stopped after {} lines", log.lines());
+                    let stopped = IncompleteOutput::new(&file_name, &what, &e);
+                    say_err(&format!("slam-launch: {}", stopped.line()));
+                    if let Ok(mut slot) = log_stopped.lock() {
+                        *slot = Some(stopped);
+                    }
+                }
+            }
+        };
+        log_line(&format!("$ {} {}", program.display(), args.join(" ")));
         let mut command = Command::new(program);
         command
             .args(args)
@@ -85,7 +104,7 @@ impl Stage {
             // Each stage reports what it took in and sent out (see ipc_types::progress),
             // which is how the supervisor tells which stage has stalled.
             .env(ipc_types::progress::ENV, "1");
-        die_with_launcher(&mut command);
+        die_with_parent(&mut command);
         let mut child = command.spawn().map_err(|source| StageError::Spawn {
             name: name.to_owned(),
             program: program.display().to_string(),
@@ -126,7 +145,7 @@ impl Stage {
             let summary = Arc::clone(&summary);
             stderr_reader = Some(std::thread::spawn(move || {
                 for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                    let _ = writeln!(log, "{line}");
+                    log_line(&line);
                     if let Ok(mut summary) = summary.lock() {
                         summary.take(&line);
                     }
@@ -144,6 +163,7 @@ impl Stage {
             child,
             stderr_tail,
             summary,
+            log_stopped,
             stdout_reader,
             stderr_reader,
             exit: None,
@@ -174,6 +194,16 @@ impl Stage {
             .lock()
             .map(|summary| summary.lines().to_vec())
             .unwrap_or_default()
+    }
+
+    /// The stage's log file, if it could not be written to the end; once it has ended, for
+    /// good.
+    pub fn log_stopped(&mut self) -> Option<IncompleteOutput> {
+        self.join_stderr();
+        self.log_stopped
+            .lock()
+            .ok()
+            .and_then(|stopped| stopped.clone())
     }
 
     /// Once the child has ended, waits until every event of its stdout has been sent (its
@@ -219,17 +249,18 @@ impl Stage {
     }
 }
 
-/// Has the kernel send the child SIGTERM when the launcher dies, however it dies (SIGKILL
-/// included), so no stage outlives it holding its shared memory with nobody to stop it.
-/// SIGTERM, not SIGKILL: every stage takes it as Ctrl-C (`ipc_types::shutdown`), so
-/// map-sink still writes its results from what it received and the others remove their
-/// iceoryx2 nodes on the way out. Linux only (`PR_SET_PDEATHSIG`); it is tied to the thread
-/// that forked the child, not the process.
+/// Has the kernel send the child SIGTERM when this process dies, however it dies (SIGKILL
+/// included), so no stage outlives the launcher holding its shared memory with nobody to
+/// stop it (and no slam-launch outlives slam-bench). SIGTERM, not SIGKILL: every stage and
+/// slam-launch take it as Ctrl-C (`ipc_types::shutdown`), so map-sink still writes its
+/// results from what it received and the others remove their iceoryx2 nodes on the way
+/// out. Linux only (`PR_SET_PDEATHSIG`); it is tied to the thread that forked the child,
+/// not the process: call it on the thread that lives as long as the child should.
 #[cfg(target_os = "linux")]
-fn die_with_launcher(command: &mut Command) {
+pub fn die_with_parent(command: &mut Command) {
     use std::os::unix::process::CommandExt;
     // Ours: the child's parent until we die. Always fits a pid_t on Linux.
-    let launcher = libc::pid_t::try_from(std::process::id()).unwrap_or(libc::pid_t::MAX);
+    let parent = libc::pid_t::try_from(std::process::id()).unwrap_or(libc::pid_t::MAX);
     let death_signal = libc::c_ulong::try_from(libc::SIGTERM).unwrap_or(15);
     // SAFETY: the closure runs in the child between fork and exec; it calls only prctl(2)
     // and getppid(2), which are async-signal-safe, and makes its errors without allocating.
@@ -240,7 +271,7 @@ fn die_with_launcher(command: &mut Command) {
             }
             // We may have died between fork and prctl, before there was a death signal to
             // send: the child then has another parent already, and must not run.
-            if libc::getppid() != launcher {
+            if libc::getppid() != parent {
                 return Err(std::io::Error::from_raw_os_error(libc::ESRCH));
             }
             Ok(())
@@ -248,9 +279,9 @@ fn die_with_launcher(command: &mut Command) {
     }
 }
 
-/// Elsewhere a stage outlives a killed launcher; it still stops on Ctrl-C.
+/// Elsewhere a child outlives a killed parent; it still stops on Ctrl-C.
 #[cfg(not(target_os = "linux"))]
-fn die_with_launcher(_command: &mut Command) {}
+pub fn die_with_parent(_command: &mut Command) {}
 
 /// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`; a SIGBUS with
 /// what /dev/shm has left (see [`crate::shm_room`]).

@@ -6,6 +6,7 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use ipc_types::{Domain, shutdown};
+use stage_kit::say_err;
 
 use crate::losses::Losses;
 use crate::stage::{Stage, StageError, StageEvent, describe};
@@ -257,7 +258,12 @@ pub fn run(
     // Even in quiet mode: what a stage could not do is part of the result.
     for stage in &mut stages {
         for line in stage.closing_summary() {
-            eprintln!("{line}");
+            say_err(&line);
+        }
+    }
+    for stage in &mut stages {
+        if let Some(stopped) = stage.log_stopped() {
+            say_err(&format!("slam-launch: incomplete: {}", stopped.line()));
         }
     }
     Ok(Ended { outcome, losses })
@@ -279,11 +285,11 @@ fn stop_all(stages: &mut [Stage], domain: &Domain) {
     }
     for stage in stages.iter_mut() {
         if stage.poll_exit().is_none() {
-            eprintln!(
+            say_err(&format!(
                 "{} did not stop within {} s; killed",
                 stage.name,
                 STOP_GRACE.as_secs()
-            );
+            ));
             stage.kill();
         }
     }
@@ -317,7 +323,7 @@ impl Printer {
             return;
         }
         self.clear();
-        eprintln!("[{stage}] {line}");
+        say_err(&format!("[{stage}] {line}"));
     }
 
     fn progress(&mut self, progress: &Progress) {
@@ -335,23 +341,23 @@ impl Printer {
         self.last = Instant::now();
         let text = format!("{}: {}", self.label, progress.render(self.total));
         if self.live {
-            eprint!("\r\x1b[K{text}");
+            let _ = write!(std::io::stderr(), "\r\x1b[K{text}");
             let _ = std::io::stderr().flush();
             self.shown = true;
         } else {
-            eprintln!("{text}");
+            say_err(&text);
         }
     }
 
     /// A problem of the run, shown even in quiet mode (like the closing summaries).
     fn warn(&mut self, text: &str) {
         self.clear();
-        eprintln!("slam-launch: {text}");
+        say_err(&format!("slam-launch: {text}"));
     }
 
     fn clear(&mut self) {
         if self.shown {
-            eprint!("\r\x1b[K");
+            let _ = write!(std::io::stderr(), "\r\x1b[K");
             self.shown = false;
         }
     }
@@ -359,7 +365,7 @@ impl Printer {
     fn finish(&mut self, progress: &Progress) {
         self.clear();
         if !self.quiet && progress.frames() > 0 {
-            eprintln!("{}: {}", self.label, progress.render(self.total));
+            say_err(&format!("{}: {}", self.label, progress.render(self.total)));
         }
     }
 }

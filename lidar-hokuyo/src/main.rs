@@ -11,6 +11,7 @@ use ipc_types::prelude::*;
 use lidar_hokuyo::{
     ConnectionNotices, Driver, DriverConfig, DriverStats, Finish, ScanRequest, TcpConnector,
 };
+use stage_kit::{say, say_err};
 
 /// Live Hokuyo lidar (UTM-30LX-EW, UST-10LX/20LX, ...) on the shared-memory scan topic.
 #[derive(Debug, Parser)]
@@ -77,16 +78,16 @@ fn run() -> Result<()> {
     let node = domain.node("lidar-hokuyo")?;
     // A live sensor never waits for a slow subscriber: the oldest scans are dropped instead.
     let mut scans = Outlet::create(&domain, &node, topic::SCAN, Delivery::Latest, 0)?;
-    println!("ready");
+    say("ready");
     std::io::stdout()
         .flush()
         .context("cannot write to stdout")?;
     match scans.wait_for_subscribers(args.subscribers, Some(Duration::from_secs(10))) {
         Ok(true) => {}
-        Ok(false) => eprintln!(
+        Ok(false) => say_err(&format!(
             "lidar-hokuyo: fewer than {} subscribers after 10 s; starting anyway",
             args.subscribers
-        ),
+        )),
         Err(_) if shutdown::requested() => return Ok(()),
         Err(e) => return Err(e.into()),
     }
@@ -112,16 +113,18 @@ fn run() -> Result<()> {
     let notices = driver.notices;
     // The stream ends either way, so the stages after us finish their work and write.
     if let Err(e) = scans.publish_end_of_stream(stats.published, stats.last_stamp_ns) {
-        eprintln!("lidar-hokuyo: cannot publish the end of the stream: {e}");
+        say_err(&format!(
+            "lidar-hokuyo: cannot publish the end of the stream: {e}"
+        ));
     }
     let how = match finish {
         Finish::Frames => "done",
         Finish::Stopped => "stopped",
     };
-    eprintln!(
+    say_err(&format!(
         "lidar-hokuyo: {how}: published {} scans, dropped {} damaged scans, {} connections",
         stats.published, stats.damaged, stats.connections
-    );
+    ));
     ipc_types::losses::report(&[("damaged_scans", stats.damaged)]);
     // A live source that never delivered has failed, however it was stopped.
     if stats.published == 0 {

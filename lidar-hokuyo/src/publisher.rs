@@ -18,6 +18,7 @@
 use std::time::{Duration, Instant};
 
 use ipc_types::{LaserScan, Outlet, PublishError};
+use stage_kit::say_err;
 
 use crate::backoff::Backoff;
 use crate::connector::Connect;
@@ -373,7 +374,7 @@ fn sleep_unless_stopped(delay: Duration, stop: &dyn Fn() -> bool) -> bool {
 }
 
 fn log(message: &str) {
-    eprintln!("lidar-hokuyo: {message}");
+    say_err(&format!("lidar-hokuyo: {message}"));
 }
 
 /// A line for the console: stdout, which slam-launch shows (its stderr goes to a log file).

@@ -15,6 +15,7 @@ use lidar_replay::{
     Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
 };
 use recorder::Recorded;
+use stage_kit::{say, say_err};
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
 /// log has it, Odometry (published before the scan it goes with, with the same stamp).
@@ -130,7 +131,7 @@ impl Streams {
             None
         };
         let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
-        println!("ready");
+        say("ready");
 
         let wait = (!pacer.is_lockstep()).then_some(REAL_TIME_SUBSCRIBER_WAIT);
         scans.wait_for_subscribers(args.subscribers, wait)?;
@@ -156,11 +157,11 @@ impl Streams {
         if !self.odometry_waited {
             self.odometry_waited = true;
             if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
-                eprintln!(
+                say_err(&format!(
                     "lidar-replay: nobody subscribed to the odometry within {} s; \
                      publishing it anyway",
                     ODOMETRY_SUBSCRIBER_WAIT.as_secs()
-                );
+                ));
             }
         }
         if !sleep_until(self.pacer.due(stamp_ns, Instant::now())) {
@@ -220,7 +221,7 @@ fn replay_log(args: &Args) -> Result<()> {
         Ok(log) => log,
         // Ctrl-C is how a user ends a replay, before its first scan as after it.
         Err(e @ OpenError::Stopped { .. }) => {
-            eprintln!("lidar-replay: {e}");
+            say_err(&format!("lidar-replay: {e}"));
             return Ok(());
         }
         Err(e) => return Err(e.into()),
@@ -306,10 +307,10 @@ fn replay_log(args: &Args) -> Result<()> {
         args.file.display()
     );
     if args.skip > 0 {
-        eprintln!(
+        say_err(&format!(
             "lidar-replay: started at scan {} of the log (--skip)",
             args.skip
-        );
+        ));
     }
     finish(&streams, &mut summary)?;
     summary.lines_read = log.line_number();
@@ -361,7 +362,7 @@ fn replay_recording(args: &Args) -> Result<()> {
                 continue;
             }
             Err(e @ recorder::ReadError::Cut { .. }) => {
-                eprintln!("lidar-replay: {}: {e}", args.file.display());
+                say_err(&format!("lidar-replay: {}: {e}", args.file.display()));
                 summary.cut = Some(e.to_string());
                 break;
             }
@@ -385,10 +386,10 @@ fn replay_recording(args: &Args) -> Result<()> {
 fn report_malformed(summary: &ReplaySummary, file: &std::path::Path, e: &lidar_replay::LineError) {
     let malformed = summary.malformed_total();
     if malformed <= REPORTED_LINES {
-        eprintln!("lidar-replay: {}: {e} (skipped)", file.display());
+        say_err(&format!("lidar-replay: {}: {e} (skipped)", file.display()));
     }
     if malformed == REPORTED_LINES {
-        eprintln!("lidar-replay: further malformed lines are only counted");
+        say_err("lidar-replay: further malformed lines are only counted");
     }
 }
 
@@ -406,7 +407,7 @@ fn finish(streams: &Streams, summary: &mut ReplaySummary) -> Result<()> {
 /// The summary as one block at the very end, so slam-launch can show it whole (see
 /// SUMMARY_HEAD), and its losses for the launcher.
 fn report(summary: &ReplaySummary) {
-    eprintln!("{summary}");
+    say_err(&summary.to_string());
     ipc_types::losses::report(&summary.losses());
 }
 

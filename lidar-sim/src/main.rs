@@ -10,6 +10,7 @@ use clap::Parser;
 use ipc_types::prelude::*;
 use lidar_sim::{SensorConfig, Simulation, VehicleConfig, World};
 use serde::Deserialize;
+use stage_kit::{say, say_err};
 
 /// What `--config` may set: the sensor and the vehicle (every field optional).
 #[derive(Debug, Default, Deserialize)]
@@ -101,12 +102,14 @@ fn run() -> Result<()> {
     corners.publish(|message| {
         message.header = Header::new(0, 0, "map");
         if let Err(e) = message.set(&true_corners) {
-            eprintln!("lidar-sim: only part of the world's corners are published: {e}");
+            say_err(&format!(
+                "lidar-sim: only part of the world's corners are published: {e}"
+            ));
             let _ = message.set(&true_corners[..ipc_types::MAX_WORLD_CORNERS]);
         }
     })?;
     let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
-    println!("ready");
+    say("ready");
 
     let wait = match delivery {
         Delivery::Lossless => None,
@@ -179,7 +182,7 @@ fn run() -> Result<()> {
         published += 1;
     }
     if shutdown::requested() {
-        eprintln!("lidar-sim: stopped after {published} scans");
+        say_err(&format!("lidar-sim: stopped after {published} scans"));
         ipc_types::losses::report(&losses);
         return Ok(());
     }
@@ -188,7 +191,7 @@ fn run() -> Result<()> {
         odometry.publish_end_of_stream(published, last_stamp)?;
     }
     scans.publish_end_of_stream(published, last_stamp)?;
-    eprintln!("lidar-sim: published {published} scans");
+    say_err(&format!("lidar-sim: published {published} scans"));
     ipc_types::losses::report(&losses);
     Ok(())
 }

@@ -9,19 +9,28 @@ use crate::error::SinkError;
 /// Writes `contents` to `path` through `path` + `.tmp`: the temporary file is written and
 /// synced before it is renamed over `path`, so a reader (or a crash) sees either the old
 /// file or the complete new one, never a prefix.
+/// On failure (a full disk) the temporary file is removed, so none is left half-written.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), SinkError> {
     let tmp = tmp_path(path);
-    let mut file = File::create(&tmp).map_err(|e| SinkError::io("create", &tmp, e))?;
-    file.write_all(contents)
-        .map_err(|e| SinkError::io("write", &tmp, e))?;
-    // Without the sync a crash soon after the rename can leave the new name pointing at an
-    // empty file on file systems that reorder metadata before data.
-    file.sync_all()
-        .map_err(|e| SinkError::io("sync", &tmp, e))?;
-    drop(file);
-    fs::rename(&tmp, path).map_err(|e| SinkError::io("rename into place", path, e))?;
+    let written = write_synced(&tmp, contents).and_then(|()| {
+        fs::rename(&tmp, path).map_err(|e| SinkError::io("rename into place", path, e))
+    });
+    if written.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    written?;
     sync_parent(path);
     Ok(())
+}
+
+/// Writes `contents` into a new file at `tmp` and syncs it.
+fn write_synced(tmp: &Path, contents: &[u8]) -> Result<(), SinkError> {
+    let mut file = File::create(tmp).map_err(|e| SinkError::io("create", tmp, e))?;
+    file.write_all(contents)
+        .map_err(|e| SinkError::io("write", tmp, e))?;
+    // Without the sync a crash soon after the rename can leave the new name pointing at an
+    // empty file on file systems that reorder metadata before data.
+    file.sync_all().map_err(|e| SinkError::io("sync", tmp, e))
 }
 
 /// The temporary name `write_atomic` uses for `path`: same directory, so the rename never

@@ -53,7 +53,9 @@ mod corner_score;
 mod corners_csv;
 mod error;
 mod grid_image;
+mod incomplete;
 mod landmarks;
+mod line_file;
 mod map_load_error;
 mod map_writer;
 mod map_yaml;
@@ -68,6 +70,7 @@ mod saved_map;
 mod scan_keeper;
 mod svg;
 mod tum;
+mod tum_stream;
 
 pub use align::{Se2Alignment, align_se2};
 pub use ate::{AteStats, ate};
@@ -77,10 +80,12 @@ pub use corner_score::nearest_rmse;
 pub use corners_csv::{corners_csv, corners_csv_header};
 pub use error::SinkError;
 pub use grid_image::{encode_png, grid_pixels};
+pub use incomplete::IncompleteOutput;
 pub use landmarks::{
     CornerLandmark, GridReference, LANDMARKS_FORMAT, LANDMARKS_FRAME, LANDMARKS_UNITS,
     LANDMARKS_VERSION, Landmarks, LandmarksError,
 };
+pub use line_file::LineFile;
 pub use map_load_error::MapLoadError;
 pub use map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
 pub use map_yaml::{
@@ -106,3 +111,4 @@ pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;
 pub use svg::{SvgInput, render_svg};
 pub use tum::{TumWriter, read_tum};
+pub use tum_stream::TumStream;

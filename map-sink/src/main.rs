@@ -125,6 +125,7 @@ fn run() -> Result<()> {
     }
 
     let mut progress = Progress::default();
+    let mut told = 0;
     let mut assembly = PathAssembly::new();
     let mut published = None;
     let mut last_status = Instant::now();
@@ -183,6 +184,7 @@ fn run() -> Result<()> {
                 recorder.record_converged(sample.header.seq, sample.header.stamp_ns);
             }
         }
+        tell_incomplete(&recorder, &mut told);
         if args.status && last_status.elapsed() >= STATUS_PERIOD {
             say(&progress.line());
             last_status = Instant::now();
@@ -199,6 +201,7 @@ fn run() -> Result<()> {
             dropped: published.saturating_sub(progress.poses),
         });
     }
+    tell_incomplete(&recorder, &mut told);
     let (metrics, grid) = recorder.finish_with_report()?;
     say_err(&format!(
         "map-sink: {} poses, {} map corners written to {}",
@@ -225,7 +228,33 @@ fn run() -> Result<()> {
             peak as f64 / 1e3
         ));
     }
+    let incomplete = &metrics.incomplete_outputs;
+    if !incomplete.is_empty() {
+        // A closing summary (slam-launch shows it on the console): the run went on, but
+        // its results are not all there.
+        let listed = if incomplete.iter().any(|o| o.file == map_sink::METRICS_FILE) {
+            String::new()
+        } else {
+            format!(" (also in {})", map_sink::METRICS_FILE)
+        };
+        say_err(&format!(
+            "map-sink: summary: {} of the run's files incomplete{listed}",
+            incomplete.len()
+        ));
+        for output in incomplete {
+            say_err(&format!("  {}", output.line()));
+        }
+        anyhow::bail!("the run's results are incomplete");
+    }
     Ok(())
+}
+
+/// Says on stderr which files stopped since the last call, as it happens.
+fn tell_incomplete(recorder: &Recorder, told: &mut usize) {
+    for output in recorder.incomplete_outputs().iter().skip(*told) {
+        say_err(&format!("map-sink: {}; the run goes on", output.line()));
+    }
+    *told = recorder.incomplete_outputs().len();
 }
 
 /// Takes the final path's chunks; a complete path goes to the recorder. A chunk that does

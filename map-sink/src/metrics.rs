@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::incomplete::IncompleteOutput;
 use crate::rpe::RelativePoseErrors;
 
 /// How many scans the pipeline published, processed and dropped.
@@ -60,4 +61,8 @@ pub struct Metrics {
     pub converged_at_scan: Option<u64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub converged_at_stamp: Option<String>,
+    /// The run's files that stopped short or were not written (a full disk); absent when
+    /// every file is whole.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub incomplete_outputs: Vec<IncompleteOutput>,
 }

@@ -13,6 +13,7 @@ use crate::compact_scan::CompactScan;
 use crate::corner_score::nearest_rmse;
 use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
+use crate::incomplete::IncompleteOutput;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
 use crate::metrics::{FrameCounts, Metrics};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
@@ -21,7 +22,7 @@ use crate::percentile::percentile;
 use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
-use crate::tum::TumWriter;
+use crate::tum_stream::TumStream;
 use slam_geom::MapCorner;
 use slam_geom::Pose2;
 use slam_geom::format_tum_line;
@@ -94,9 +95,15 @@ struct Estimate {
 /// Records one run into a directory.
 ///
 /// The online estimate (`trajectory_online.tum`) and the other per-scan trajectories are
-/// appended and flushed line by line as poses arrive, so a killed run keeps every pose it had ([`TumWriter`] explains why they are not written atomically);
-/// the map, the picture and the metrics are whole-file results written atomically by
+/// appended and flushed line by line as poses arrive, so a killed run keeps every pose it
+/// had ([`crate::TumWriter`] explains why they are not written atomically); the map, the
+/// picture and the metrics are whole-file results written atomically by
 /// [`finish`](Self::finish), so a crash never leaves one half-written.
+///
+/// A file that cannot be written (a full disk) does not stop the run: a trajectory file
+/// stops at its last whole line, a whole-file result is left out, and each is listed in
+/// [`incomplete_outputs`](Self::incomplete_outputs) and in metrics.json, which is written
+/// last.
 ///
 /// Poses, truth and scans are matched by sequence number (the scan's), in any arrival order.
 /// The occupancy grid is traced at the end from the final path, so scans are kept until
@@ -105,9 +112,10 @@ struct Estimate {
 pub struct Recorder {
     dir: PathBuf,
     options: RecorderOptions,
-    online: TumWriter,
-    ground_truth: Option<TumWriter>,
-    dead_reckoning: Option<TumWriter>,
+    online: TumStream,
+    ground_truth: TumStream,
+    dead_reckoning: TumStream,
+    incomplete: Vec<IncompleteOutput>,
     estimates: BTreeMap<u64, Estimate>,
     truth: BTreeMap<u64, Pose2>,
     /// The truth again by stamp, to score the final path (which carries stamps only).
@@ -155,14 +163,15 @@ impl Recorder {
                 _ => {}
             }
         }
-        let online = TumWriter::create(&dir.join(TRAJECTORY_ONLINE_FILE))?;
+        let online = TumStream::start(&dir.join(TRAJECTORY_ONLINE_FILE))?;
         Ok(Self {
             dir: dir.to_path_buf(),
             scans: ScanKeeper::new(resolution),
             options,
             online,
-            ground_truth: None,
-            dead_reckoning: None,
+            ground_truth: TumStream::lazy(&dir.join(GROUND_TRUTH_FILE)),
+            dead_reckoning: TumStream::lazy(&dir.join(DEAD_RECKONING_FILE)),
+            incomplete: Vec::new(),
             estimates: BTreeMap::new(),
             truth: BTreeMap::new(),
             truth_by_stamp: BTreeMap::new(),
@@ -184,6 +193,11 @@ impl Recorder {
         &self.dir
     }
 
+    /// The files that stopped short or were not written so far, in the order it happened.
+    pub fn incomplete_outputs(&self) -> &[IncompleteOutput] {
+        &self.incomplete
+    }
+
     /// Records the estimate for scan `seq`, stamped with the scan's `stamp_ns`, with the
     /// dead-reckoning pose and the scan-to-pose latency when known.
     pub fn record_pose(
@@ -199,15 +213,10 @@ impl Recorder {
             Some((first, last)) => (first.min(stamp_ns), last.max(stamp_ns)),
             None => (stamp_ns, stamp_ns),
         });
-        self.online.append(stamp_ns, est)?;
+        self.incomplete.extend(self.online.append(stamp_ns, est));
         if let Some(dr) = dead_reckoning {
-            append_lazily(
-                &mut self.dead_reckoning,
-                &self.dir,
-                DEAD_RECKONING_FILE,
-                stamp_ns,
-                dr,
-            )?;
+            self.incomplete
+                .extend(self.dead_reckoning.append(stamp_ns, dr));
         }
         self.estimates.insert(
             seq,
@@ -225,13 +234,8 @@ impl Recorder {
     /// Records the simulator's true pose for scan `seq`.
     pub fn record_truth(&mut self, seq: u64, stamp_ns: u64, pose: Pose2) -> Result<(), SinkError> {
         self.touch();
-        append_lazily(
-            &mut self.ground_truth,
-            &self.dir,
-            GROUND_TRUTH_FILE,
-            stamp_ns,
-            pose,
-        )?;
+        self.incomplete
+            .extend(self.ground_truth.append(stamp_ns, pose));
         self.truth.insert(seq, pose);
         self.truth_by_stamp.insert(stamp_ns, pose);
         Ok(())
@@ -300,20 +304,17 @@ impl Recorder {
     /// Syncs the trajectories, scores the run (against the relations too, if given: every
     /// trajectory file is complete by then), traces the occupancy grid from the final path
     /// and writes `map_corners.csv`, the map (`map.pgm`, `map.yaml`, `map.png`,
-    /// `landmarks.json`), `map.svg` and finally `metrics.json`, each atomically. Returns
-    /// the metrics written.
+    /// `landmarks.json`), `map.svg` and finally `metrics.json`, each atomically. A file
+    /// that cannot be written is left out and listed in the metrics' `incomplete_outputs`
+    /// (metrics.json itself only in those returned). Returns the metrics.
     pub fn finish(self) -> Result<Metrics, SinkError> {
         self.finish_with_report().map(|(metrics, _)| metrics)
     }
 
     /// [`finish`](Self::finish), also saying what the occupancy grid cost.
-    pub fn finish_with_report(self) -> Result<(Metrics, Option<GridReport>), SinkError> {
-        self.online.sync()?;
-        for writer in [&self.ground_truth, &self.dead_reckoning]
-            .into_iter()
-            .flatten()
-        {
-            writer.sync()?;
+    pub fn finish_with_report(mut self) -> Result<(Metrics, Option<GridReport>), SinkError> {
+        for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
+            self.incomplete.extend(stream.sync());
         }
         let final_path: Vec<PathPose> = match &self.final_path {
             Some(path) => path.clone(),
@@ -330,7 +331,7 @@ impl Recorder {
             .iter()
             .map(|p| format_tum_line(p.stamp_ns, &p.pose))
             .collect();
-        write_atomic(&self.dir.join(TRAJECTORY_FILE), text.as_bytes())?;
+        self.write_result(TRAJECTORY_FILE, text.as_bytes());
         let trajectory: Vec<[f64; 2]> = final_path
             .iter()
             .map(|p| p.pose.position().into())
@@ -356,10 +357,7 @@ impl Recorder {
         metrics.relative_pose_error = relative_pose_error;
         metrics.online_ate_rmse_m = online_stats.map(|s| s.rmse_m);
 
-        write_atomic(
-            &self.dir.join(MAP_CORNERS_FILE),
-            corners_csv(&self.map).as_bytes(),
-        )?;
+        self.write_result(MAP_CORNERS_FILE, corners_csv(&self.map).as_bytes());
         let started = Instant::now();
         let grid = self.grid(&final_path)?;
         let report = grid.as_ref().map(|(grid, traced)| GridReport {
@@ -373,12 +371,24 @@ impl Recorder {
             build_s: started.elapsed().as_secs_f64(),
         });
         let grid = grid.map(|(grid, _)| grid);
-        write_map(&self.dir, grid.as_ref(), &self.map)?;
+        if let Err(e) = write_map(&self.dir, grid.as_ref(), &self.map) {
+            // The map's files name each other: they are written in an order that leaves
+            // none naming a file that is not there, and the first failure ends them.
+            let name = format!("{MAP_PGM_FILE}, {MAP_PNG_FILE}, {MAP_YAML_FILE}, {LANDMARKS_FILE}");
+            self.incomplete
+                .push(IncompleteOutput::new(&name, "not all written", &e));
+        }
         let svg = self.picture(&trajectory, stats, &metrics, grid.as_ref());
-        write_atomic(&self.dir.join(MAP_SVG_FILE), svg.as_bytes())?;
+        self.write_result(MAP_SVG_FILE, svg.as_bytes());
+        metrics.incomplete_outputs = self.incomplete.clone();
         let mut json = serde_json::to_string_pretty(&metrics)?;
         json.push('\n');
-        write_atomic(&self.dir.join(METRICS_FILE), json.as_bytes())?;
+        if let Err(e) = write_atomic(&self.dir.join(METRICS_FILE), json.as_bytes()) {
+            // Not in the file, then, but in what is returned, for the closing summary.
+            metrics
+                .incomplete_outputs
+                .push(IncompleteOutput::new(METRICS_FILE, "not written", &e));
+        }
         Ok((metrics, report))
     }
 
@@ -394,6 +404,15 @@ impl Recorder {
             .collect();
         let grid = OccupancyGrid::build(&self.options.grid, &scans)?;
         Ok(grid.map(|g| (g, scans.len())))
+    }
+
+    /// Writes a whole-file result atomically; one that cannot be written is listed as
+    /// incomplete and the run's other results still go on.
+    fn write_result(&mut self, name: &str, contents: &[u8]) {
+        if let Err(e) = write_atomic(&self.dir.join(name), contents) {
+            self.incomplete
+                .push(IncompleteOutput::new(name, "not written", &e));
+        }
     }
 
     fn touch(&mut self) {
@@ -477,6 +496,7 @@ impl Recorder {
             converged_at_stamp: self
                 .converged_at
                 .map(|(_, stamp_ns)| slam_geom::format_stamp(stamp_ns)),
+            incomplete_outputs: Vec::new(),
         }
     }
 
@@ -529,22 +549,6 @@ impl Recorder {
             true_corners,
         })
     }
-}
-
-/// Appends to a TUM file created on first use, so a run without truth (or without dead
-/// reckoning) leaves no empty file suggesting otherwise.
-fn append_lazily(
-    writer: &mut Option<TumWriter>,
-    dir: &Path,
-    name: &str,
-    stamp_ns: u64,
-    pose: Pose2,
-) -> Result<(), SinkError> {
-    let writer = match writer {
-        Some(writer) => writer,
-        None => writer.insert(TumWriter::create(&dir.join(name))?),
-    };
-    writer.append(stamp_ns, pose)
 }
 
 /// The picture's metric lines.

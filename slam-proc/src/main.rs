@@ -13,6 +13,7 @@ use slam_proc::{
     FastSlam, FilterStats, LineObservation, LocalizeStats, Localizer, MeasuredMotion, Observation,
     OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
 };
+use stage_kit::{say, say_err};
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
 /// publishes a pose estimate for every scan, the best particle's map every few scans and at
@@ -98,7 +99,7 @@ fn run() -> Result<()> {
     // The path goes out once, at the end, in many chunks: lossless whatever the run's
     // delivery, or a real-time run would keep only the last few.
     let path = Outlet::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
-    println!("ready");
+    say("ready");
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
     }
@@ -118,7 +119,7 @@ fn run() -> Result<()> {
                 left_out = left_out.max(publish_map(&maps, &slam.best_map(), last_header)?);
                 publish_path(&path, &slam, last_header)?;
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
-                eprintln!("{}", summary(&slam.stats()));
+                say_err(&summary(&slam.stats()));
                 ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
                 return Ok(());
             }
@@ -162,8 +163,8 @@ fn run() -> Result<()> {
     // Stopped by a signal: leave the map and the path as far as they got.
     left_out = left_out.max(publish_map(&maps, &slam.best_map(), last_header)?);
     publish_path(&path, &slam, last_header)?;
-    eprintln!("slam-proc: stopped after {processed} scans");
-    eprintln!("{}", summary(&slam.stats()));
+    say_err(&format!("slam-proc: stopped after {processed} scans"));
+    say_err(&summary(&slam.stats()));
     ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
     Ok(())
 }
@@ -190,10 +191,10 @@ fn publish_map(
     let corners: Vec<MapCorner> = map.iter().map(|&c| MapCorner::from(c)).collect();
     let keep = corners.len().min(ipc_types::MAX_MAP_CORNERS);
     if keep < corners.len() {
-        eprintln!(
+        say_err(&format!(
             "slam-proc: the map has {} corners; publishing {keep}",
             corners.len()
-        );
+        ));
     }
     maps.publish(|message| {
         message.header = header;
@@ -340,7 +341,7 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
     // map-sink waits for the path's topic; no path comes (no particle keeps one here), so
     // it writes the online estimate as the trajectory.
     let _path = Outlet::<PathChunk>::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
-    println!("ready");
+    say("ready");
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
     }
@@ -359,7 +360,7 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
             if sample.header.is_end_of_stream() {
                 left_out = left_out.max(publish_map(&maps, &corners, last_header)?);
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
-                eprintln!("{}", localize_summary(&localizer.stats(), &step_ms));
+                say_err(&localize_summary(&localizer.stats(), &step_ms));
                 ipc_types::losses::report(&[
                     ("map_corners_not_published", left_out),
                     ("scans_without_beams", localizer.stats().scans_without_beams),
@@ -422,8 +423,8 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
         }
     }
     publish_map(&maps, &corners, last_header)?;
-    eprintln!("slam-proc: stopped");
-    eprintln!("{}", localize_summary(&localizer.stats(), &step_ms));
+    say_err("slam-proc: stopped");
+    say_err(&localize_summary(&localizer.stats(), &step_ms));
     ipc_types::losses::report(&[
         ("map_corners_not_published", left_out),
         ("scans_without_beams", localizer.stats().scans_without_beams),

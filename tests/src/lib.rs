@@ -104,7 +104,9 @@ pub fn read_tum(path: &Path) -> Vec<[f64; 5]> {
 
 /// Files of `domain` left in /dev/shm.
 pub fn shm_leftovers(domain: &str) -> Vec<String> {
-    let prefix = format!("slam_{domain}_");
+    let prefix = ipc_types::Domain::new(domain)
+        .expect("a valid domain name")
+        .file_prefix();
     std::fs::read_dir("/dev/shm")
         .map(|entries| {
             entries
@@ -216,7 +218,6 @@ pub fn output_within(command: &mut Command, limit: std::time::Duration) -> Optio
     let _ = child.wait();
     None
 }
-
 
 /// An emulated Hokuyo (`hokuyo-emulator`) serving the scans of `file` on a free port, and
 /// its `HOST:PORT`. The caller kills and reaps it.

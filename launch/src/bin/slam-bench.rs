@@ -149,6 +149,8 @@ fn run_once(
     if let Some(frames) = args.frames {
         command.args(["--frames", &frames.to_string()]);
     }
+    // A killed slam-bench takes its run with it, as slam-launch does its stages.
+    launch::stage::die_with_parent(&mut command);
     let started = Instant::now();
     let output = command
         .output()
