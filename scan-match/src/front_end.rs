@@ -114,7 +114,7 @@ impl FrontEnd {
     /// scan that cannot be matched is reported in the output's status.
     pub fn process(&mut self, scan: &ScanInput<'_>) -> Result<FrontEndOutput, InputError> {
         let start = Instant::now();
-        scan.geometry.check()?;
+        scan.geometry.check().map_err(InputError::Geometry)?;
         let extracted = self.extractor.extract(
             &scan.geometry,
             scan.ranges,
