@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use stage_kit::settings::{SettingError, check};
+use stage_kit::settings::{SettingError, check, check_non_negative, check_positive};
 
 /// Localization parameters. Metres, radians.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -139,14 +139,7 @@ impl LocalizeConfig {
             ("localize.converged_sigma_xy", self.converged_sigma_xy),
             ("localize.converged_sigma_yaw", self.converged_sigma_yaw),
         ];
-        for (field, value) in positive {
-            check(
-                field,
-                value,
-                value.is_finite() && value > 0.0,
-                "must be finite and > 0",
-            )?;
-        }
+        check_positive(&positive)?;
         let non_negative = [
             ("localize.kld_z", self.kld_z),
             ("localize.update_min_distance", self.update_min_distance),
@@ -167,14 +160,7 @@ impl LocalizeConfig {
             ("localize.initial_sigma_xy", self.initial_sigma_xy),
             ("localize.initial_sigma_yaw", self.initial_sigma_yaw),
         ];
-        for (field, value) in non_negative {
-            check(
-                field,
-                value,
-                value.is_finite() && value >= 0.0,
-                "must be finite and >= 0",
-            )?;
-        }
+        check_non_negative(&non_negative)?;
         Ok(())
     }
 }
