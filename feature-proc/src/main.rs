@@ -63,13 +63,10 @@ fn run() -> Result<()> {
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("feature-proc")?;
-    // A source creates its odometry topic before its scans, so once the scans exist the
-    // odometry does too, if the run has any. Subscribed to before the scans: a lockstep
-    // source starts once it counts its scan readers, and its first odometry must find us
-    // listening, or the first scans would pair differently from run to run.
-    wait_for_topic(&node, topic::SCAN)?;
-    let mut odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
     let scans = Inlet::open(&node, topic::SCAN)?;
+    // A source creates its odometry topic before its scans, so once the scans exist the
+    // odometry does too, if the run has any.
+    let mut odometry = Inlet::try_open(&node, topic::ODOMETRY)?;
     // The source chose lockstep or real time; the features follow it.
     let lockstep = scans.delivery() == Delivery::Lossless;
     let features = Outlet::create(&domain, &node, topic::FEATURES, scans.delivery(), 0)?;
