@@ -92,13 +92,20 @@ impl OdometryTrack {
     }
 
     /// Whether the pose at `stamp_ns` is final: a reading at or after it is held, or the
-    /// stream has ended. Until then a later reading could still change it.
+    /// stream has ended. Until then a later reading could still change it. A stamp before
+    /// the first reading is extrapolated from the first two, so it waits for the second:
+    /// with one alone the pose would depend on whether the next had come yet.
     pub fn resolves(&self, stamp_ns: u64) -> bool {
+        let before_first = self
+            .readings
+            .front()
+            .is_some_and(|first| stamp_ns < first.stamp_ns);
         self.ended
-            || self
+            || (self
                 .readings
                 .back()
                 .is_some_and(|last| last.stamp_ns >= stamp_ns)
+                && !(before_first && self.readings.len() < 2))
     }
 
     /// The odometry at `stamp_ns` from the readings held: interpolated between the two
@@ -168,6 +175,25 @@ mod tests {
 
     fn close(a: &Pose2, b: &Pose2) -> bool {
         (a.x - b.x).abs() < 1e-12 && (a.y - b.y).abs() < 1e-12 && (a.yaw - b.yaw).abs() < 1e-12
+    }
+
+    #[test]
+    fn a_stamp_before_the_first_reading_waits_for_the_second() {
+        let mut track = OdometryTrack::new();
+        push(&mut track, reading(100, 1.0, 0.0));
+        // One reading would answer with itself; two extrapolate back from both. Resolving
+        // early would make the answer depend on when the second came.
+        assert!(!track.resolves(90 * MS));
+        assert!(track.resolves(100 * MS));
+        push(&mut track, reading(110, 2.0, 0.0));
+        assert!(track.resolves(90 * MS));
+        let at = track.at(90 * MS).expect("two readings");
+        push(&mut track, reading(120, 3.0, 0.0));
+        assert_eq!(track.at(90 * MS), Some(at), "later readings change nothing");
+        let mut ended = OdometryTrack::new();
+        push(&mut ended, reading(100, 1.0, 0.0));
+        ended.end();
+        assert!(ended.resolves(90 * MS), "nothing more will come");
     }
 
     #[test]
