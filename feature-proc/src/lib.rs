@@ -16,14 +16,12 @@
 //!
 //! Conventions (frames, corner heading and angle) are those of docs/CONVENTIONS.md; every
 //! threshold is in [`FeatureConfig`]. [`OdometryTrack`] pairs each scan with the odometry at its
-//! stamp, so the features carry it downstream. [`seed_hall`] loads the shared real recording and
-//! [`eval`] scores corners against ground truth, for this crate's tests and others'.
+//! stamp, so the features carry it downstream. [`seed_hall`] loads the shared real recording.
 
 #![forbid(unsafe_code)]
 
 mod config;
 mod corner;
-pub mod eval;
 mod extractor;
 mod features;
 mod line_fit;

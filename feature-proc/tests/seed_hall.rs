@@ -1,7 +1,9 @@
 //! The real recording: at least as many corners as the course implementation, and they are
 //! real: most recur in the next scan after the motion between the two.
 
-use feature_proc::eval::{MatchParams, estimate_motion, redetected};
+mod common;
+
+use common::eval::{MatchParams, estimate_motion, redetected};
 use feature_proc::{Corner, Extractor, FeatureConfig, seed_hall};
 
 /// The recording, or a failure naming where it was looked for: these tests must not pass

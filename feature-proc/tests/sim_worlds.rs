@@ -3,8 +3,8 @@
 
 mod common;
 
+use common::eval::{CornerScore, View, World, score_run};
 use common::{Noise, hokuyo, input};
-use feature_proc::eval::{CornerScore, View, World, score_run};
 use feature_proc::{Extractor, FeatureConfig};
 
 /// A hall with recessed walls and pillars: square ones on a grid, two turned, a hexagon.

@@ -3,8 +3,8 @@
 
 mod common;
 
+use common::eval::{ScanGeometry, View, World};
 use common::{Noise, full_turn, hokuyo, input, room};
-use feature_proc::eval::{ScanGeometry, View, World};
 use feature_proc::{Extractor, FeatureConfig, ScanError, ScanInput};
 use nalgebra::{Vector2, Vector4};
 use rand::rngs::StdRng;

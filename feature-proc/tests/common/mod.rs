@@ -2,8 +2,10 @@
 
 #![allow(dead_code)]
 
+pub mod eval;
+
+use eval::{ScanGeometry, World};
 use feature_proc::ScanInput;
-use feature_proc::eval::{ScanGeometry, World};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};

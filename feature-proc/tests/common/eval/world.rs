@@ -1,10 +1,12 @@
 //! A world of straight walls: exact ray casting, its true corners, and which of them a
 //! sensor at a pose could be expected to detect.
 
-use super::score::{CornerScore, score_corners};
-use crate::config::FeatureConfig;
-use crate::features::Corner;
+use feature_proc::{Corner, FeatureConfig};
+use lidar_sim::RayCaster;
+use lidar_sim::geometry::Segment;
 use slam_geom::wrap_angle;
+
+use super::score::{CornerScore, score_corners};
 
 pub use slam_geom::TrueCorner;
 
@@ -58,17 +60,30 @@ impl View {
 }
 
 /// Straight walls and the corners where they meet.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct World {
     walls: Vec<[[f64; 2]; 2]>,
     corners: Vec<TrueCorner>,
     /// The two walls of each corner.
     corner_walls: Vec<[usize; 2]>,
+    /// The simulator's ray caster over `walls`.
+    caster: RayCaster,
+}
+
+impl Default for World {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl World {
     pub fn new() -> Self {
-        Self::default()
+        Self {
+            walls: Vec::new(),
+            corners: Vec::new(),
+            corner_walls: Vec::new(),
+            caster: RayCaster::from_segments(Vec::new()),
+        }
     }
 
     /// Adds walls along `vertices`; with `closed` the last vertex joins the first. Every
@@ -101,6 +116,12 @@ impl World {
             self.corner_walls
                 .push([wall_before, first_wall + i % wall_count]);
         }
+        self.caster = RayCaster::from_segments(
+            self.walls
+                .iter()
+                .map(|[a, b]| Segment::new(*a, *b))
+                .collect(),
+        );
     }
 
     pub fn walls(&self) -> &[[[f64; 2]; 2]] {
@@ -113,22 +134,7 @@ impl World {
 
     /// Distance along the ray from `origin` in direction `bearing` to the first wall.
     pub fn ray_cast(&self, origin: [f64; 2], bearing: f64) -> Option<f64> {
-        let (sin, cos) = bearing.sin_cos();
-        let mut nearest: Option<f64> = None;
-        for [a, b] in &self.walls {
-            let e = [b[0] - a[0], b[1] - a[1]];
-            let denom = cos * e[1] - sin * e[0];
-            if denom.abs() < 1e-15 {
-                continue;
-            }
-            let w = [a[0] - origin[0], a[1] - origin[1]];
-            let s = (w[0] * e[1] - w[1] * e[0]) / denom;
-            let u = (w[0] * sin - w[1] * cos) / denom;
-            if s > 1e-9 && (0.0..=1.0).contains(&u) && nearest.is_none_or(|n| s < n) {
-                nearest = Some(s);
-            }
-        }
-        nearest
+        self.caster.cast(origin, bearing, f64::INFINITY)
     }
 
     /// Exact ranges from a sensor at `pose` (`[x, y, yaw]`, world from sensor).

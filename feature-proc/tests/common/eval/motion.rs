@@ -2,7 +2,7 @@
 //! hypotheses from one or two corner matches of similar opening angle, the one that
 //! explains most corners wins, refined by a least-squares rigid fit of its matches.
 
-use crate::features::Corner;
+use feature_proc::Corner;
 use slam_geom::wrap_angle;
 
 /// The pose of the later scan in the earlier scan's frame.

@@ -1,9 +1,8 @@
 //! Precision and recall of detected corners against true ones.
 
+use feature_proc::{Corner, Extractor, ScanInput};
+
 use super::world::{TrueCorner, View, World};
-use crate::extractor::Extractor;
-use crate::features::Corner;
-use crate::scan::ScanInput;
 
 /// Counts for precision (detections near a true corner) and recall (true corners in view
 /// with a detection near them). Add the scores of many scans to pool them.
