@@ -10,8 +10,8 @@ use launch::config::{RunConfig, SourceKind};
 use launch::relations::relations_beside;
 use launch::stall::StallLimits;
 use launch::supervisor::{self, Display, Outcome, StagePlan};
-use map_sink::{METRICS_FILE, Metrics, write_atomic};
-use slam_eval::ScoreSummary;
+use map_sink::write_atomic;
+use slam_eval::{METRICS_FILE, Metrics, ScoreSummary};
 use stage_kit::{say, say_err};
 
 /// Runs a scan source (lidar-sim, lidar-replay or lidar-hokuyo) -> feature-proc -> slam-proc
@@ -454,7 +454,7 @@ fn plan(
     ];
     sink.push(format!("--resolution={}", config.grid.resolution));
     // map-sink scores: it writes metrics.json and map.svg once, at the end, and the score
-    // belongs in both (see map_sink::score_run).
+    // belongs in both (see slam_eval::score_run).
     if let Some(relations) = &config.relations {
         sink.push("--relations".into());
         sink.push(relations.display().to_string());

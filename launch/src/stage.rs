@@ -7,7 +7,8 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
 
-use map_sink::{IncompleteOutput, LineFile};
+use map_sink::LineFile;
+use slam_eval::IncompleteOutput;
 use stage_kit::say_err;
 
 use crate::closing::ClosingSummary;

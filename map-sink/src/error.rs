@@ -15,13 +15,6 @@ pub enum SinkError {
         #[source]
         source: io::Error,
     },
-    /// A line of a TUM file is not `stamp x y z qx qy qz qw`.
-    #[error("{}:{line}: {reason}", path.display())]
-    Malformed {
-        path: PathBuf,
-        line: usize,
-        reason: String,
-    },
     /// A [`RecorderOptions`](crate::RecorderOptions) value is out of range.
     #[error("invalid recorder option: {0}")]
     InvalidOption(String),

@@ -13,16 +13,16 @@
 //! * Trajectories are appended and flushed line by line, so a killed run keeps what it had;
 //!   whole-file results are written to `name.tmp` and renamed, so none is ever half written
 //!   (see [`TumWriter`] and [`write_atomic`]).
-//! * Accuracy follows docs/CONVENTIONS.md: the estimate is aligned to the truth by a
-//!   least-squares rigid SE(2) fit ([`align_se2`], as `evo_ape -a`) before the absolute
-//!   trajectory error ([`ate`]) is taken, and the map corners are moved by the same
-//!   transform before they are scored.
+//! * Accuracy is scored through slam-eval, as docs/CONVENTIONS.md says: the estimate is
+//!   aligned to the truth by a least-squares rigid SE(2) fit before the absolute trajectory
+//!   error ([`slam_eval::ate`]) is taken, and the map corners are moved by the same
+//!   transform before they are scored; the summary is slam-eval's [`Metrics`].
 //! * The occupancy grid is traced at the end of the run from the final path
 //!   ([`OccupancyGrid`]), so the scans are kept until then, compactly ([`CompactScan`],
 //!   [`ScanKeeper`]).
 //! * Given ground-truth relations ([`RecorderOptions::relations`]), the trajectory files are
 //!   scored with the relative-pose error of Kuemmerle et al. 2009 through slam-eval
-//!   ([`score_run`]; why here and not in slam-launch is said there).
+//!   ([`slam_eval::score_run`]; why here and not in slam-launch is said there).
 //!
 //! ```
 //! use map_sink::{Pose2, Recorder, RecorderOptions};
@@ -45,42 +45,31 @@
 //! # }
 //! ```
 
-mod align;
-mod ate;
 mod atomic;
 mod compact_scan;
-mod corner_score;
 mod corners_csv;
 mod error;
 mod grid_image;
-mod incomplete;
 mod landmarks;
 mod line_file;
 mod map_load_error;
 mod map_writer;
 mod map_yaml;
-mod metrics;
 mod occupancy_grid;
 mod path_assembly;
-mod percentile;
 mod pgm;
 mod recorder;
-mod rpe;
 mod saved_map;
 mod scan_keeper;
 mod svg;
 mod tum;
 mod tum_stream;
 
-pub use align::{Se2Alignment, align_se2};
-pub use ate::{AteStats, ate};
 pub use atomic::{tmp_path, write_atomic};
 pub use compact_scan::{Beam, CompactScan};
-pub use corner_score::nearest_rmse;
 pub use corners_csv::{corners_csv, corners_csv_header};
 pub use error::SinkError;
 pub use grid_image::{encode_png, grid_pixels};
-pub use incomplete::IncompleteOutput;
 pub use landmarks::{
     CornerLandmark, GridReference, LANDMARKS_FORMAT, LANDMARKS_FRAME, LANDMARKS_UNITS,
     LANDMARKS_VERSION, Landmarks, LandmarksError,
@@ -92,23 +81,20 @@ pub use map_yaml::{
     FREE_PIXEL, FREE_THRESH, MapMode, MapYaml, OCCUPIED_PIXEL, OCCUPIED_THRESH, UNKNOWN_PIXEL,
     YamlError, trinary_pixel,
 };
-pub use metrics::{FrameCounts, Metrics};
 pub use occupancy_grid::{
     CellState, FREE_PROBABILITY, GridCell, GridConfig, GridError, OCCUPIED_PROBABILITY,
     OccupancyGrid, RESOLUTION_RANGE_M,
 };
 pub use path_assembly::{ChunkError, PathAssembly, PathPose};
-pub use percentile::percentile;
 pub use pgm::{Pgm, PgmError, encode_pgm};
-pub use recorder::{
-    DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE,
-    METRICS_FILE, Recorder, RecorderOptions, TRAJECTORY_FILE,
-};
-pub use rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
+pub use recorder::{GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions};
 pub use saved_map::{GridMap, SavedMap};
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;
+// slam-proc's timing summary takes its percentiles through this crate (it does not depend
+// on slam-eval).
+pub use slam_eval::percentile;
 pub use svg::{SvgInput, render_svg};
-pub use tum::{TumWriter, read_tum};
+pub use tum::TumWriter;
 pub use tum_stream::TumStream;

@@ -8,9 +8,8 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
-use map_sink::{
-    FrameCounts, GridConfig, PathAssembly, PathPose, Recorder, RecorderOptions, RelationsFile,
-};
+use map_sink::{GridConfig, PathAssembly, PathPose, Recorder, RecorderOptions};
+use slam_eval::{FrameCounts, METRICS_FILE, RelationsFile};
 use stage_kit::{say, say_err};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
@@ -232,10 +231,10 @@ fn run() -> Result<()> {
     if !incomplete.is_empty() {
         // A closing summary (slam-launch shows it on the console): the run went on, but
         // its results are not all there.
-        let listed = if incomplete.iter().any(|o| o.file == map_sink::METRICS_FILE) {
+        let listed = if incomplete.iter().any(|o| o.file == METRICS_FILE) {
             String::new()
         } else {
-            format!(" (also in {})", map_sink::METRICS_FILE)
+            format!(" (also in {})", METRICS_FILE)
         };
         say_err(&format!(
             "map-sink: summary: {} of the run's files incomplete{listed}",

@@ -6,42 +6,30 @@ use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::align::Se2Alignment;
-use crate::ate::{AteStats, ate, distance};
 use crate::atomic::write_atomic;
 use crate::compact_scan::CompactScan;
-use crate::corner_score::nearest_rmse;
 use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
-use crate::incomplete::IncompleteOutput;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
-use crate::metrics::{FrameCounts, Metrics};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
 use crate::path_assembly::PathPose;
-use crate::percentile::percentile;
-use crate::rpe::{RelationsFile, RelativePoseErrors, TRAJECTORY_ONLINE_FILE, score_run};
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
+use slam_eval::{
+    AteStats, DEAD_RECKONING_FILE, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput, METRICS_FILE,
+    Metrics, RelationsFile, RelativePoseErrors, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, ate,
+    distance, nearest_rmse, percentile, score_run,
+};
 use slam_geom::MapCorner;
 use slam_geom::Pose2;
+use slam_geom::Se2Alignment;
 use slam_geom::format_tum_line;
 
-/// The estimated trajectory: the filter's final path (the best particle's, consistent with
-/// its map), written atomically by [`Recorder::finish`]; the online estimates when no final
-/// path came (a run whose filter died).
-pub const TRAJECTORY_FILE: &str = "trajectory.tum";
-/// The simulator's true trajectory, appended as it grows (only when truth is recorded).
-pub const GROUND_TRUTH_FILE: &str = "ground_truth.tum";
-/// The dead-reckoning trajectory, appended as it grows (only when one is recorded).
-pub const DEAD_RECKONING_FILE: &str = "dead_reckoning.tum";
 /// The final map, written atomically by [`Recorder::finish`].
 pub const MAP_CORNERS_FILE: &str = "map_corners.csv";
 /// The picture, written atomically by [`Recorder::finish`].
 pub const MAP_SVG_FILE: &str = "map.svg";
-/// The summary, written atomically and last by [`Recorder::finish`]: its presence means
-/// the run was finished.
-pub const METRICS_FILE: &str = "metrics.json";
 
 /// How a [`Recorder`] records.
 #[derive(Debug, Clone, PartialEq)]

@@ -7,9 +7,9 @@
 
 use std::fmt::Write;
 
-use crate::align::Se2Alignment;
 use crate::occupancy_grid::GridCell;
 use slam_geom::MapCorner;
+use slam_geom::Se2Alignment;
 
 const MAX_MAP_W: f64 = 1400.0;
 const MAX_MAP_H: f64 = 1000.0;

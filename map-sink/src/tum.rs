@@ -1,10 +1,9 @@
-//! TUM trajectory files (the format is slam-geom's), written as a run grows and read back
-//! for scoring and tests.
+//! TUM trajectory files (the format is slam-geom's), written as a run grows (slam-geom's
+//! `read_tum` reads them back).
 
-use std::fs;
 use std::path::Path;
 
-use slam_geom::{Pose2, TumPose, format_tum_line, parse_tum};
+use slam_geom::{Pose2, format_tum_line};
 
 use crate::error::SinkError;
 use crate::line_file::LineFile;
@@ -14,8 +13,8 @@ use crate::line_file::LineFile;
 /// Durability: a trajectory is *appended* line by line instead of being written to a
 /// temporary name and renamed like the other results, because a killed run must keep the
 /// poses it had. The file never ends in part of a line, a full disk included (see
-/// [`LineFile`]); only a power cut can leave a last line short, which is why [`read_tum`]
-/// skips a final line without a newline.
+/// [`LineFile`]); only a power cut can leave a last line short, which is why
+/// [`slam_geom::read_tum`] skips a final line without a newline.
 #[derive(Debug)]
 pub struct TumWriter {
     file: LineFile,
@@ -48,16 +47,4 @@ impl TumWriter {
     pub fn path(&self) -> &Path {
         self.file.path()
     }
-}
-
-/// Reads a TUM file (see [`slam_geom::parse_tum`]: a last line cut short by a crash is
-/// dropped); a malformed line is an error naming it.
-pub fn read_tum(path: &Path) -> Result<Vec<TumPose>, SinkError> {
-    let text = fs::read_to_string(path).map_err(|e| SinkError::io("read", path, e))?;
-    let poses = parse_tum(&text).map_err(|e| SinkError::Malformed {
-        path: path.to_path_buf(),
-        line: e.line,
-        reason: e.problem.to_string(),
-    })?;
-    Ok(poses.into_iter().map(|(_, pose)| pose).collect())
 }

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use slam_geom::Pose2;
 
 use crate::error::SinkError;
-use crate::incomplete::IncompleteOutput;
 use crate::tum::TumWriter;
+use slam_eval::IncompleteOutput;
 
 #[derive(Debug)]
 enum State {

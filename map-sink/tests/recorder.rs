@@ -7,12 +7,14 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    CellState, FrameCounts, GROUND_TRUTH_FILE, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE,
-    MAP_SVG_FILE, METRICS_FILE, Metrics, PathPose, Pose2, Recorder, RecorderOptions, RelationsFile,
-    SavedMap, SinkError, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, corners_csv_header, read_tum,
-    score_run,
+    CellState, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE, MAP_SVG_FILE, PathPose, Pose2, Recorder,
+    RecorderOptions, SavedMap, SinkError, corners_csv_header,
 };
-use slam_geom::format_stamp;
+use slam_eval::{
+    FrameCounts, GROUND_TRUTH_FILE, METRICS_FILE, Metrics, RelationsFile, TRAJECTORY_FILE,
+    TRAJECTORY_ONLINE_FILE, score_run,
+};
+use slam_geom::{format_stamp, read_tum};
 
 type TestResult = Result<(), Box<dyn std::error::Error>>;
 
@@ -153,7 +155,7 @@ fn full_run_writes_every_file() -> TestResult {
 fn relations_from_truth(truth: &Path, step: usize) -> Result<String, Box<dyn std::error::Error>> {
     let poses = read_tum(truth)?;
     let mut text = String::from("# t1 t2 x y z roll pitch yaw\n");
-    for (a, b) in poses.iter().zip(poses.iter().skip(step)) {
+    for ((_, a), (_, b)) in poses.iter().zip(poses.iter().skip(step)) {
         let (pa, pb) = (
             Pose2::new(a.position[0], a.position[1], a.yaw()),
             Pose2::new(b.position[0], b.position[1], b.yaw()),
@@ -170,7 +172,7 @@ fn relations_from_truth(truth: &Path, step: usize) -> Result<String, Box<dyn std
     }
     text.push_str(&format!(
         "{} 1.5 1 0 0 0 0 0\n",
-        format_stamp(poses[0].stamp_ns)
+        format_stamp(poses[0].1.stamp_ns)
     ));
     Ok(text)
 }
@@ -344,12 +346,9 @@ fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
 
     let written = read_tum(&dir.join(TRAJECTORY_FILE))?;
     assert_eq!(written.len(), 50);
-    assert!(
-        written
-            .iter()
-            .zip(&truth)
-            .all(|(w, t)| (w.position[0] - t.x).abs() < 1e-9 && (w.position[1] - t.y).abs() < 1e-9)
-    );
+    assert!(written.iter().zip(&truth).all(
+        |((_, w), t)| (w.position[0] - t.x).abs() < 1e-9 && (w.position[1] - t.y).abs() < 1e-9
+    ));
     assert_eq!(read_tum(&dir.join(TRAJECTORY_ONLINE_FILE))?.len(), 50);
     let ate = metrics.ate_rmse_m.ok_or("no ATE")?;
     let online = metrics.online_ate_rmse_m.ok_or("no online ATE")?;

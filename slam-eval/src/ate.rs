@@ -1,6 +1,6 @@
 //! Absolute trajectory error after rigid alignment.
 
-use crate::align::{Se2Alignment, align_se2};
+use slam_geom::{Point2, Se2Alignment, WeightedPair, align_se2};
 
 /// The absolute trajectory error of an estimate against the truth.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -14,14 +14,21 @@ pub struct AteStats {
     pub pairs: usize,
 }
 
-/// Aligns `est` to `truth` with [`align_se2`] and measures the position errors. The slices
-/// must be paired by index (the same scans, in time order); `None` when they are empty or
-/// of different lengths, since then there is nothing meaningful to score.
+/// Aligns `est` to `truth` with [`align_se2`] (every pair weighted alike) and measures the
+/// position errors. The slices must be paired by index (the same scans, in time order);
+/// `None` when they are empty or of different lengths, since then there is nothing
+/// meaningful to score. Positions that fix no rotation (one pose, or a robot that never
+/// moved) are aligned by translation alone.
 pub fn ate(est: &[[f64; 2]], truth: &[[f64; 2]]) -> Option<AteStats> {
     if est.is_empty() || est.len() != truth.len() {
         return None;
     }
-    let alignment = align_se2(est, truth);
+    let pairs: Vec<WeightedPair> = est
+        .iter()
+        .zip(truth)
+        .map(|(e, t)| (Point2::from(*e), Point2::from(*t), 1.0))
+        .collect();
+    let alignment = align_se2(&pairs).unwrap_or_else(|| translation_only(&pairs));
     let errors: Vec<f64> = est
         .iter()
         .zip(truth)
@@ -37,6 +44,18 @@ pub fn ate(est: &[[f64; 2]], truth: &[[f64; 2]]) -> Option<AteStats> {
     })
 }
 
-pub(crate) fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+/// The shift of the mean source point onto the mean target point, for pairs that fix no
+/// rotation.
+fn translation_only(pairs: &[WeightedPair]) -> Se2Alignment {
+    let n = pairs.len().max(1) as f64;
+    let shift = pairs.iter().map(|(s, t, _)| t - s).sum::<Point2>() / n;
+    Se2Alignment {
+        rotation: 0.0,
+        translation: [shift.x, shift.y],
+    }
+}
+
+/// The distance between two points, metres.
+pub fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }

@@ -1,9 +1,9 @@
 //! An output of a run that could not be written whole (a full disk, a file system gone
 //! read-only): named in metrics.json and in map-sink's closing summary.
 
-use serde::{Deserialize, Serialize};
+use std::error::Error;
 
-use crate::error::SinkError;
+use serde::{Deserialize, Serialize};
 
 /// A file of the run that stopped short or was not written, and why.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -17,7 +17,7 @@ pub struct IncompleteOutput {
 
 impl IncompleteOutput {
     /// `file` could not be written because of `error`; `what` says what became of it.
-    pub fn new(file: &str, what: &str, error: &SinkError) -> Self {
+    pub fn new(file: &str, what: &str, error: &dyn Error) -> Self {
         Self {
             file: file.to_owned(),
             problem: format!("{what}: {}", chain(error)),
@@ -31,9 +31,9 @@ impl IncompleteOutput {
 }
 
 /// The error and its causes, `: `-separated (as `{:#}` prints an anyhow error).
-fn chain(error: &SinkError) -> String {
+fn chain(error: &dyn Error) -> String {
     let mut text = error.to_string();
-    let mut source = std::error::Error::source(error);
+    let mut source = error.source();
     while let Some(cause) = source {
         text.push_str(&format!(": {cause}"));
         source = cause.source();
@@ -47,8 +47,7 @@ mod tests {
 
     #[test]
     fn the_problem_names_the_cause() {
-        let error = SinkError::Io {
-            action: "append to",
+        let error = crate::EvalError::Io {
             path: "run/dead_reckoning.tum".into(),
             source: std::io::Error::from_raw_os_error(28),
         };
@@ -56,7 +55,7 @@ mod tests {
         let line = output.line();
         assert!(
             line.starts_with(
-                "dead_reckoning.tum: stopped after 3 lines: cannot append to \
+                "dead_reckoning.tum: stopped after 3 lines: cannot read \
                  run/dead_reckoning.tum: "
             ),
             "{line}"

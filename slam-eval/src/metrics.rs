@@ -1,9 +1,10 @@
-//! The numbers that summarise a run, as written to `metrics.json`.
+//! The numbers that summarise a run, as map-sink writes them to `metrics.json` and the
+//! launcher, the benchmark and the tests read them back.
 
 use serde::{Deserialize, Serialize};
 
-use crate::incomplete::IncompleteOutput;
-use crate::rpe::RelativePoseErrors;
+use crate::incomplete_output::IncompleteOutput;
+use crate::run_score::RelativePoseErrors;
 
 /// How many scans the pipeline published, processed and dropped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]

@@ -1,8 +1,7 @@
 //! The relative-pose error (Kuemmerle et al. 2009) of a run's trajectory files against
-//! ground-truth relations, through slam-eval, the workspace's one implementation of the
-//! metric and its stamp matching.
+//! ground-truth relations.
 //!
-//! The score is taken here, in map-sink, rather than by slam-launch after the run: map-sink
+//! map-sink takes this score at the end of a run, rather than slam-launch after it: map-sink
 //! writes `metrics.json` and `map.svg` once, atomically and last, and the score belongs in
 //! both; scoring afterwards would mean a second writer rewriting both files after the run
 //! had already declared itself finished. It also scores a pipeline started by hand (a live
@@ -11,14 +10,13 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use slam_eval::{Relation, ScoreSummary, Trajectory, read_relations, score};
 
-use crate::error::SinkError;
-use crate::recorder::{DEAD_RECKONING_FILE, TRAJECTORY_FILE};
-
-/// The per-scan (online) estimate, once `trajectory.tum` becomes the best particle's whole
-/// path written at the end. map-sink does not write it yet; it is scored when it exists.
-pub const TRAJECTORY_ONLINE_FILE: &str = "trajectory_online.tum";
+use crate::error::EvalError;
+use crate::relations::{Relation, read_relations};
+use crate::run_files::{DEAD_RECKONING_FILE, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE};
+use crate::score::score;
+use crate::summary::ScoreSummary;
+use crate::trajectory::Trajectory;
 
 /// A relations file, read and checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,7 +27,7 @@ pub struct RelationsFile {
 
 impl RelationsFile {
     /// Reads and parses `path`; the error names the file and the first bad line.
-    pub fn read(path: &Path) -> Result<Self, SinkError> {
+    pub fn read(path: &Path) -> Result<Self, EvalError> {
         Ok(Self {
             path: path.to_path_buf(),
             relations: read_relations(path)?,
@@ -62,8 +60,8 @@ pub fn score_run(
     dir: &Path,
     truth: &RelationsFile,
     tolerance_ns: u64,
-) -> Result<RelativePoseErrors, SinkError> {
-    let score_file = |name: &str| -> Result<Option<ScoreSummary>, SinkError> {
+) -> Result<RelativePoseErrors, EvalError> {
+    let score_file = |name: &str| -> Result<Option<ScoreSummary>, EvalError> {
         let path = dir.join(name);
         if !path.is_file() {
             return Ok(None);

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use crate::error::EvalError;
-use slam_geom::parse_tum;
+use slam_geom::{TumReadError, read_tum};
 
 use crate::pose::{Pose, from_tum};
 
@@ -26,7 +26,7 @@ impl Trajectory {
         Ok(Self { stamps_ns, poses })
     }
 
-    /// Reads a TUM file with [`slam_geom::parse_tum`]'s rules (blank lines and `#` comments
+    /// Reads a TUM file with [`slam_geom::read_tum`]'s rules (blank lines and `#` comments
     /// skipped, a last line cut short by a crash dropped).
     pub fn read_tum(path: &Path) -> Result<Self, EvalError> {
         let malformed = |line, reason| EvalError::Malformed {
@@ -34,11 +34,10 @@ impl Trajectory {
             line,
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
-            path: path.to_path_buf(),
-            source,
+        let lines = read_tum(path).map_err(|e| match e {
+            TumReadError::Io { path, source } => EvalError::Io { path, source },
+            TumReadError::Malformed { line, problem, .. } => malformed(line, problem.to_string()),
         })?;
-        let lines = parse_tum(&text).map_err(|e| malformed(e.line, e.problem.to_string()))?;
         if lines.is_empty() {
             return Err(EvalError::Empty {
                 path: path.to_path_buf(),

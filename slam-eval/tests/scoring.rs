@@ -1,11 +1,28 @@
-//! Alignment, absolute trajectory error, corner scoring and percentiles.
-
-mod common;
+//! Absolute trajectory error after alignment, corner scoring and percentiles.
 
 use std::f64::consts::PI;
 
-use common::Rng;
-use map_sink::{Se2Alignment, align_se2, ate, nearest_rmse, percentile};
+use slam_eval::{ate, nearest_rmse, percentile};
+use slam_geom::Se2Alignment;
+
+/// A deterministic standard normal sample (splitmix64, Box-Muller): the noise of a truth.
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn normal(&mut self) -> f64 {
+        let u1 = self.uniform().max(1e-300);
+        let u2 = self.uniform();
+        (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+    }
+}
 
 fn moved(points: &[[f64; 2]], t: Se2Alignment) -> Vec<[f64; 2]> {
     points.iter().map(|p| t.apply(*p)).collect()
@@ -28,12 +45,12 @@ fn known_rigid_motion_is_recovered_exactly() {
         translation: [12.0, -7.5],
     };
     let truth = moved(&est, truth_from_est);
-    let found = align_se2(&est, &truth);
+    let stats = ate(&est, &truth).expect("paired, non-empty");
+    let found = stats.alignment;
     assert!((found.rotation - 2.4).abs() < 1e-12, "{found:?}");
     assert!(
         (found.translation[0] - 12.0).abs() < 1e-10 && (found.translation[1] + 7.5).abs() < 1e-10
     );
-    let stats = ate(&est, &truth).expect("paired, non-empty");
     assert!(stats.rmse_m < 1e-10 && stats.max_m < 1e-10 && stats.final_error_m < 1e-10);
     assert_eq!(stats.pairs, 200);
 }
@@ -45,7 +62,7 @@ fn rotation_near_pi_does_not_flip_or_reflect() {
         rotation: -PI,
         translation: [1.0, 1.0],
     };
-    let found = align_se2(&est, &moved(&est, t));
+    let found = ate(&est, &moved(&est, t)).expect("paired").alignment;
     assert!((found.rotation.abs() - PI).abs() < 1e-12);
     let back = found.inverse();
     let p = back.apply(found.apply([3.0, -2.0]));
@@ -60,7 +77,7 @@ fn noisy_truth_gives_the_noise_level() {
         translation: [3.0, 4.0],
     };
     let sigma = 0.05;
-    let mut rng = Rng::new(7);
+    let mut rng = Rng(7);
     let truth: Vec<[f64; 2]> = moved(&est, t)
         .into_iter()
         .map(|p| [p[0] + sigma * rng.normal(), p[1] + sigma * rng.normal()])
@@ -85,10 +102,15 @@ fn noisy_truth_gives_the_noise_level() {
 
 #[test]
 fn degenerate_inputs() {
-    assert_eq!(align_se2(&[], &[]), Se2Alignment::IDENTITY);
-    let one = align_se2(&[[1.0, 2.0]], &[[4.0, 6.0]]);
+    // One pose fixes no rotation: it is aligned by translation alone.
+    let one = ate(&[[1.0, 2.0]], &[[4.0, 6.0]])
+        .expect("one pair")
+        .alignment;
     assert_eq!(one.rotation, 0.0);
     assert_eq!(one.translation, [3.0, 4.0]);
+    let standing = ate(&[[1.0, 2.0]; 3], &[[4.0, 6.0]; 3]).expect("three pairs");
+    assert_eq!(standing.alignment.translation, [3.0, 4.0]);
+    assert_eq!(standing.rmse_m, 0.0);
     assert!(ate(&[], &[]).is_none());
     assert!(ate(&[[0.0, 0.0]], &[]).is_none());
 }

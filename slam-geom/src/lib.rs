@@ -9,9 +9,11 @@
 //! * [`Point2`] is a point or vector in the plane;
 //! * [`TrueCorner`] and [`MapCorner`] are a corner as it is and as a map estimates it;
 //! * [`parse_stamp_ns`] and [`format_stamp`] convert decimal seconds and nanoseconds exactly;
+//! * [`align_se2`] is the weighted least-squares rigid fit of paired points ([`Se2Alignment`]);
 //! * [`ScanGeometry`] says where a scan's beams point and which ranges are valid;
-//! * [`parse_tum`] and [`format_tum_line`] read and write TUM trajectories.
+//! * [`read_tum`], [`parse_tum`] and [`format_tum_line`] read and write TUM trajectories.
 
+mod align;
 mod angle;
 mod corner;
 mod pose;
@@ -19,13 +21,15 @@ mod scan_geometry;
 mod stamp;
 mod tum;
 
+pub use align::{Se2Alignment, WeightedPair, align_se2};
 pub use angle::wrap_angle;
 pub use corner::{MapCorner, TrueCorner};
 pub use pose::Pose2;
 pub use scan_geometry::{ScanGeometry, ScanGeometryError};
 pub use stamp::{StampError, StampProblem, format_stamp, parse_stamp_ns};
 pub use tum::{
-    TumError, TumPose, TumProblem, format_tum_line, parse_tum, parse_tum_line, yaw_quaternion,
+    TumError, TumPose, TumProblem, TumReadError, format_tum_line, parse_tum, parse_tum_line,
+    read_tum, yaw_quaternion,
 };
 
 /// A point or vector in the plane, metres.

@@ -2,6 +2,9 @@
 //! seconds, `#` comments and blank lines allowed. Written by map-sink, read by the scorer,
 //! the recorder's tests and the end-to-end tests, all through these functions.
 
+use std::io;
+use std::path::{Path, PathBuf};
+
 use thiserror::Error;
 
 use crate::{Pose2, StampError, format_stamp, parse_stamp_ns};
@@ -125,6 +128,39 @@ pub fn parse_tum(text: &str) -> Result<Vec<(usize, TumPose)>, TumError> {
     Ok(poses)
 }
 
+/// Why a TUM file could not be read.
+#[derive(Debug, Error)]
+pub enum TumReadError {
+    // The cause is the source, not part of the message: `{:#}` would print it twice.
+    #[error("cannot read {}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+    #[error("{}, line {line}: {problem}", path.display())]
+    Malformed {
+        path: PathBuf,
+        line: usize,
+        problem: TumProblem,
+    },
+}
+
+/// Reads a TUM file with [`parse_tum`]'s rules (a last line cut short by a crash is
+/// dropped): its poses with their 1-based line numbers; a malformed line is an error naming
+/// the file and the line.
+pub fn read_tum(path: &Path) -> Result<Vec<(usize, TumPose)>, TumReadError> {
+    let text = std::fs::read_to_string(path).map_err(|source| TumReadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_tum(&text).map_err(|e| TumReadError::Malformed {
+        path: path.to_path_buf(),
+        line: e.line,
+        problem: e.problem,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -165,5 +201,29 @@ mod tests {
         let whole = parse_tum("1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1").unwrap();
         assert_eq!(whole.len(), 2);
         assert_eq!(whole[1].0, 2);
+    }
+
+    #[test]
+    fn a_file_is_read_and_its_errors_name_it() {
+        let dir = std::env::temp_dir().join(format!("slam-geom-tum-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let good = dir.join("good.tum");
+        std::fs::write(&good, format_tum_line(5, &Pose2::new(1.0, 2.0, 0.5))).unwrap();
+        let poses = read_tum(&good).unwrap();
+        assert_eq!(poses.len(), 1);
+        assert_eq!(poses[0].1.stamp_ns, 5);
+        let bad = dir.join("bad.tum");
+        std::fs::write(&bad, "# header\n1.0 0 0\n").unwrap();
+        let error = read_tum(&bad).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "{}, line 2: 3 fields, expected 8 (stamp x y z qx qy qz qw)",
+                bad.display()
+            )
+        );
+        let missing = read_tum(&dir.join("missing.tum")).unwrap_err();
+        assert!(matches!(missing, TumReadError::Io { .. }), "{missing}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -22,8 +22,9 @@ use crate::chi2::quantile_even;
 use crate::config::SlamConfig;
 use crate::line_motion;
 use crate::observation::{LineObservation, OdometryInput, Prepared};
-use crate::rigid_fit::{Prior, kabsch, normal_equations, refine};
+use crate::rigid_fit::{Prior, normal_equations, refine};
 use slam_geom::Pose2;
+use slam_geom::align_se2;
 use slam_geom::wrap_angle;
 
 /// The motion from the previous scan to this one (`previous_from_current`).
@@ -238,7 +239,7 @@ impl MotionEstimator {
                     (xy(&current[a.current]), xy(&previous[a.previous]), 1.0),
                     (xy(&current[b.current]), xy(&previous[b.previous]), 1.0),
                 ];
-                let Some(hypothesis) = kabsch(&points) else {
+                let Some(hypothesis) = align_se2(&points).map(|fit| fit.to_pose()) else {
                     continue;
                 };
                 if !within_limits(&hypothesis, config) {
@@ -284,7 +285,7 @@ impl MotionEstimator {
                     (xy(s), xy(t), 1.0 / variance)
                 })
                 .collect();
-            let start = kabsch(&points)?;
+            let start = align_se2(&points)?.to_pose();
             let pairs: Vec<_> = matched
                 .iter()
                 .map(|c| (&previous[c.previous], &current[c.current]))

@@ -1,42 +1,12 @@
-//! Rigid fits of matched corners between two frames: the closed-form weighted Kabsch fit of
-//! the positions, then a Gauss-Newton refinement that also uses the headings, each pair's
-//! full covariance and a prior on the transform.
+//! The refinement of a rigid fit of matched corners between two frames (the closed-form
+//! weighted fit of the positions is `slam_geom::align_se2`): Gauss-Newton that also uses the
+//! headings, each pair's full covariance and a prior on the transform.
 
-use nalgebra::{Cholesky, Matrix2, Matrix3, Vector2, Vector3};
+use nalgebra::{Cholesky, Matrix3, Vector3};
 
 use crate::observation::Prepared;
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;
-
-/// Least-squares rigid transform `T` with `target ≈ R source + t`, each point weighted;
-/// `None` when the points do not fix a rotation (fewer than two distinct points).
-pub(crate) fn kabsch(points: &[(Vector2<f64>, Vector2<f64>, f64)]) -> Option<Pose2> {
-    let total: f64 = points.iter().map(|p| p.2).sum();
-    if total.is_nan() || total <= 0.0 {
-        return None;
-    }
-    let source_mean = points.iter().map(|(s, _, w)| s * *w).sum::<Vector2<f64>>() / total;
-    let target_mean = points.iter().map(|(_, t, w)| t * *w).sum::<Vector2<f64>>() / total;
-    let mut h = Matrix2::zeros();
-    let mut spread = 0.0;
-    for (s, t, w) in points {
-        let (ds, dt) = (s - source_mean, t - target_mean);
-        h += ds * dt.transpose() * *w;
-        spread += ds.norm_squared() * *w;
-    }
-    if spread < 1e-12 * total {
-        return None;
-    }
-    let svd = h.svd(true, true);
-    let (u, v) = (svd.u?, svd.v_t?.transpose());
-    // The reflection guard: a least-squares orthogonal matrix may be a reflection when the
-    // points are noisy or nearly collinear; flipping the last axis gives the best rotation.
-    let d = (v * u.transpose()).determinant().signum();
-    let rotation = v * Matrix2::new(1.0, 0.0, 0.0, d) * u.transpose();
-    let yaw = rotation[(1, 0)].atan2(rotation[(0, 0)]);
-    let t = target_mean - rotation * source_mean;
-    Some(Pose2::new(t.x, t.y, wrap_angle(yaw)))
-}
 
 /// A Gaussian belief about a transform: the prior of a motion fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -137,48 +107,13 @@ pub(crate) fn normal_equations(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{Matrix4, Vector4};
+    use nalgebra::{Matrix4, Vector2, Vector4};
 
     fn prepared(x: f64, y: f64, heading: f64) -> Prepared {
         Prepared {
             z: Vector4::new(x, y, heading, 1.5),
             covariance: Matrix4::from_diagonal(&Vector4::new(1e-4, 1e-4, 1e-4, 1e-4)),
         }
-    }
-
-    #[test]
-    fn kabsch_recovers_a_transform() {
-        let truth = Pose2::new(0.3, -0.2, 0.25);
-        let source = [
-            Vector2::new(1.0, 2.0),
-            Vector2::new(-3.0, 0.5),
-            Vector2::new(4.0, -1.0),
-        ];
-        let points: Vec<_> = source
-            .iter()
-            .map(|s| (*s, truth.transform(*s), 1.0))
-            .collect();
-        let fit = kabsch(&points).unwrap();
-        assert!((fit.x - truth.x).abs() < 1e-12 && (fit.y - truth.y).abs() < 1e-12);
-        assert!((fit.yaw - truth.yaw).abs() < 1e-12);
-    }
-
-    #[test]
-    fn kabsch_never_returns_a_reflection() {
-        // A mirrored target: the best proper rotation, not the reflection that fits exactly.
-        let source = [
-            Vector2::new(1.0, 0.0),
-            Vector2::new(0.0, 1.0),
-            Vector2::new(-1.0, -1.0),
-        ];
-        let points: Vec<_> = source
-            .iter()
-            .map(|s| (*s, Vector2::new(s.x, -s.y), 1.0))
-            .collect();
-        let fit = kabsch(&points).unwrap();
-        let r = fit.rotation();
-        assert!((r.determinant() - 1.0).abs() < 1e-12);
-        assert!(kabsch(&[(Vector2::new(1.0, 1.0), Vector2::new(0.0, 0.0), 1.0)]).is_none());
     }
 
     #[test]

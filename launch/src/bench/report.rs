@@ -2,9 +2,8 @@
 
 use std::path::PathBuf;
 
-use map_sink::Metrics;
 use serde::Serialize;
-use slam_eval::{ErrorStats, ScoreSummary};
+use slam_eval::{ErrorStats, Metrics, RelativePoseErrors, ScoreSummary};
 
 use super::published::{Published, SOURCES};
 
@@ -77,7 +76,7 @@ pub struct LogResult {
 impl LogResult {
     /// Sums up the runs of one log.
     pub fn new(log: String, file: PathBuf, relations: PathBuf, runs: Vec<SeedRun>) -> Self {
-        let summaries = |pick: fn(&map_sink::RelativePoseErrors) -> Option<ScoreSummary>| {
+        let summaries = |pick: fn(&RelativePoseErrors) -> Option<ScoreSummary>| {
             runs.iter()
                 .filter_map(|run| run.metrics.relative_pose_error.as_ref().and_then(pick))
                 .collect::<Vec<_>>()

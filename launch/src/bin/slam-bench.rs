@@ -16,7 +16,8 @@ use launch::bench::report::{BenchReport, LogResult, SeedRun};
 use launch::bench::seeds::parse_seeds;
 use launch::bench::table;
 use launch::relations::relations_beside;
-use map_sink::{METRICS_FILE, Metrics, write_atomic};
+use map_sink::write_atomic;
+use slam_eval::{METRICS_FILE, Metrics};
 
 /// Runs slam-launch on every log in DIR that has a relations file beside it (CARMEN `.clf`
 /// for now), once per seed, and prints a table of the relative-pose errors (Kuemmerle et
