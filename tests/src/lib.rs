@@ -3,9 +3,18 @@
 //!
 //! The binaries must have been built first (`cargo build --release --workspace`, as the
 //! README's test command does); the helpers say so instead of running stale ones silently.
+//!
+//! Processes are signalled, waited for and reaped through `nix`'s safe wrappers, so no test
+//! needs `unsafe`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, ExitStatus, Output, Stdio};
+use std::time::{Duration, Instant};
+
+pub use nix::sys::signal::Signal;
+pub use nix::sys::wait::WaitStatus;
+use nix::sys::wait::{WaitPidFlag, waitpid};
+pub use nix::unistd::Pid;
 
 /// Directory of the workspace's release binaries (`target/release`).
 pub fn bin_dir() -> PathBuf {
@@ -48,14 +57,153 @@ pub fn domain(tag: &str) -> String {
     format!("e2e-{tag}-{}", std::process::id())
 }
 
-/// Runs `slam-launch` with `args`, quietly, in `domain`, writing into `out`.
-pub fn launch(domain: &str, out: &Path, args: &[&str]) -> Output {
-    Command::new(bin("slam-launch"))
+/// `slam-launch` with `args`, quietly, in `domain`, writing into `out`, not started yet.
+pub fn launch_command(domain: &str, out: &Path, args: &[&str]) -> Command {
+    let mut command = Command::new(bin("slam-launch"));
+    command
         .args(["--quiet", "--domain", domain, "--out"])
         .arg(out)
-        .args(args)
+        .args(args);
+    command
+}
+
+/// Runs `slam-launch` with `args`, quietly, in `domain`, writing into `out`.
+pub fn launch(domain: &str, out: &Path, args: &[&str]) -> Output {
+    launch_command(domain, out, args)
         .output()
         .expect("run slam-launch")
+}
+
+/// Runs `slam-launch` on the recorded log `log` (`--replay LOG`) with `args`, as [`launch`].
+pub fn launch_replay(domain: &str, out: &Path, log: &Path, args: &[&str]) -> Output {
+    let log = log.to_str().expect("a UTF-8 path");
+    launch(domain, out, &[&["--replay", log], args].concat())
+}
+
+/// Runs `slam-launch` on the (emulated) Hokuyo at `addr` for its first `frames` scans (the
+/// driver's `[hokuyo] frames`, from a config file written into `out`) with `args`, as
+/// [`launch`].
+pub fn launch_hokuyo(domain: &str, out: &Path, addr: &str, frames: u32, args: &[&str]) -> Output {
+    std::fs::create_dir_all(out).expect("the run's directory");
+    let config = out.join("hokuyo.toml");
+    std::fs::write(&config, format!("[hokuyo]\nframes = {frames}\n")).expect("hokuyo.toml");
+    let config = config.to_str().expect("a UTF-8 path");
+    let source = ["--source", "hokuyo", "--addr", addr, "--config", config];
+    launch(domain, out, &[&source, args].concat())
+}
+
+/// Starts `slam-launch` as [`launch`] runs it, in the background: its output discarded and
+/// its console (stderr) as `console` says (`Stdio::piped()` to read it).
+pub fn spawn_launch(domain: &str, out: &Path, args: &[&str], console: Stdio) -> Child {
+    launch_command(domain, out, args)
+        .stdout(Stdio::null())
+        .stderr(console)
+        .spawn()
+        .expect("start slam-launch")
+}
+
+/// Collects `child`'s console (its piped stderr) on a thread, line by line, so the child
+/// never blocks on a full pipe; the thread returns the lines joined once the child has
+/// closed it.
+pub fn read_console(child: &mut Child) -> std::thread::JoinHandle<String> {
+    use std::io::{BufRead, BufReader};
+    let stderr = child.stderr.take().expect("the console is piped");
+    std::thread::spawn(move || {
+        BufReader::new(stderr)
+            .lines()
+            .map_while(Result::ok)
+            .collect::<Vec<_>>()
+            .join("\n")
+    })
+}
+
+/// Waits until the run `launcher` writes into `out` is under way: `poses` lines in its
+/// online trajectory (map-sink flushes it as it grows; `trajectory.tum` comes at the end).
+/// Panics when the launcher ends first or `limit` passes, stopping it first.
+pub fn wait_for_poses(launcher: &mut Child, out: &Path, poses: usize, limit: Duration) {
+    let online = out.join(slam_eval::TRAJECTORY_ONLINE_FILE);
+    let deadline = Instant::now() + limit;
+    while lines_in(&online) < poses {
+        if let Some(status) = launcher.try_wait().expect("poll slam-launch") {
+            panic!("slam-launch ended before {poses} poses were recorded: {status}");
+        }
+        if Instant::now() > deadline {
+            stop(launcher);
+            panic!("not {poses} poses recorded in {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Stops a slam-launch of a test that failed: SIGTERM, so it stops its stages too, then
+/// reaps it.
+pub fn stop(launcher: &mut Child) {
+    let _ = nix::sys::signal::kill(pid_of(launcher), Signal::SIGTERM);
+    let _ = launcher.wait();
+}
+
+/// The process id of `child`, as the signal and wait calls take it.
+pub fn pid_of(child: &Child) -> Pid {
+    Pid::from_raw(i32::try_from(child.id()).expect("a pid fits an i32"))
+}
+
+/// Sends `signal` to `pid`, a process of this test's own run; panics when it cannot.
+pub fn send(pid: Pid, signal: Signal) {
+    nix::sys::signal::kill(pid, signal)
+        .unwrap_or_else(|e| panic!("cannot send {signal} to {pid}: {e}"));
+}
+
+/// Waits for `child` to end, at most `limit`: `None` while it still runs then.
+pub fn wait_within(child: &mut Child, limit: Duration) -> Option<ExitStatus> {
+    let deadline = Instant::now() + limit;
+    loop {
+        if let Some(status) = child.try_wait().expect("poll the child") {
+            return Some(status);
+        }
+        if Instant::now() > deadline {
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Makes this process the subreaper of its descendants: orphans are handed to the nearest
+/// living ancestor that is one, so the stages of a killed launcher come to the test, to be
+/// reaped and their exit statuses read (pid 1 of a container may never reap them).
+pub fn become_subreaper() {
+    nix::sys::prctl::set_child_subreaper(true).expect("become a child subreaper");
+}
+
+/// Whether `pid`, a process of ours (a child, or handed to us as subreaper), has ended: its
+/// wait status then (reaped), `None` while it runs.
+pub fn try_reap(pid: Pid) -> Option<WaitStatus> {
+    match waitpid(pid, Some(WaitPidFlag::WNOHANG)) {
+        Ok(WaitStatus::StillAlive) => None,
+        Ok(status) => Some(status),
+        Err(e) => panic!("{pid} is not ours to wait for: {e}"),
+    }
+}
+
+/// Kills `pid` (see [`try_reap`]) with SIGKILL and reaps it: the end of a test that failed.
+pub fn kill_and_reap(pid: Pid) {
+    let _ = nix::sys::signal::kill(pid, Signal::SIGKILL);
+    let _ = waitpid(pid, None);
+}
+
+/// Waits for `pid` (see [`try_reap`]) at most `limit`; past it the process is killed and
+/// reaped, and the test fails naming `what`.
+pub fn reap_within(pid: Pid, limit: Duration, what: &str) -> WaitStatus {
+    let deadline = Instant::now() + limit;
+    loop {
+        if let Some(status) = try_reap(pid) {
+            return status;
+        }
+        if Instant::now() > deadline {
+            kill_and_reap(pid);
+            panic!("{what} ({pid}) still running after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }
 
 /// Panics with the run's output unless it succeeded.
@@ -69,36 +217,23 @@ pub fn assert_success(output: &Output) {
     );
 }
 
-/// The run's metrics.json.
-pub fn metrics(out: &Path) -> serde_json::Value {
-    let text = std::fs::read_to_string(out.join("metrics.json")).expect("metrics.json");
-    serde_json::from_str(&text).expect("metrics.json is JSON")
-}
-
-/// A number from metrics.json.
-pub fn number(metrics: &serde_json::Value, key: &str) -> f64 {
-    metrics
-        .get(key)
-        .and_then(serde_json::Value::as_f64)
-        .unwrap_or_else(|| panic!("metrics.json has no number '{key}': {metrics}"))
-}
-
-/// The poses of a TUM file: `(stamp, x, y, qz, qw)`; panics on a malformed line.
-pub fn read_tum(path: &Path) -> Vec<[f64; 5]> {
-    let text = std::fs::read_to_string(path)
+/// The run's metrics.json, read as the typed summary map-sink writes; panics when it is
+/// missing or not that summary.
+pub fn metrics(out: &Path) -> slam_eval::Metrics {
+    let path = out.join(slam_eval::METRICS_FILE);
+    let text = std::fs::read_to_string(&path)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    slam_geom::parse_tum(&text)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    serde_json::from_str(&text)
+        .unwrap_or_else(|e| panic!("{} is not the metrics map-sink writes: {e}", path.display()))
+}
+
+/// The poses of a TUM file, read by [`slam_geom::read_tum`]; panics on an unreadable file
+/// or a malformed line.
+pub fn read_tum(path: &Path) -> Vec<slam_geom::TumPose> {
+    slam_geom::read_tum(path)
+        .unwrap_or_else(|e| panic!("{e}"))
         .into_iter()
-        .map(|(_, pose)| {
-            let [x, y, _] = pose.position;
-            let [_, _, qz, qw] = pose.orientation;
-            // The stamp as the file spells it, read as seconds.
-            let stamp = slam_geom::format_stamp(pose.stamp_ns)
-                .parse()
-                .unwrap_or(f64::NAN);
-            [stamp, x, y, qz, qw]
-        })
+        .map(|(_, pose)| pose)
         .collect()
 }
 
@@ -166,13 +301,13 @@ pub fn duplicate_corners(corners: &[[f64; 4]], distance: f64, heading: f64) -> V
 }
 
 /// The children of `parent`, by /proc: `(pid, command name)`.
-pub fn children_of(parent: libc::pid_t) -> Vec<(libc::pid_t, String)> {
+pub fn children_of(parent: Pid) -> Vec<(Pid, String)> {
     let mut found = Vec::new();
     for entry in std::fs::read_dir("/proc")
         .expect("/proc")
         .filter_map(Result::ok)
     {
-        let Ok(pid) = entry.file_name().to_string_lossy().parse::<libc::pid_t>() else {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<i32>() else {
             continue;
         };
         // "pid (comm) state ppid ...": comm may hold spaces, so split after its ')'.
@@ -183,12 +318,20 @@ pub fn children_of(parent: libc::pid_t) -> Vec<(libc::pid_t, String)> {
             continue;
         };
         let mut rest = stat[close + 1..].split_whitespace();
-        let ppid = rest.nth(1).and_then(|p| p.parse::<libc::pid_t>().ok());
-        if ppid == Some(parent) {
-            found.push((pid, stat[open + 1..close].to_owned()));
+        let ppid = rest.nth(1).and_then(|p| p.parse::<i32>().ok());
+        if ppid == Some(parent.as_raw()) {
+            found.push((Pid::from_raw(pid), stat[open + 1..close].to_owned()));
         }
     }
     found
+}
+
+/// The child of `parent` whose command is `name` (a stage of a slam-launch).
+pub fn child_named(parent: Pid, name: &str) -> Option<Pid> {
+    children_of(parent)
+        .into_iter()
+        .find(|(_, command)| command == name)
+        .map(|(pid, _)| pid)
 }
 
 /// Lines of a file, 0 while it does not exist.
@@ -199,20 +342,15 @@ pub fn lines_in(path: &Path) -> usize {
 /// Runs `command` with its output captured, killing it after `limit`: `None` if it had to
 /// be killed, so a test of a refusal fails instead of hanging on a program that does not
 /// refuse.
-pub fn output_within(command: &mut Command, limit: std::time::Duration) -> Option<Output> {
-    use std::process::Stdio;
+pub fn output_within(command: &mut Command, limit: Duration) -> Option<Output> {
     let mut child = command
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("start the command");
-    let deadline = std::time::Instant::now() + limit;
-    while std::time::Instant::now() < deadline {
-        if child.try_wait().expect("poll the command").is_some() {
-            return Some(child.wait_with_output().expect("read the command's output"));
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
+    if wait_within(&mut child, limit).is_some() {
+        return Some(child.wait_with_output().expect("read the command's output"));
     }
     let _ = child.kill();
     let _ = child.wait();
@@ -223,7 +361,6 @@ pub fn output_within(command: &mut Command, limit: std::time::Duration) -> Optio
 /// its `HOST:PORT`. The caller kills and reaps it.
 pub fn start_hokuyo_emulator(file: &Path) -> (std::process::Child, String) {
     use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
     let mut emulator = Command::new(bin("hokuyo-emulator"))
         .args(["--port", "0", "--file"])
         .arg(file)
@@ -258,9 +395,7 @@ pub fn localization_gaps(
     let reference = slam_eval::Trajectory::read_tum(reference).unwrap_or_else(|e| panic!("{e}"));
     let from_ns = if from_convergence {
         let stamp = metrics(run)
-            .get("converged_at_stamp")
-            .and_then(serde_json::Value::as_str)
-            .map(str::to_owned)
+            .converged_at_stamp
             .unwrap_or_else(|| panic!("{} never converged", run.display()));
         slam_geom::parse_stamp_ns(&stamp).unwrap_or_else(|e| panic!("{stamp}: {e}"))
     } else {

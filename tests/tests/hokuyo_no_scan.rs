@@ -15,29 +15,21 @@ const LIMIT: Duration = Duration::from_secs(120);
 #[test]
 fn an_address_that_cannot_be_resolved_is_refused_before_starting() {
     let out = scratch("hokuyo-unresolved").join("run");
-    let mut child = Command::new(bin("slam-launch"))
-        .args(["--quiet", "--domain", &domain("hokuyo-unresolved"), "--out"])
-        .arg(&out)
-        .args(["--source", "hokuyo", "--addr", "notanaddr"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("slam-launch");
+    let mut child = spawn_launch(
+        &domain("hokuyo-unresolved"),
+        &out,
+        &["--source", "hokuyo", "--addr", "notanaddr"],
+        Stdio::piped(),
+    );
     // A launcher that took the address would run until stopped: bounded, and stopped.
-    let deadline = Instant::now() + LIMIT;
-    while child.try_wait().unwrap().is_none() {
-        if Instant::now() > deadline {
-            // SAFETY: kill(2) on our own child; SIGTERM so it stops its stages too.
-            unsafe {
-                libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
-            }
-            let output = child.wait_with_output().unwrap();
-            panic!(
-                "still running after {LIMIT:?}: {}",
-                String::from_utf8_lossy(&output.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
+    if wait_within(&mut child, LIMIT).is_none() {
+        // SIGTERM, not SIGKILL: slam-launch stops its stages on the way out.
+        send(pid_of(&child), Signal::SIGTERM);
+        let output = child.wait_with_output().unwrap();
+        panic!(
+            "still running after {LIMIT:?}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
     }
     let output = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -87,20 +79,12 @@ fn a_run_that_never_gets_a_scan_shows_why_and_fails() {
         match lines.recv_timeout(left) {
             Ok(line) => seen.push(line),
             Err(e) => {
-                // SIGTERM, not SIGKILL: slam-launch stops its stages on the way out.
-                // SAFETY: kill(2) on our own child.
-                unsafe {
-                    libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
-                }
-                let _ = child.wait();
+                stop(&mut child);
                 panic!("not on the console ({e}): {seen:?}");
             }
         }
     }
-    // SAFETY: kill(2) on our own child.
-    unsafe {
-        libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
-    }
+    send(pid_of(&child), Signal::SIGTERM);
     let status = child.wait().unwrap();
     reader.join().unwrap();
     seen.extend(lines.try_iter());

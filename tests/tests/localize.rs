@@ -70,22 +70,31 @@ fn the_office_map_localizes_another_run_from_a_known_and_an_unknown_start() {
     );
     assert!(gaps.matched > 3900, "{gaps:?}");
     // ATE as the project scores it (aligned, docs/CONVENTIONS.md): the acceptance's figure.
-    let ate = number(&metrics(&known), "ate_rmse_m");
+    let ate = metrics(&known)
+        .ate_rmse_m
+        .expect("metrics.json has ate_rmse_m");
     eprintln!("office seed 2, known start: ATE RMSE {ate:.4} m");
     assert!(ate <= 0.03, "ATE {ate} m");
     // Unaligned, in the map's frame, the map's own error counts too (the mapping run is
     // 0.018 m from its truth so): a looser bound.
     assert!(gaps.rmse_m <= 0.05, "{gaps:?}");
-    assert_eq!(number(&metrics(&known), "converged_at_scan"), 0.0);
+    assert_eq!(
+        metrics(&known)
+            .converged_at_scan
+            .expect("metrics.json has converged_at_scan"),
+        0
+    );
 
     let unknown = localize_office(&map, 2, None, "unknown");
-    let converged = number(&metrics(&unknown), "converged_at_scan");
+    let converged = metrics(&unknown)
+        .converged_at_scan
+        .expect("metrics.json has converged_at_scan");
     let gaps = office_gaps(&map, &unknown, true);
     eprintln!(
         "office seed 2, unknown start: converged at scan {converged}, then RMSE {:.4} m, max {:.4} m",
         gaps.rmse_m, gaps.stats.max
     );
-    assert!(converged <= 200.0, "converged at scan {converged}");
+    assert!(converged <= 200, "converged at scan {converged}");
     assert!(gaps.rmse_m <= 0.05, "{gaps:?}");
 
     // Localizing leaves the map as it was.
@@ -105,9 +114,7 @@ fn office_convergence_over_seeds() {
         let known = localize_office(&map, seed, Some("0,0,0"), &format!("known-{seed}"));
         let known_gaps = office_gaps(&map, &known, false);
         let unknown = localize_office(&map, seed, None, &format!("unknown-{seed}"));
-        let converged = metrics(&unknown)
-            .get("converged_at_scan")
-            .and_then(serde_json::Value::as_u64);
+        let converged = metrics(&unknown).converged_at_scan;
         let gaps = office_gaps(&map, &unknown, true);
         eprintln!(
             "seed {seed}: known start RMSE {:.4} m | unknown start converged at scan {converged:?}, then RMSE {:.4} m, max {:.4} m",
@@ -147,7 +154,9 @@ fn mapping_on_a_saved_map_extends_its_landmarks() {
     assert!(corners.len() > saved + 40, "{saved} -> {}", corners.len());
     let duplicates = duplicate_corners(&corners, 0.5, 0.5);
     assert!(duplicates.is_empty(), "duplicated corners: {duplicates:?}");
-    let ate = number(&metrics(&out), "ate_rmse_m");
+    let ate = metrics(&out)
+        .ate_rmse_m
+        .expect("metrics.json has ate_rmse_m");
     assert!(ate < 0.05, "ATE {ate} m");
 }
 
@@ -235,22 +244,21 @@ fn a_damaged_map_is_refused_before_anything_starts() {
 #[test]
 fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
     let log = data_dir().join("carmen/aces.clf");
-    let log = log.to_str().unwrap();
     let map = scratch("aces-map");
-    let output = launch(
+    let output = launch_replay(
         &domain("aces-map"),
         &map,
-        &["--replay", log, "--rate", "0", "--seed", "1"],
+        &log,
+        &["--rate", "0", "--seed", "1"],
     );
     assert_success(&output);
     for start in ["1000", "3000", "5000"] {
         let out = scratch(&format!("aces-from-{start}"));
-        let output = launch(
+        let output = launch_replay(
             &domain(&format!("aces-{start}")),
             &out,
+            &log,
             &[
-                "--replay",
-                log,
                 "--rate",
                 "0",
                 "--map",
@@ -261,7 +269,9 @@ fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
             ],
         );
         assert_success(&output);
-        let converged = number(&metrics(&out), "converged_at_scan");
+        let converged = metrics(&out)
+            .converged_at_scan
+            .expect("metrics.json has converged_at_scan");
         // The mapping run's path is in the map's frame already.
         let gaps = localization_gaps(
             &out,
@@ -273,7 +283,7 @@ fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
             "aces from scan {start}: converged at scan {converged}, then {} poses, RMSE {:.3} m, mean {:.3} m, max {:.3} m",
             gaps.matched, gaps.rmse_m, gaps.stats.mean, gaps.stats.max
         );
-        assert!(converged <= 300.0, "converged at scan {converged}");
+        assert!(converged <= 300, "converged at scan {converged}");
         // Converged in the right place: a wrong one is metres off. The map's own loops
         // are open by 0.2-0.3 m in places (README), which bounds the agreement with the
         // mapping run's path; a known start from scan 0 agrees no better.

@@ -60,11 +60,7 @@ fn lines_a_replay_dropped_are_counted_on_the_console() {
     std::fs::write(&file, doctored.join("\n") + "\n").expect("write the log");
 
     let out = dir.join("run");
-    let output = launch(
-        &domain("losses-replay"),
-        &out,
-        &["--replay", file.to_str().expect("utf-8 path")],
-    );
+    let output = launch_replay(&domain("losses-replay"), &out, &file, &[]);
     assert_success(&output);
     assert_eq!(
         losses_block(&output),

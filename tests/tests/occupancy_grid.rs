@@ -7,6 +7,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use lidar_sim::{RayCaster, SensorConfig, World};
+use slam_geom::{Point2, Se2Alignment, TumPose, WeightedPair, align_se2};
 use tests::*;
 
 /// An occupied cell counts as a wall when its centre is this close to one, and a wall point
@@ -121,37 +122,6 @@ fn read_pixel(map: &MapDescription, pixel: u8) -> Cell {
     }
 }
 
-/// The rigid transform (rotation, translation) that best maps `from` onto `to`, least
-/// squares over the positions (Umeyama without scale).
-fn fit_se2(from: &[[f64; 2]], to: &[[f64; 2]]) -> (f64, [f64; 2]) {
-    let n = from.len() as f64;
-    let mean = |p: &[[f64; 2]]| {
-        let s = p.iter().fold([0.0, 0.0], |a, q| [a[0] + q[0], a[1] + q[1]]);
-        [s[0] / n, s[1] / n]
-    };
-    let (mf, mt) = (mean(from), mean(to));
-    let (mut dot, mut cross) = (0.0, 0.0);
-    for (f, t) in from.iter().zip(to) {
-        let (a, b) = ([f[0] - mf[0], f[1] - mf[1]], [t[0] - mt[0], t[1] - mt[1]]);
-        dot += a[0] * b[0] + a[1] * b[1];
-        cross += a[0] * b[1] - a[1] * b[0];
-    }
-    let theta = cross.atan2(dot);
-    let (s, c) = theta.sin_cos();
-    (
-        theta,
-        [
-            mt[0] - (c * mf[0] - s * mf[1]),
-            mt[1] - (s * mf[0] + c * mf[1]),
-        ],
-    )
-}
-
-fn apply(t: (f64, [f64; 2]), p: [f64; 2]) -> [f64; 2] {
-    let (s, c) = t.0.sin_cos();
-    [c * p[0] - s * p[1] + t.1[0], s * p[0] + c * p[1] + t.1[1]]
-}
-
 fn distance_to_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
     let e = [b[0] - a[0], b[1] - a[1]];
     let len2 = e[0] * e[0] + e[1] * e[1];
@@ -164,22 +134,23 @@ fn distance_to_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
 }
 
 /// The map-frame-to-world transform: the final path fitted onto the truth by stamp.
-fn map_to_world(out: &Path) -> (f64, [f64; 2]) {
-    let truth: HashMap<u64, [f64; 2]> = read_tum(&out.join("ground_truth.tum"))
+fn map_to_world(out: &Path) -> Se2Alignment {
+    let xy = |p: &TumPose| Point2::new(p.position[0], p.position[1]);
+    let truth: HashMap<u64, Point2> = read_tum(&out.join("ground_truth.tum"))
         .iter()
-        .map(|p| (p[0].to_bits(), [p[1], p[2]]))
+        .map(|p| (p.stamp_ns, xy(p)))
         .collect();
-    let (est, tru): (Vec<[f64; 2]>, Vec<[f64; 2]>) = read_tum(&out.join("trajectory.tum"))
+    let pairs: Vec<WeightedPair> = read_tum(&out.join("trajectory.tum"))
         .iter()
-        .filter_map(|p| Some(([p[1], p[2]], *truth.get(&p[0].to_bits())?)))
-        .unzip();
-    assert!(est.len() > 1000, "{} poses with truth", est.len());
-    fit_se2(&est, &tru)
+        .filter_map(|p| Some((xy(p), *truth.get(&p.stamp_ns)?, 1.0)))
+        .collect();
+    assert!(pairs.len() > 1000, "{} poses with truth", pairs.len());
+    align_se2(&pairs).expect("a path fixes the rotation")
 }
 
 /// Points along the walls, `SAMPLE_STEP_M` apart, that the simulated scanner's beams hit
 /// from some true pose: the wall the sensor saw.
-fn seen_wall_points(world: &World, truth: &[[f64; 5]]) -> Vec<[f64; 2]> {
+fn seen_wall_points(world: &World, truth: &[TumPose]) -> Vec<[f64; 2]> {
     let caster = RayCaster::new(world);
     let sensor = SensorConfig::default();
     let key = |p: [f64; 2]| {
@@ -190,14 +161,12 @@ fn seen_wall_points(world: &World, truth: &[[f64; 5]]) -> Vec<[f64; 2]> {
     };
     let mut hit = HashSet::new();
     for pose in truth.iter().step_by(2) {
-        let yaw = 2.0 * pose[3].atan2(pose[4]);
+        let yaw = pose.yaw();
+        let [x, y, _] = pose.position;
         for i in 0..sensor.beams {
             let bearing = yaw + sensor.angle_min + i as f64 * sensor.angle_increment;
-            if let Some(r) = caster.cast([pose[1], pose[2]], bearing, sensor.range_max) {
-                hit.insert(key([
-                    pose[1] + r * bearing.cos(),
-                    pose[2] + r * bearing.sin(),
-                ]));
+            if let Some(r) = caster.cast([x, y], bearing, sensor.range_max) {
+                hit.insert(key([x + r * bearing.cos(), y + r * bearing.sin()]));
             }
         }
     }
@@ -268,7 +237,7 @@ fn the_office_grid_matches_the_world() {
     let on_a_wall = occupied
         .iter()
         .filter(|c| {
-            let p = apply(to_world, **c);
+            let p = to_world.apply(**c);
             walls
                 .iter()
                 .any(|w| distance_to_segment(p, *w) <= TOLERANCE_M)
@@ -282,11 +251,7 @@ fn the_office_grid_matches_the_world() {
         .iter()
         .map(|[a, b]| (b[0] - a[0]).hypot(b[1] - a[1]))
         .sum();
-    let to_map = {
-        let (theta, t) = to_world;
-        let (s, c) = theta.sin_cos();
-        (-theta, [-(c * t[0] + s * t[1]), s * t[0] - c * t[1]])
-    };
+    let to_map = to_world.inverse();
     let cell_key = |p: [f64; 2]| {
         [
             ((p[0] - map.origin[0]) / map.resolution).floor() as i64,
@@ -298,7 +263,7 @@ fn the_office_grid_matches_the_world() {
     let mapped = seen
         .iter()
         .filter(|p| {
-            let q = apply(to_map, **p);
+            let q = to_map.apply(**p);
             let [x, y] = cell_key(q);
             (-reach..=reach).any(|dx| {
                 (-reach..=reach).any(|dy| {
@@ -345,7 +310,7 @@ fn the_office_grid_matches_the_world() {
     assert_eq!(landmarks["grid"]["width"], width);
     assert_eq!(
         landmarks["corners"].as_array().map(Vec::len),
-        Some(number(&metrics(&out), "map_corners") as usize)
+        Some(metrics(&out).map_corners)
     );
     let _ = std::fs::remove_dir_all(&out);
 }

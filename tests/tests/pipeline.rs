@@ -1,7 +1,8 @@
 //! The whole pipeline through `slam-launch`: the real binaries, real shared memory.
 
-use std::process::Command;
-use std::time::{Duration, Instant};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
 
 use tests::*;
 
@@ -15,7 +16,7 @@ const RESULT_FILES: [&str; 6] = [
 ];
 
 /// Runs a simulated world and checks everything a run must leave behind.
-fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> serde_json::Value {
+fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> slam_eval::Metrics {
     let domain = domain(&format!("{}-{frames}", world.replace(['/', '.', '_'], "-")));
     let out = scratch(&format!("world-{}", world.replace('/', "-")));
     let frames_arg = frames.to_string();
@@ -43,31 +44,28 @@ fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> serde_
         );
     }
     let metrics = metrics(&out);
-    let published = number(&metrics, "frames_published");
-    assert!(published > 0.0);
-    assert_eq!(number(&metrics, "frames_processed"), published, "{metrics}");
-    assert_eq!(number(&metrics, "frames_dropped"), 0.0, "{metrics}");
+    let published = metrics.frames_published;
+    assert!(published > 0);
+    assert_eq!(metrics.frames_processed, published, "{metrics:?}");
+    assert_eq!(metrics.frames_dropped, 0, "{metrics:?}");
     let trajectory = read_tum(&out.join("trajectory.tum"));
-    assert_eq!(trajectory.len() as f64, published);
+    assert_eq!(trajectory.len() as u64, published);
     assert_eq!(
-        read_tum(&out.join("ground_truth.tum")).len() as f64,
+        read_tum(&out.join("ground_truth.tum")).len() as u64,
         published
     );
     assert!(
-        trajectory.windows(2).all(|w| w[1][0] > w[0][0]),
+        trajectory.windows(2).all(|w| w[1].stamp_ns > w[0].stamp_ns),
         "stamps must increase"
     );
-    let ate = number(&metrics, "ate_rmse_m");
+    let ate = metrics.ate_rmse_m.expect("metrics.json has ate_rmse_m");
     assert!(
         ate <= ate_limit,
-        "{world}: ATE RMSE {ate} m > {ate_limit} m: {metrics}"
+        "{world}: ATE RMSE {ate} m > {ate_limit} m: {metrics:?}"
     );
     let csv = std::fs::read_to_string(out.join("map_corners.csv")).unwrap();
     assert!(csv.starts_with("x,y,heading,angle,"));
-    assert_eq!(
-        csv.lines().count() - 1,
-        number(&metrics, "map_corners") as usize
-    );
+    assert_eq!(csv.lines().count() - 1, metrics.map_corners);
     let svg = std::fs::read_to_string(out.join("map.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.trim_end().ends_with("</svg>"));
     assert!(
@@ -86,9 +84,20 @@ fn office_loop_is_mapped_within_target() {
     // The filter must beat the scan-matching motion integrated alone. (On an open stretch
     // it need not: the motion estimate drifts by millimetres there, and the particles'
     // noise costs about as much as the map gives back.)
-    let dead_reckoning = number(&metrics, "dead_reckoning_ate_rmse_m");
-    assert!(number(&metrics, "ate_rmse_m") < dead_reckoning, "{metrics}");
-    assert!(number(&metrics, "map_corner_rmse_m") < 0.08, "{metrics}");
+    let dead_reckoning = metrics
+        .dead_reckoning_ate_rmse_m
+        .expect("metrics.json has dead_reckoning_ate_rmse_m");
+    assert!(
+        metrics.ate_rmse_m.expect("metrics.json has ate_rmse_m") < dead_reckoning,
+        "{metrics:?}"
+    );
+    assert!(
+        metrics
+            .map_corner_rmse_m
+            .expect("metrics.json has map_corner_rmse_m")
+            < 0.08,
+        "{metrics:?}"
+    );
 }
 
 #[test]
@@ -149,39 +158,22 @@ fn two_pipelines_at_once_do_not_cross_and_repeat_exactly() {
     }
 }
 
+/// The office loop in real time, so that the run lasts long enough to be disturbed halfway,
+/// once `poses` poses are recorded; its console piped.
+fn office_under_way(domain: &str, out: &Path, poses: usize) -> Child {
+    let args = ["--world", "office", "--frames", "2000", "--rate", "40"];
+    let mut child = spawn_launch(domain, out, &args, Stdio::piped());
+    wait_for_poses(&mut child, out, poses, Duration::from_secs(60));
+    child
+}
+
 #[test]
 fn sigterm_halfway_leaves_a_valid_trajectory() {
     let domain = domain("sigterm");
     let out = scratch("sigterm");
-    let mut child = Command::new(bin("slam-launch"))
-        .args(["--quiet", "--domain", &domain, "--out"])
-        .arg(&out)
-        // Real time, so the run lasts long enough to be stopped halfway.
-        .args(["--world", "office", "--frames", "2000", "--rate", "40"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("slam-launch");
-    // The online estimate grows as the run goes; trajectory.tum is written at its end.
-    let online = out.join("trajectory_online.tum");
+    let child = office_under_way(&domain, &out, 40);
+    send(pid_of(&child), Signal::SIGTERM);
     let trajectory = out.join("trajectory.tum");
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while std::fs::read_to_string(&online)
-        .map(|t| t.lines().count())
-        .unwrap_or(0)
-        < 40
-    {
-        assert!(Instant::now() < deadline, "no poses after 60 s");
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "slam-launch ended early"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    // SAFETY: kill(2) on our own child.
-    unsafe {
-        libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
-    }
     let output = child.wait_with_output().unwrap();
     assert_eq!(
         output.status.code(),
@@ -238,8 +230,11 @@ fn a_world_file_works_like_a_builtin_world() {
     );
     assert_success(&output);
     let metrics = metrics(&out);
-    assert_eq!(number(&metrics, "frames_processed"), 400.0);
-    assert!(number(&metrics, "ate_rmse_m") < 0.3, "{metrics}");
+    assert_eq!(metrics.frames_processed, 400);
+    assert!(
+        metrics.ate_rmse_m.expect("metrics.json has ate_rmse_m") < 0.3,
+        "{metrics:?}"
+    );
 }
 
 #[test]
@@ -268,36 +263,9 @@ fn a_bad_world_file_is_refused_by_name() {
 fn a_killed_stage_is_named_and_stops_the_run() {
     let domain = domain("sigkill");
     let out = scratch("sigkill");
-    let child = Command::new(bin("slam-launch"))
-        .args(["--quiet", "--domain", &domain, "--out"])
-        .arg(&out)
-        .args(["--world", "office", "--frames", "2000", "--rate", "40"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("slam-launch");
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while std::fs::read_to_string(out.join("trajectory_online.tum"))
-        .map(|t| t.lines().count())
-        .unwrap_or(0)
-        < 20
-    {
-        assert!(Instant::now() < deadline, "no poses after 60 s");
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    let pgrep = Command::new("pgrep")
-        .args(["-f", &format!("slam-proc --domain {domain} ")])
-        .output()
-        .expect("pgrep");
-    let pid: i32 = String::from_utf8_lossy(&pgrep.stdout)
-        .lines()
-        .next()
-        .and_then(|l| l.trim().parse().ok())
-        .expect("slam-proc's pid");
-    // SAFETY: kill(2) on a process of this test's own pipeline.
-    unsafe {
-        libc::kill(pid, libc::SIGKILL);
-    }
+    let child = office_under_way(&domain, &out, 20);
+    let slam_proc = child_named(pid_of(&child), "slam-proc").expect("slam-proc runs");
+    send(slam_proc, Signal::SIGKILL);
     let output = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(1), "{stderr}");

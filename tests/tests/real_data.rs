@@ -8,28 +8,22 @@ fn seed_hall_replay_maps_the_hall_without_duplicate_corners() {
     let log = data_dir().join("seed-hall/scans.csv");
     let domain = domain("seed-hall");
     let out = scratch("seed-hall");
-    let output = launch(
+    let output = launch_replay(
         &domain,
         &out,
-        &[
-            "--replay",
-            log.to_str().unwrap(),
-            "--format",
-            "seed-csv",
-            "--particles",
-            "50",
-        ],
+        &log,
+        &["--format", "seed-csv", "--particles", "50"],
     );
     assert_success(&output);
     let metrics = metrics(&out);
-    assert_eq!(number(&metrics, "frames_published"), 400.0);
-    assert_eq!(number(&metrics, "frames_processed"), 400.0);
+    assert_eq!(metrics.frames_published, 400);
+    assert_eq!(metrics.frames_processed, 400);
     let corners = read_map_corners(&out);
     assert!(corners.len() >= 20, "{} map corners", corners.len());
     let duplicates = duplicate_corners(&corners, 0.5, 0.5);
     assert!(duplicates.is_empty(), "duplicated corners: {duplicates:?}");
     // About 50 m through the hall, about 0.11 m a scan.
-    let path = number(&metrics, "path_length_m");
+    let path = metrics.path_length_m;
     assert!((30.0..70.0).contains(&path), "path {path} m");
     assert!(shm_leftovers(&domain).is_empty());
 }
@@ -40,41 +34,20 @@ fn emulated_hokuyo_gives_the_same_map_as_the_replayed_log() {
     let (mut emulator, addr) = start_hokuyo_emulator(&log);
 
     let live_out = scratch("hokuyo-live");
-    let config = live_out.join("hokuyo.toml");
-    std::fs::write(&config, "[hokuyo]\nframes = 400\n").unwrap();
     let live_domain = domain("hokuyo-live");
-    let output = launch(
-        &live_domain,
-        &live_out,
-        &[
-            "--source",
-            "hokuyo",
-            "--addr",
-            &addr,
-            "--config",
-            config.to_str().unwrap(),
-            "--particles",
-            "50",
-        ],
-    );
+    let output = launch_hokuyo(&live_domain, &live_out, &addr, 400, &["--particles", "50"]);
     let _ = emulator.kill();
     let _ = emulator.wait();
     assert_success(&output);
-    assert_eq!(number(&metrics(&live_out), "frames_processed"), 400.0);
+    assert_eq!(metrics(&live_out).frames_processed, 400);
 
     let replay_out = scratch("hokuyo-replay");
     let replay_domain = domain("hokuyo-replay");
-    let output = launch(
+    let output = launch_replay(
         &replay_domain,
         &replay_out,
-        &[
-            "--replay",
-            log.to_str().unwrap(),
-            "--format",
-            "seed-csv",
-            "--particles",
-            "50",
-        ],
+        &log,
+        &["--format", "seed-csv", "--particles", "50"],
     );
     assert_success(&output);
 

@@ -15,11 +15,11 @@ const FRAMES: &str = "400";
 /// loop's jump spread back on its own instead of all solved together, 0.066 m.
 const ACES_MAX_TRANSLATION_M: f64 = 0.060;
 
-fn number_at(value: &serde_json::Value, key: &str) -> f64 {
-    value
-        .get(key)
-        .and_then(serde_json::Value::as_f64)
-        .unwrap_or_else(|| panic!("no number '{key}' in {value}"))
+/// The mean of one error of a score that used some relations.
+fn mean(stats: Option<slam_eval::ErrorStats>) -> f64 {
+    stats
+        .expect("a score over some relations has statistics")
+        .mean
 }
 
 #[test]
@@ -29,12 +29,11 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
     let domain = domain("mit-csail-rpe");
     let out = scratch("mit-csail-rpe");
     // No --relations: slam-launch finds mit-csail.relations beside the log.
-    let output = launch(
+    let output = launch_replay(
         &domain,
         &out,
+        &log,
         &[
-            "--replay",
-            log.to_str().unwrap(),
             "--format",
             "carmen",
             "--frames",
@@ -47,28 +46,29 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
     );
     assert_success(&output);
     let metrics = metrics(&out);
-    assert_eq!(number(&metrics, "frames_processed"), 400.0);
+    assert_eq!(metrics.frames_processed, 400);
 
-    let rpe = &metrics["relative_pose_error"];
-    assert_eq!(rpe["relations_file"], relations.to_str().unwrap(), "{rpe}");
-    let estimate = &rpe["trajectory"];
-    let total = number_at(estimate, "relations");
-    let used = number_at(estimate, "used");
-    assert_eq!(total, 1172.0, "{estimate}");
-    // 400 of 1988 scans hold about a fifth of the relations (216 today); the rest have
-    // no poses and are counted, not scored.
-    assert!((150.0..=300.0).contains(&used), "{estimate}");
-    assert_eq!(used + number_at(estimate, "unmatched"), total);
-    let translation = number_at(&estimate["translation_m"], "mean");
+    let rpe = metrics
+        .relative_pose_error
+        .expect("metrics.json has relative_pose_error");
+    assert_eq!(rpe.relations_file, relations, "{rpe:?}");
+    let estimate = rpe.trajectory.expect("trajectory.tum is scored");
+    assert_eq!(estimate.relations, 1172, "{estimate:?}");
+    // 400 of 1988 scans hold about a fifth of the relations; the rest have no poses and are
+    // counted, not scored.
+    assert!((150..=300).contains(&estimate.used), "{estimate:?}");
+    assert_eq!(estimate.used + estimate.unmatched, estimate.relations);
+    let translation = mean(estimate.translation_m);
     assert!(
         translation > 0.0 && translation <= MIT_CSAIL_400_MAX_TRANSLATION_M,
-        "mean translational error {translation} m > {MIT_CSAIL_400_MAX_TRANSLATION_M} m: {estimate}"
+        "mean translational error {translation} m > {MIT_CSAIL_400_MAX_TRANSLATION_M} m: {estimate:?}"
     );
-    assert!(number_at(&estimate["rotation_deg"], "mean") > 0.0);
+    assert!(mean(estimate.rotation_deg) > 0.0);
     // The front end's own estimate is scored over the same relations.
-    assert_eq!(number_at(&rpe["dead_reckoning"], "used"), used);
+    let used = |score: Option<slam_eval::ScoreSummary>| score.map(|s| s.used);
+    assert_eq!(used(rpe.dead_reckoning), Some(estimate.used));
     // So is the online estimate, each scan's weighted mean.
-    assert_eq!(number_at(&rpe["trajectory_online"], "used"), used);
+    assert_eq!(used(rpe.trajectory_online), Some(estimate.used));
 
     let stdout = String::from_utf8_lossy(&output.stdout);
     let expected = format!("| RPE {translation:.3} +- ");
@@ -88,18 +88,7 @@ fn aces_closes_its_overlapping_loops_together() {
     let log = data_dir().join("carmen/aces.clf");
     let domain = domain("aces-rpe");
     let out = scratch("aces-rpe");
-    let output = launch(
-        &domain,
-        &out,
-        &[
-            "--replay",
-            log.to_str().unwrap(),
-            "--seed",
-            "1",
-            "--particles",
-            "100",
-        ],
-    );
+    let output = launch_replay(&domain, &out, &log, &["--seed", "1", "--particles", "100"]);
     assert_success(&output);
     // slam-proc's summary block, on the console's stderr.
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -110,12 +99,15 @@ fn aces_closes_its_overlapping_loops_together() {
         .and_then(|count| count.parse::<u32>().ok())
         .unwrap_or_else(|| panic!("no count of loops closed in {stderr}"));
     assert!(closed >= 2, "{closed} loops closed: {stderr}");
-    let estimate = &metrics(&out)["relative_pose_error"]["trajectory"];
-    assert_eq!(number_at(estimate, "used"), 1279.0, "{estimate}");
-    let translation = number_at(&estimate["translation_m"], "mean");
+    let estimate = metrics(&out)
+        .relative_pose_error
+        .and_then(|rpe| rpe.trajectory)
+        .expect("metrics.json scores trajectory.tum");
+    assert_eq!(estimate.used, 1279, "{estimate:?}");
+    let translation = mean(estimate.translation_m);
     assert!(
         translation > 0.0 && translation <= ACES_MAX_TRANSLATION_M,
-        "mean translational error {translation} m > {ACES_MAX_TRANSLATION_M} m: {estimate}"
+        "mean translational error {translation} m > {ACES_MAX_TRANSLATION_M} m: {estimate:?}"
     );
     assert!(shm_leftovers(&domain).is_empty());
 }
@@ -127,15 +119,11 @@ fn a_bad_relations_file_stops_the_run_before_it_starts() {
     let bad = dir.join("bad.relations");
     std::fs::write(&bad, "1.0 2.0 1 0 0 0 0 0\n1.0 2.0 1 0 0 0 0\n").unwrap();
     let out = dir.join("run");
-    let output = launch(
+    let output = launch_replay(
         &domain("bad-relations"),
         &out,
-        &[
-            "--replay",
-            log.to_str().unwrap(),
-            "--relations",
-            bad.to_str().unwrap(),
-        ],
+        &log,
+        &["--relations", bad.to_str().unwrap()],
     );
     assert!(!output.status.success());
     let stderr = String::from_utf8_lossy(&output.stderr);

@@ -45,10 +45,11 @@ fn record_and_replay(
     assert_success(&output);
     let recording = recorded.join("run.mcap");
     let replayed = scratch(&format!("{tag}-replayed"));
-    let output = launch(
+    let output = launch_replay(
         &domain(&format!("{tag}-rep")),
         &replayed,
-        &[&["--replay", recording.to_str().unwrap()], replay_args].concat(),
+        &recording,
+        replay_args,
     );
     assert_success(&output);
     let console = String::from_utf8_lossy(&output.stderr);
@@ -67,8 +68,8 @@ fn an_office_run_replayed_from_its_recording_gives_the_same_trajectory_bit_for_b
     );
     assert_same_results(&recorded, &replayed);
     assert_eq!(
-        number(&metrics(&replayed), "frames_processed"),
-        number(&metrics(&recorded), "frames_processed")
+        metrics(&replayed).frames_processed,
+        metrics(&recorded).frames_processed
     );
     for dir in [recorded, replayed] {
         let _ = std::fs::remove_dir_all(dir);
@@ -181,8 +182,8 @@ fn check_recording_of(out: &Path, odometry: bool) {
         assert_eq!(read.message_encoding, "json", "{topic}");
     }
     let metrics = metrics(out);
-    let published = number(&metrics, "frames_published") as u64;
-    let processed = number(&metrics, "frames_processed") as u64;
+    let published = metrics.frames_published;
+    let processed = metrics.frames_processed;
     assert_eq!(topics["/lidar/scan"].messages, published);
     assert_eq!(topics["/perception/features"].messages, published);
     assert_eq!(topics["/slam/pose"].messages, processed);
@@ -201,41 +202,24 @@ fn check_recording_of(out: &Path, odometry: bool) {
 fn recordings_of_a_real_log_and_a_live_hokuyo_read_back_with_the_runs_counts() {
     let log = data_dir().join("seed-hall/scans.csv");
     let replay_out = scratch("record-seed-hall");
-    let output = launch(
+    let output = launch_replay(
         &domain("record-seed-hall"),
         &replay_out,
-        &[
-            "--replay",
-            log.to_str().unwrap(),
-            "--format",
-            "seed-csv",
-            "--particles",
-            "30",
-            "--record",
-        ],
+        &log,
+        &["--format", "seed-csv", "--particles", "30", "--record"],
     );
     assert_success(&output);
-    assert_eq!(number(&metrics(&replay_out), "frames_published"), 400.0);
+    assert_eq!(metrics(&replay_out).frames_published, 400);
     check_recording_of(&replay_out, false);
 
     let (mut emulator, addr) = start_hokuyo_emulator(&log);
     let live_out = scratch("record-hokuyo");
-    let config = live_out.join("hokuyo.toml");
-    std::fs::write(&config, "[hokuyo]\nframes = 400\n").expect("config");
-    let output = launch(
+    let output = launch_hokuyo(
         &domain("record-hokuyo"),
         &live_out,
-        &[
-            "--source",
-            "hokuyo",
-            "--addr",
-            &addr,
-            "--config",
-            config.to_str().unwrap(),
-            "--particles",
-            "30",
-            "--record",
-        ],
+        &addr,
+        400,
+        &["--particles", "30", "--record"],
     );
     let _ = emulator.kill();
     let _ = emulator.wait();
@@ -245,10 +229,11 @@ fn recordings_of_a_real_log_and_a_live_hokuyo_read_back_with_the_runs_counts() {
     // The live run replays from its recording offline, with the same results.
     let offline = scratch("record-hokuyo-offline");
     let recording = live_out.join("run.mcap");
-    let output = launch(
+    let output = launch_replay(
         &domain("record-hokuyo-offline"),
         &offline,
-        &["--replay", recording.to_str().unwrap(), "--particles", "30"],
+        &recording,
+        &["--particles", "30"],
     );
     assert_success(&output);
     assert_same_results(&live_out, &offline);
@@ -261,10 +246,10 @@ fn recordings_of_a_real_log_and_a_live_hokuyo_read_back_with_the_runs_counts() {
 fn a_recorder_killed_mid_run_leaves_a_readable_file_and_the_run_finishes() {
     let domain = domain("record-killed");
     let out = scratch("record-killed");
-    let launcher = Command::new(bin("slam-launch"))
-        .args(["--quiet", "--domain", &domain, "--out"])
-        .arg(&out)
-        .args([
+    let launcher = spawn_launch(
+        &domain,
+        &out,
+        &[
             "--world",
             "office",
             "--rate",
@@ -272,12 +257,10 @@ fn a_recorder_killed_mid_run_leaves_a_readable_file_and_the_run_finishes() {
             "--particles",
             "30",
             "--record",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start slam-launch");
-    let launcher_pid = libc::pid_t::try_from(launcher.id()).expect("pid");
+        ],
+        Stdio::piped(),
+    );
+    let launcher_pid = pid_of(&launcher);
 
     // Mid-run: a few chunks of the recording are on disk (the whole loop makes tens of MB).
     let recording = out.join("run.mcap");
@@ -286,9 +269,7 @@ fn a_recorder_killed_mid_run_leaves_a_readable_file_and_the_run_finishes() {
     while recorder.is_none() {
         let written = std::fs::metadata(&recording).map_or(0, |m| m.len());
         if written > 3 << 20 {
-            recorder = children_of(launcher_pid)
-                .into_iter()
-                .find(|(_, name)| name == "slam-record");
+            recorder = child_named(launcher_pid, "slam-record");
         }
         assert!(
             Instant::now() < deadline,
@@ -296,9 +277,7 @@ fn a_recorder_killed_mid_run_leaves_a_readable_file_and_the_run_finishes() {
         );
         std::thread::sleep(Duration::from_millis(20));
     }
-    let (pid, _) = recorder.expect("slam-record");
-    // SAFETY: kill(2) on a stage of the run this test started.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGKILL) }, 0);
+    send(recorder.expect("slam-record"), Signal::SIGKILL);
 
     let output = launcher.wait_with_output().expect("slam-launch ends");
     let console = String::from_utf8_lossy(&output.stderr);
@@ -310,11 +289,8 @@ fn a_recorder_killed_mid_run_leaves_a_readable_file_and_the_run_finishes() {
     assert!(console.contains("the run goes on without it"), "{console}");
     // The run's results are all there: every scan was processed.
     let run = metrics(&out);
-    assert_eq!(
-        number(&run, "frames_processed"),
-        number(&run, "frames_published")
-    );
-    assert!(number(&run, "frames_processed") > 3000.0);
+    assert_eq!(run.frames_processed, run.frames_published);
+    assert!(run.frames_processed > 3000);
     assert!(out.join("trajectory.tum").is_file());
 
     // The file reads, in order, up to its last complete chunk.
@@ -340,18 +316,16 @@ fn a_recorder_killed_mid_run_leaves_a_readable_file_and_the_run_finishes() {
 
     // And it replays: what it holds, with the cut reported.
     let replayed = scratch("record-killed-replayed");
-    let output = launch(
+    let output = launch_replay(
         &tests::domain("record-killed-rep"),
         &replayed,
-        &["--replay", recording.to_str().unwrap(), "--particles", "30"],
+        &recording,
+        &["--particles", "30"],
     );
     assert_success(&output);
     let console = String::from_utf8_lossy(&output.stderr);
     assert!(console.contains("cut short:"), "{console}");
-    assert_eq!(
-        number(&metrics(&replayed), "frames_processed"),
-        scans as f64
-    );
+    assert_eq!(metrics(&replayed).frames_processed, scans);
     for dir in [out, replayed] {
         let _ = std::fs::remove_dir_all(dir);
     }

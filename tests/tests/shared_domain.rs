@@ -1,7 +1,7 @@
 //! A domain belongs to one pipeline: a second `slam-launch` given the domain of a running
 //! one is refused before it starts anything, and the running one goes on untouched.
 
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
 use tests::*;
@@ -21,15 +21,12 @@ fn a_domain_with_live_nodes_is_refused_by_name() {
     let domain = domain("shared");
     let first_out = scratch("shared-first");
     // In real time the office loop takes about 100 s: it is running while the test goes on.
-    let child = Command::new(bin("slam-launch"))
-        .args(["--quiet", "--domain", &domain, "--out"])
-        .arg(&first_out)
-        .args(["--world", "office", "--rate", "40"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start slam-launch");
-    let mut first = Running(child);
+    let mut first = Running(spawn_launch(
+        &domain,
+        &first_out,
+        &["--world", "office", "--rate", "40"],
+        Stdio::null(),
+    ));
 
     // Wait until the first pipeline's stages are up in the domain.
     let ipc = ipc_types::Domain::new(&domain).expect("domain");
@@ -64,19 +61,8 @@ fn a_domain_with_live_nodes_is_refused_by_name() {
     assert!(ipc.alive_nodes() >= 3);
 
     // Ctrl-C ends it as an interrupted run.
-    // SAFETY: kill(2) with a pid we spawned and a valid signal number.
-    let pid = i32::try_from(first.0.id()).expect("pid");
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
-    let deadline = Instant::now() + Duration::from_secs(60);
-    let status = loop {
-        if let Some(status) = first.0.try_wait().expect("try_wait") {
-            break status;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "the first pipeline ignored Ctrl-C"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    send(pid_of(&first.0), Signal::SIGINT);
+    let status = wait_within(&mut first.0, Duration::from_secs(60))
+        .expect("the first pipeline ends on Ctrl-C");
     assert_eq!(status.code(), Some(130));
 }

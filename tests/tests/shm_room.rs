@@ -7,7 +7,6 @@
 //! is still tested with an injected free space (`SLAM_LAUNCH_SHM_FREE`) and the report with
 //! a SIGBUS sent by hand.
 
-use std::io::{BufRead, BufReader};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -61,10 +60,7 @@ fn a_dev_shm_too_small_is_refused_before_starting() {
     let out = scratch("shm-injected");
     let name = domain("shm-injected");
     let output = output_within(
-        Command::new(bin("slam-launch"))
-            .args(["--quiet", "--domain", &name, "--out"])
-            .arg(&out)
-            .args(["--world", "office", "--frames", "20"])
+        launch_command(&name, &out, &["--world", "office", "--frames", "20"])
             .env("SLAM_LAUNCH_SHM_FREE", (1u64 << 20).to_string()),
         LIMIT,
     )
@@ -103,29 +99,17 @@ fn a_stage_dying_of_sigbus_in_a_full_dev_shm_is_explained() {
 #[test]
 fn a_stage_killed_by_sigbus_is_reported_with_the_free_space() {
     let out = scratch("shm-signal");
-    let mut launcher = Command::new(bin("slam-launch"))
-        .args(["--quiet", "--domain", &domain("shm-signal"), "--out"])
-        .arg(&out)
-        .args(["--world", "office"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start slam-launch");
-    let stderr = launcher.stderr.take().expect("stderr");
-    let console = std::thread::spawn(move || {
-        BufReader::new(stderr)
-            .lines()
-            .map_while(Result::ok)
-            .collect::<Vec<_>>()
-            .join("\n")
-    });
-    let launcher_pid = libc::pid_t::try_from(launcher.id()).expect("pid");
+    let mut launcher = spawn_launch(
+        &domain("shm-signal"),
+        &out,
+        &["--world", "office"],
+        Stdio::piped(),
+    );
+    let console = read_console(&mut launcher);
+    let launcher_pid = pid_of(&launcher);
     let deadline = Instant::now() + LIMIT;
     let slam_proc = loop {
-        if let Some(&(pid, _)) = children_of(launcher_pid)
-            .iter()
-            .find(|(_, name)| name == "slam-proc")
-        {
+        if let Some(pid) = child_named(launcher_pid, "slam-proc") {
             break pid;
         }
         assert!(
@@ -140,10 +124,9 @@ fn a_stage_killed_by_sigbus_is_reported_with_the_free_space() {
     // that is not a fault of its guard page restores the default action and returns, so a
     // fault repeats and kills; a SIGBUS sent by kill(2) does not repeat by itself, and two
     // sent before the first is handled arrive as one.
-    // SAFETY: kill(2) on a process of this test's run.
-    assert_eq!(unsafe { libc::kill(slam_proc, libc::SIGBUS) }, 0);
-    // SAFETY: as above; once slam-proc is reaped the call fails with ESRCH and the loop ends.
-    while unsafe { libc::kill(slam_proc, libc::SIGBUS) } == 0
+    send(slam_proc, Signal::SIGBUS);
+    // Once slam-proc is reaped the call fails with ESRCH and the loop ends.
+    while nix::sys::signal::kill(slam_proc, Signal::SIGBUS).is_ok()
         && launcher.try_wait().expect("try_wait").is_none()
     {
         assert!(Instant::now() < deadline, "slam-proc outlived SIGBUS");

@@ -2,9 +2,8 @@
 //! warning time, and after the limit the run fails with that reason; the stages it holds
 //! up are not named, and map-sink still writes the results.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Stdio;
+use std::time::Duration;
 
 use tests::*;
 
@@ -19,80 +18,32 @@ fn freeze(stage: &str) -> (Option<i32>, String) {
     let out = scratch(&format!("stall-{stage}"));
     // Lockstep: the office loop's 3958 scans take several seconds, one frozen stage holds
     // every other one up. Quiet: a stall is reported all the same.
-    let mut launcher = Command::new(bin("slam-launch"))
-        .args(["--quiet", "--domain", &domain, "--out"])
-        .arg(&out)
-        .args([
+    let mut launcher = spawn_launch(
+        &domain,
+        &out,
+        &[
             "--world",
             "office",
             "--stall-warning",
             "2",
             "--stall-limit",
             "6",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start slam-launch");
-    let stderr = launcher.stderr.take().expect("stderr");
-    let console = std::thread::spawn(move || {
-        BufReader::new(stderr)
-            .lines()
-            .map_while(Result::ok)
-            .collect::<Vec<_>>()
-            .join("\n")
-    });
-    let launcher_pid = libc::pid_t::try_from(launcher.id()).expect("pid");
-    let stop = |launcher: &mut std::process::Child, why: &str| -> ! {
-        // SAFETY: kill(2) on our own child; SIGTERM so it stops its stages too.
-        unsafe {
-            libc::kill(launcher_pid, libc::SIGTERM);
-        }
-        let _ = launcher.wait();
-        panic!("{why}");
+        ],
+        Stdio::piped(),
+    );
+    let console = read_console(&mut launcher);
+    wait_for_poses(&mut launcher, &out, 100, LIMIT);
+    let Some(pid) = child_named(pid_of(&launcher), stage) else {
+        stop(&mut launcher);
+        panic!("no {stage} among slam-launch's children");
     };
+    send(pid, Signal::SIGSTOP);
 
-    // Under way: some poses recorded (map-sink flushes the online path as it grows).
-    let online = out.join("trajectory_online.tum");
-    let deadline = Instant::now() + LIMIT;
-    while lines_in(&online) < 100 {
-        if let Some(status) = launcher.try_wait().expect("try_wait") {
-            let console = console.join().unwrap_or_default();
-            panic!("slam-launch ended before the test froze {stage}: {status}\n{console}");
-        }
-        if Instant::now() > deadline {
-            stop(&mut launcher, &format!("no poses recorded in {LIMIT:?}"));
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    let Some(&(pid, _)) = children_of(launcher_pid)
-        .iter()
-        .find(|(_, name)| name == stage)
-    else {
-        stop(
-            &mut launcher,
-            &format!("no {stage} among slam-launch's children"),
-        );
-    };
-    // SAFETY: kill(2) on a process of this test's run.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
-
-    let deadline = Instant::now() + LIMIT;
-    let status = loop {
-        if let Some(status) = launcher.try_wait().expect("try_wait") {
-            break status;
-        }
-        if Instant::now() > deadline {
-            // SAFETY: kill(2) on a process of this test's run, so it can be stopped.
-            unsafe {
-                libc::kill(pid, libc::SIGCONT);
-            }
-            stop(
-                &mut launcher,
-                &format!("slam-launch still running {LIMIT:?} after {stage} froze"),
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
+    let Some(status) = wait_within(&mut launcher, LIMIT) else {
+        // Woken, so it can be stopped.
+        send(pid, Signal::SIGCONT);
+        stop(&mut launcher);
+        panic!("slam-launch still running {LIMIT:?} after {stage} froze");
     };
     let console = console.join().expect("console");
     // The frozen stage was woken and stopped with the others: map-sink wrote what it had
