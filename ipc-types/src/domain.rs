@@ -68,11 +68,11 @@ pub enum NodeError {
         path: std::path::PathBuf,
         source: std::io::Error,
     },
-    #[error("cannot create node '{name}' in domain '{domain}': {cause:?}")]
+    #[error("cannot create node '{name}' in domain '{domain}'")]
     Create {
         name: String,
         domain: String,
-        cause: iceoryx2::node::NodeCreationFailure,
+        source: iceoryx2::node::NodeCreationFailure,
     },
 }
 
@@ -186,10 +186,10 @@ impl Domain {
             .config(&self.config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<ipc::Service>()
-            .map_err(|cause| NodeError::Create {
+            .map_err(|source| NodeError::Create {
                 name: name.to_owned(),
                 domain: self.name.clone(),
-                cause,
+                source,
             })?;
         self.restrict_shm_files()?;
         Ok(node)

@@ -2,6 +2,7 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 /// Length of the fixed frame-id buffer, NUL padded.
 pub const FRAME_ID_LEN: usize = 32;
@@ -13,7 +14,7 @@ pub const FLAG_END_OF_STREAM: u32 = 1;
 
 /// Sequence, time and frame of a message, after ROS `std_msgs/Header`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[type_name("slam::Header::v1")]
 pub struct Header {
     /// Sequence number of the source scan, counting from 0 without gaps at the source.

@@ -37,6 +37,11 @@ const _: () = {
     assert!(size_of::<WorldCorners>() == 72 + 32 * crate::MAX_WORLD_CORNERS);
     assert!(size_of::<MapSnapshot>() == 72 + 168 * crate::MAX_MAP_CORNERS);
     assert!(size_of::<StampedPose>() == 32);
-    assert!(offset_of!(PathChunk, poses) == 88);
+    // A bounded array is its count, 4 reserved bytes, then its items: the count at the
+    // offset below, the items 8 bytes after it.
+    assert!(size_of::<BoundedArray<StampedPose, 1>>() == 8 + 32);
+    assert!(offset_of!(WorldCorners, corners) == 64);
+    assert!(offset_of!(MapSnapshot, corners) == 64);
+    assert!(offset_of!(PathChunk, poses) == 80);
     assert!(size_of::<PathChunk>() == 88 + 32 * crate::MAX_PATH_CHUNK_POSES);
 };

@@ -3,23 +3,30 @@
 //! That lets a publisher loan uninitialised shared memory and zero it in place instead of
 //! building a multi-kilobyte message on the stack and copying it in, and lets tests and
 //! recorders make a message on the heap with [`Zeroable::boxed_zeroed`].
+//!
+//! Every message derives [`zerocopy::FromZeros`], so the compiler checks that claim field by
+//! field (no references, `bool`, enums or `NonZero`); [`Zeroable`] only adds the two ways of
+//! getting a zeroed message the transport and the recorders need.
 
-/// A type for which all-zero bytes are a valid value.
-///
-/// # Safety
-/// Implement only for `#[repr(C)]` types whose fields are integers, floats, arrays of them or
-/// other `Zeroable` types: no references, no `bool`, no enums, no `NonZero`.
-pub unsafe trait Zeroable: Sized {
+use std::mem::MaybeUninit;
+
+use zerocopy::FromZeros;
+
+/// A type for which all-zero bytes are a valid value, as its derived [`FromZeros`] proves.
+pub trait Zeroable: FromZeros + Sized {
     /// A zeroed value on the heap, without passing a large value through the stack.
     fn boxed_zeroed() -> Box<Self> {
-        // SAFETY: the trait's contract says all-zero bytes are a valid `Self`.
-        unsafe { Box::<Self>::new_zeroed().assume_init() }
+        Self::new_box_zeroed()
+            .unwrap_or_else(|_| std::alloc::handle_alloc_error(std::alloc::Layout::new::<Self>()))
     }
 
     /// Zeroes `slot` in place and returns it as initialised.
-    fn zero_in_place(slot: &mut std::mem::MaybeUninit<Self>) -> &mut Self {
-        // SAFETY: writing zero bytes over the whole slot makes it a valid `Self` by the
-        // trait's contract.
+    fn zero_in_place(slot: &mut MaybeUninit<Self>) -> &mut Self {
+        // SAFETY: `Self: FromZeros` (derived, so checked by the compiler) means all-zero
+        // bytes are a valid `Self`, and writing them over the whole slot initialises it.
+        // zerocopy can zero only a value that is already initialised (`FromZeros::zero`), and
+        // a loaned shared-memory slot is not: building a zeroed value and moving it in would
+        // put a multi-kilobyte message on the stack, which is what zeroing in place avoids.
         unsafe {
             std::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
             slot.assume_init_mut()
@@ -27,15 +34,4 @@ pub unsafe trait Zeroable: Sized {
     }
 }
 
-/// Implements [`Zeroable`] for message types after checking, at compile time, that they
-/// contain nothing but numbers.
-macro_rules! impl_zeroable {
-    ($($t:ty),* $(,)?) => {
-        $(
-            // SAFETY: every field of these `#[repr(C)]` types is a number, an array of
-            // numbers or another `Zeroable` message type (see each type's definition).
-            unsafe impl $crate::zeroed::Zeroable for $t {}
-        )*
-    };
-}
-pub(crate) use impl_zeroable;
+impl<T: FromZeros> Zeroable for T {}

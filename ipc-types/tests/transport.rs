@@ -33,19 +33,19 @@ fn publish_scans(outlet: &Outlet<LaserScan>, count: u64) {
     outlet.publish_end_of_stream(count, 0).unwrap();
 }
 
-/// Receives scans until end of stream; returns their sequence numbers.
-fn drain_until_end(inlet: &Inlet<LaserScan>) -> Vec<u64> {
+/// Receives messages until end of stream; returns their sequence numbers.
+fn drain_until_end<T: Message>(inlet: &Inlet<T>) -> Vec<u64> {
     let mut seqs = Vec::new();
     let deadline = Instant::now() + Duration::from_secs(30);
     loop {
         assert!(Instant::now() < deadline, "no end of stream after {seqs:?}");
         wait_any(&[inlet], Duration::from_millis(50)).unwrap();
         while let Some(sample) = inlet.receive().unwrap() {
-            if sample.header.is_end_of_stream() {
+            let header = Message::header(sample.payload());
+            if header.is_end_of_stream() {
                 return seqs;
             }
-            assert_eq!(sample.ranges().len(), 3);
-            seqs.push(sample.header.seq);
+            seqs.push(header.seq);
         }
     }
 }
@@ -175,6 +175,36 @@ fn history_reaches_a_late_subscriber() {
     outlet.update_connections().unwrap();
     let sample = inlet.receive().unwrap().expect("history sample");
     assert_eq!(sample.corners().len(), 1);
+}
+
+#[test]
+fn each_end_waits_for_the_other_and_a_timeout_is_kept() {
+    let domain = unique_domain("discovery");
+    let _cleanup = Cleanup(domain.clone());
+    let node = domain.node("main").unwrap();
+    // The subscriber comes first and waits for the topic to be created.
+    let subscriber_domain = domain.clone();
+    let subscriber = std::thread::spawn(move || {
+        let node = subscriber_domain.node("subscriber").unwrap();
+        let inlet = Inlet::open(&node, topic::POSE).unwrap();
+        drain_until_end(&inlet)
+    });
+    std::thread::sleep(Duration::from_millis(200));
+    let outlet = Outlet::create(&domain, &node, topic::POSE, Delivery::Lossless, 0).unwrap();
+    assert!(
+        outlet
+            .wait_for_subscribers(1, Some(Duration::from_secs(20)))
+            .unwrap()
+    );
+    outlet.publish(|pose| pose.header.seq = 7).unwrap();
+    outlet.publish_end_of_stream(1, 0).unwrap();
+    assert_eq!(subscriber.join().unwrap(), vec![7]);
+
+    // Nobody else subscribes: the wait for a second subscriber ends with its timeout.
+    let start = Instant::now();
+    let timeout = Duration::from_millis(300);
+    assert!(!outlet.wait_for_subscribers(2, Some(timeout)).unwrap());
+    assert!(start.elapsed() >= timeout);
 }
 
 #[test]

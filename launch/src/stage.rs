@@ -234,7 +234,8 @@ impl Stage {
             return;
         }
         if let Ok(pid) = libc::pid_t::try_from(self.child.id()) {
-            // SAFETY: kill(2) with a pid we own and have not reaped yet.
+            // SAFETY: kill(2) with a pid we own and have not reaped yet. std's `Child` sends
+            // only SIGKILL, and no dependency of the workspace wraps kill(2) safely.
             unsafe {
                 libc::kill(pid, signal);
             }
@@ -265,6 +266,8 @@ pub fn die_with_parent(command: &mut Command) {
     let death_signal = libc::c_ulong::try_from(libc::SIGTERM).unwrap_or(15);
     // SAFETY: the closure runs in the child between fork and exec; it calls only prctl(2)
     // and getppid(2), which are async-signal-safe, and makes its errors without allocating.
+    // `pre_exec` itself is unsafe in std (the closure runs in a forked child), so no safe
+    // wrapper of prctl would remove this block.
     unsafe {
         command.pre_exec(move || {
             if libc::prctl(libc::PR_SET_PDEATHSIG, death_signal, 0, 0, 0) != 0 {

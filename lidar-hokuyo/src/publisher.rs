@@ -78,9 +78,9 @@ impl ScanSink for Outlet<LaserScan> {
         Outlet::publish(self, |scan| filled = frame.fill(scan))?;
         // The geometry never asks for more beams than a LaserScan holds; should it, the
         // message went out short and that is reported.
-        filled.map_err(|e| PublishError::Send {
+        filled.map_err(|source| PublishError::Failed {
             service: ipc_types::topic::SCAN.name().to_owned(),
-            cause: e.to_string(),
+            source: source.into(),
         })
     }
 }

@@ -28,7 +28,7 @@ fn stderr_of(output: &std::process::Output) -> String {
 }
 
 fn assert_contiguous(scans: &[Received]) {
-    let seqs: Vec<u64> = scans.iter().map(|s| s.seq).collect();
+    let seqs: Vec<u64> = scans.iter().map(|s| s.header.seq).collect();
     assert_eq!(seqs, (0..scans.len() as u64).collect::<Vec<_>>());
 }
 
@@ -51,7 +51,7 @@ fn streams_the_recording_with_the_sensors_geometry_and_stamps() {
     for (i, scan) in scans.iter().enumerate() {
         assert_ranges(&scan.ranges, &seed_hall()[i], &format!("scan {i}"));
         assert!(scan.intensities.iter().all(|&v| v == 0.0));
-        assert_eq!(scan.frame_id, "laser");
+        assert_eq!(scan.header.frame_id(), "laser");
         // PP: AMIN 0, AMAX 1080, AFRT 540, ARES 1440, DMIN 23, DMAX 60000, SCAN 2400.
         assert_eq!(scan.angle_min, (-540.0 * TAU / 1440.0) as f32);
         assert_eq!(scan.angle_increment, (TAU / 1440.0) as f32);
@@ -70,16 +70,16 @@ fn streams_the_recording_with_the_sensors_geometry_and_stamps() {
         "no wrap"
     );
     for (scan, sent) in scans.iter().zip(sent) {
-        let error_ms = (scan.stamp_ns as f64 - sent.stamp_ns as f64) / 1e6;
+        let error_ms = (scan.header.stamp_ns as f64 - sent.stamp_ns as f64) / 1e6;
         assert!(
             error_ms.abs() < 5.0,
             "scan {}: stamp off by {error_ms} ms",
-            scan.seq
+            scan.header.seq
         );
     }
     // At least a revolution apart (more if the emulator stalled under load).
     for pair in scans.windows(2) {
-        let step_ms = (pair[1].stamp_ns as f64 - pair[0].stamp_ns as f64) / 1e6;
+        let step_ms = (pair[1].header.stamp_ns as f64 - pair[0].header.stamp_ns as f64) / 1e6;
         assert!(step_ms > 23.5, "stamps {step_ms} ms apart");
     }
     // The handshake, the time synchronisation, the ranging command and the final QT.
@@ -154,7 +154,11 @@ fn a_connection_dropped_mid_scan_resumes_without_gaps() {
         assert_ranges(&scan.ranges, &seed_hall()[row], &format!("row {row}"));
     }
     // The second connection synchronised the clock again: stamps still increase.
-    assert!(scans.windows(2).all(|p| p[1].stamp_ns > p[0].stamp_ns));
+    assert!(
+        scans
+            .windows(2)
+            .all(|p| p[1].header.stamp_ns > p[0].header.stamp_ns)
+    );
     let stats = emulator.stop();
     assert_eq!((stats.connections, stats.dropped_connections), (2, 1));
     drop((inlet, node));
@@ -225,7 +229,7 @@ fn a_window_with_clusters_and_intensities() {
         assert_ranges(&scan.ranges, &values, &format!("row {row}"));
         let intensities: Vec<f32> = values.iter().map(|&v| intensity_of(v, 23) as f32).collect();
         assert_eq!(scan.intensities, intensities);
-        assert_eq!(scan.frame_id, "front_laser");
+        assert_eq!(scan.header.frame_id(), "front_laser");
         // The first beam sits at the middle step of its cluster, 312.
         assert_eq!(scan.angle_min, ((312.0 - 540.0) * step) as f32);
         assert_eq!(scan.angle_increment, (3.0 * step) as f32);
@@ -236,7 +240,7 @@ fn a_window_with_clusters_and_intensities() {
     // The sensor stamps step 0; the first beam passes 312 steps later.
     let delay_ns = 312.0 * 0.025 / 1440.0 * 1e9;
     for (scan, sent) in scans.iter().zip(&stats.sent) {
-        let error_ms = (scan.stamp_ns as f64 - sent.stamp_ns as f64 - delay_ns) / 1e6;
+        let error_ms = (scan.header.stamp_ns as f64 - sent.stamp_ns as f64 - delay_ns) / 1e6;
         assert!(error_ms.abs() < 5.0, "stamp off by {error_ms} ms");
     }
     drop((inlet, node));

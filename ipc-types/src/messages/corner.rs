@@ -2,12 +2,13 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 /// A corner (see docs/CONVENTIONS.md): the walls' intersection point, the heading of the
 /// bisector towards the tip and the opening angle, with a row-major 4x4 covariance over
 /// `(x, y, heading, angle)`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[type_name("slam::Corner::v1")]
 pub struct Corner {
     pub x: f64,
@@ -19,7 +20,7 @@ pub struct Corner {
 
 /// A corner of the simulated world, for scoring a map. No covariance: it is the truth.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[type_name("slam::TrueCorner::v1")]
 pub struct TrueCorner {
     pub x: f64,
@@ -30,7 +31,7 @@ pub struct TrueCorner {
 
 /// A corner of a SLAM map with the number of scans that saw it.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[type_name("slam::MapCorner::v1")]
 pub struct MapCorner {
     pub corner: Corner,

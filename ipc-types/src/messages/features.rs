@@ -4,6 +4,7 @@ use std::borrow::Cow;
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 use super::corner::Corner;
 use super::line::Line;
@@ -14,7 +15,7 @@ use crate::header::Header;
 
 /// The features of one scan, in the sensor frame.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
 #[type_name("slam::Features::v3")]
 pub struct Features {
     /// The source scan's header (sequence, stamp, frame); `sent_ns` is this message's.

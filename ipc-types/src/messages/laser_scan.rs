@@ -5,6 +5,7 @@ use std::borrow::Cow;
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
 use slam_geom::ScanGeometry;
+use zerocopy::FromZeros;
 
 use crate::capacity::{CapacityError, MAX_BEAMS, fill, used};
 use crate::header::Header;
@@ -16,7 +17,7 @@ use crate::header::Header;
 /// -inf = too close. A consumer treats any non-finite range, or one outside
 /// `[range_min, range_max]`, as invalid.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
 #[type_name("slam::LaserScan::v1")]
 pub struct LaserScan {
     pub header: Header,
@@ -133,6 +134,17 @@ pub struct LaserScanRecord<'a> {
     pub range_max: f32,
     pub ranges: Cow<'a, [f32]>,
     pub intensities: Cow<'a, [f32]>,
+}
+
+impl LaserScanRecord<'_> {
+    /// The same record owning its beams, to keep after the scan it was made from is gone.
+    pub fn into_owned(self) -> LaserScanRecord<'static> {
+        LaserScanRecord {
+            ranges: Cow::Owned(self.ranges.into_owned()),
+            intensities: Cow::Owned(self.intensities.into_owned()),
+            ..self
+        }
+    }
 }
 
 impl Serialize for LaserScan {

@@ -2,11 +2,12 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 /// A line in normal form `x cos(theta) + y sin(theta) = rho` in the sensor frame, with the
 /// row-major 2x2 covariance of `(rho, theta)` and the end points of the fitted points.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[type_name("slam::Line::v1")]
 pub struct Line {
     pub rho: f64,

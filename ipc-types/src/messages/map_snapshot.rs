@@ -4,32 +4,30 @@ use std::borrow::Cow;
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
+use super::bounded_array::BoundedArray;
 use super::corner::MapCorner;
-use crate::capacity::{CapacityError, MAX_MAP_CORNERS, fill, used};
+use crate::capacity::{CapacityError, MAX_MAP_CORNERS};
 use crate::header::Header;
 
 /// The confirmed corners of the best particle's map, in the map frame.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
 #[type_name("slam::MapSnapshot::v1")]
 pub struct MapSnapshot {
     /// Header of the last scan the map includes.
     pub header: Header,
-    pub corner_count: u32,
-    /// Keeps the layout free of implicit padding; always 0.
-    pub reserved: u32,
-    pub corners: [MapCorner; MAX_MAP_CORNERS],
+    pub corners: BoundedArray<MapCorner, MAX_MAP_CORNERS>,
 }
 
 impl MapSnapshot {
     pub fn corners(&self) -> &[MapCorner] {
-        used(&self.corners, self.corner_count)
+        self.corners.as_slice()
     }
 
     pub fn set(&mut self, corners: &[MapCorner]) -> Result<(), CapacityError> {
-        self.corner_count = fill("map corners", &mut self.corners, corners)?;
-        Ok(())
+        self.corners.set("map corners", corners)
     }
 
     pub fn to_record(&self) -> MapSnapshotRecord<'_> {

@@ -1,5 +1,6 @@
 //! The fixed-layout messages that cross process boundaries.
 
+mod bounded_array;
 mod corner;
 mod features;
 mod ground_truth;
@@ -13,6 +14,7 @@ mod pose_estimate;
 mod scan_motion;
 mod world_corners;
 
+pub use bounded_array::BoundedArray;
 pub use corner::{Corner, MapCorner, TrueCorner};
 pub use features::{Features, FeaturesRecord, OdometryAtScan};
 pub use ground_truth::GroundTruthPose;
@@ -25,23 +27,3 @@ pub use pose::Pose2;
 pub use pose_estimate::{PoseEstimate, StageTiming};
 pub use scan_motion::ScanMotion;
 pub use world_corners::{WorldCorners, WorldCornersRecord};
-
-crate::zeroed::impl_zeroable!(
-    crate::header::Header,
-    Pose2,
-    Corner,
-    TrueCorner,
-    MapCorner,
-    Line,
-    LaserScan,
-    Odometry,
-    GroundTruthPose,
-    WorldCorners,
-    Features,
-    StageTiming,
-    PoseEstimate,
-    MapSnapshot,
-    StampedPose,
-    PathChunk,
-    ScanMotion,
-);

@@ -2,6 +2,7 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 use super::pose::Pose2;
 use crate::header::Header;
@@ -10,7 +11,7 @@ use crate::header::Header;
 ///
 /// Only increments between two messages are meaningful; the odometry frame drifts.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[type_name("slam::Odometry::v1")]
 pub struct Odometry {
     pub header: Header,

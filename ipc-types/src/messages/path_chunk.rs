@@ -4,14 +4,18 @@ use std::borrow::Cow;
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
+use super::bounded_array::BoundedArray;
 use super::pose::Pose2;
-use crate::capacity::{CapacityError, MAX_PATH_CHUNK_POSES, fill, used};
+use crate::capacity::{CapacityError, MAX_PATH_CHUNK_POSES};
 use crate::header::Header;
 
 /// One pose of a path: a scan's stamp and the pose (`map_from_robot`) at it.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, FromZeros, Serialize, Deserialize,
+)]
 #[type_name("slam::StampedPose::v1")]
 pub struct StampedPose {
     pub stamp_ns: u64,
@@ -22,7 +26,7 @@ pub struct StampedPose {
 /// of any length travels as consecutive chunks; the receiver has it all once it holds
 /// `total` poses.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
 #[type_name("slam::PathChunk::v1")]
 pub struct PathChunk {
     /// `seq` numbers the chunks of one path from 0; `stamp_ns` is the last scan's.
@@ -31,20 +35,16 @@ pub struct PathChunk {
     pub first: u64,
     /// Poses in the whole path.
     pub total: u64,
-    pub pose_count: u32,
-    /// Keeps the layout free of implicit padding; always 0.
-    pub reserved: u32,
-    pub poses: [StampedPose; MAX_PATH_CHUNK_POSES],
+    pub poses: BoundedArray<StampedPose, MAX_PATH_CHUNK_POSES>,
 }
 
 impl PathChunk {
     pub fn poses(&self) -> &[StampedPose] {
-        used(&self.poses, self.pose_count)
+        self.poses.as_slice()
     }
 
     pub fn set(&mut self, poses: &[StampedPose]) -> Result<(), CapacityError> {
-        self.pose_count = fill("path poses", &mut self.poses, poses)?;
-        Ok(())
+        self.poses.set("path poses", poses)
     }
 
     pub fn to_record(&self) -> PathChunkRecord<'_> {

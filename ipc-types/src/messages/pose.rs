@@ -2,10 +2,13 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 /// A planar pose `world_from_robot`: position in metres, yaw in radians in `[-pi, pi)`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, FromZeros, Serialize, Deserialize,
+)]
 #[type_name("slam::Pose2::v1")]
 pub struct Pose2 {
     pub x: f64,

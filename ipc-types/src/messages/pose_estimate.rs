@@ -2,13 +2,16 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 use super::pose::Pose2;
 use crate::header::Header;
 
 /// Time spent in each stage of one SLAM update, nanoseconds.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend, FromZeros, Serialize, Deserialize,
+)]
 #[type_name("slam::StageTiming::v1")]
 pub struct StageTiming {
     pub motion_ns: u64,
@@ -20,7 +23,7 @@ pub struct StageTiming {
 
 /// The pose estimate after one scan, in the map frame (the first pose is the origin).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[type_name("slam::PoseEstimate::v2")]
 pub struct PoseEstimate {
     /// The source scan's header; `sent_ns` is this message's.

@@ -2,13 +2,16 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
 use super::pose::Pose2;
 
 /// The front end's motion estimate for one scan: the scan registered against a local map of
 /// the recent ones and fused with the odometry (docs/CONVENTIONS.md, "Front end").
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, FromZeros, Serialize, Deserialize,
+)]
 #[type_name("slam::ScanMotion::v1")]
 pub struct ScanMotion {
     /// The robot's pose in the front end's own frame (the identity at its first scan).

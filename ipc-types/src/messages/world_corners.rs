@@ -4,32 +4,30 @@ use std::borrow::Cow;
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
+use zerocopy::FromZeros;
 
+use super::bounded_array::BoundedArray;
 use super::corner::TrueCorner;
-use crate::capacity::{CapacityError, MAX_WORLD_CORNERS, fill, used};
+use crate::capacity::{CapacityError, MAX_WORLD_CORNERS};
 use crate::header::Header;
 
 /// Every corner of the simulated world in the world frame, published once (with history, so
 /// a late subscriber still gets it) so a map can be scored.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
 #[type_name("slam::WorldCorners::v1")]
 pub struct WorldCorners {
     pub header: Header,
-    pub corner_count: u32,
-    /// Keeps the layout free of implicit padding; always 0.
-    pub reserved: u32,
-    pub corners: [TrueCorner; MAX_WORLD_CORNERS],
+    pub corners: BoundedArray<TrueCorner, MAX_WORLD_CORNERS>,
 }
 
 impl WorldCorners {
     pub fn corners(&self) -> &[TrueCorner] {
-        used(&self.corners, self.corner_count)
+        self.corners.as_slice()
     }
 
     pub fn set(&mut self, corners: &[TrueCorner]) -> Result<(), CapacityError> {
-        self.corner_count = fill("world corners", &mut self.corners, corners)?;
-        Ok(())
+        self.corners.set("world corners", corners)
     }
 
     pub fn to_record(&self) -> WorldCornersRecord<'_> {

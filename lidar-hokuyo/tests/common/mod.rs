@@ -83,20 +83,7 @@ pub fn finish(mut child: Child, limit: Duration) -> Output {
 }
 
 /// A received scan, copied out of shared memory.
-#[derive(Debug, Clone)]
-pub struct Received {
-    pub seq: u64,
-    pub stamp_ns: u64,
-    pub frame_id: String,
-    pub angle_min: f32,
-    pub angle_increment: f32,
-    pub time_increment: f32,
-    pub scan_time: f32,
-    pub range_min: f32,
-    pub range_max: f32,
-    pub ranges: Vec<f32>,
-    pub intensities: Vec<f32>,
-}
+pub type Received = LaserScanRecord<'static>;
 
 /// Subscribes to the scans once the driver has created the topic; fails if the driver
 /// dies first. The second value is the subscribing node: keep it as long as the inlet.
@@ -135,19 +122,7 @@ pub fn receive(
             if sample.header.is_end_of_stream() {
                 return (scans, true);
             }
-            scans.push(Received {
-                seq: sample.header.seq,
-                stamp_ns: sample.header.stamp_ns,
-                frame_id: sample.header.frame_id().to_owned(),
-                angle_min: sample.angle_min,
-                angle_increment: sample.angle_increment,
-                time_increment: sample.time_increment,
-                scan_time: sample.scan_time,
-                range_min: sample.range_min,
-                range_max: sample.range_max,
-                ranges: sample.ranges().to_vec(),
-                intensities: sample.intensities().to_vec(),
-            });
+            scans.push(sample.to_record().into_owned());
         }
         if until(&scans) {
             return (scans, false);

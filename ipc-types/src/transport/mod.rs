@@ -1,0 +1,55 @@
+//! Typed publishers and subscribers over a run's [`Domain`], with a wake-up event per topic.
+//!
+//! An [`Outlet`] publishes a [`Message`] on its [`Topic`] and notifies the topic's event
+//! service; an [`Inlet`] subscribes and sleeps on that event through [`wait_any`]. The
+//! [`Delivery`] mode belongs to the service, chosen by whoever creates it (the source of the
+//! data), and travels downstream: a stage reads its input's mode and creates its output with
+//! the same one. The same event tells each end when the other arrives (see `discovery`).
+
+mod discovery;
+mod error;
+mod inlet;
+mod outlet;
+mod wait;
+
+use iceoryx2::prelude::*;
+
+pub use error::{OpenError, OpenFailure, PublishError, PublishFailure, ReceiveError, WaitError};
+pub use inlet::{Inlet, wait_for_topic};
+pub use outlet::Outlet;
+pub use wait::{Wake, Wakeable, wait_any};
+
+/// How a topic treats a subscriber whose queue is full.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Delivery {
+    /// The publisher waits until every subscriber has room: nothing is lost and a run is
+    /// deterministic (lockstep).
+    Lossless,
+    /// The oldest queued message is dropped: a slow subscriber never blocks the sensor
+    /// (real time).
+    Latest,
+}
+
+/// Queue depth of a subscriber in [`Delivery::Lossless`] mode: one message in flight per
+/// stage, so the publisher sends the next only when the previous has been taken.
+pub const LOSSLESS_QUEUE: usize = 1;
+/// Queue depth of a subscriber in [`Delivery::Latest`] mode: a second of scans at 40 Hz.
+pub const LATEST_QUEUE: usize = 40;
+/// Subscribers a topic may have at once. iceoryx2 preallocates queue slots for each in the
+/// publisher's shared memory (see [`crate::shm`]), so this is not free: the pipeline needs
+/// two on the scans and one elsewhere, and the rest is room for tools and tests.
+pub(crate) const MAX_SUBSCRIBERS: usize = 16;
+/// Publishers a topic may have at once: one in the pipeline, the rest for tools and tests.
+pub(crate) const MAX_PUBLISHERS: usize = 4;
+
+/// The queue depth of each subscriber of a topic with this delivery and history.
+pub(crate) fn subscriber_queue(delivery: Delivery, history: usize) -> usize {
+    match delivery {
+        Delivery::Lossless => LOSSLESS_QUEUE.max(history),
+        Delivery::Latest => LATEST_QUEUE.max(history),
+    }
+}
+
+fn service_name(name: &str) -> Result<ServiceName, OpenError> {
+    ServiceName::new(name).map_err(|_| OpenError::BadServiceName(name.to_owned()))
+}
