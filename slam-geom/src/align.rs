@@ -105,6 +105,7 @@ pub fn align_se2(pairs: &[WeightedPair]) -> Option<Se2Alignment> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+    use std::f64::consts::PI;
 
     fn pairs_of(source: &[Point2], alignment: &Se2Alignment) -> Vec<WeightedPair> {
         source
@@ -116,7 +117,7 @@ mod tests {
     proptest! {
         #[test]
         fn a_known_transform_is_recovered(
-            rotation in -3.14_f64..3.14,
+            rotation in -PI..PI,
             tx in -50.0_f64..50.0,
             ty in -50.0_f64..50.0,
             points in prop::collection::vec((-20.0_f64..20.0, -20.0_f64..20.0, 0.1_f64..10.0), 3..30),

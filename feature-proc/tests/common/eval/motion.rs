@@ -3,7 +3,7 @@
 //! explains most corners wins, refined by a least-squares rigid fit of its matches.
 
 use feature_proc::Corner;
-use slam_geom::wrap_angle;
+use slam_geom::{Point2, WeightedPair, align_se2, wrap_angle};
 
 /// The pose of the later scan in the earlier scan's frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -160,24 +160,29 @@ pub fn estimate_motion(
     )
 }
 
-/// Least-squares rigid motion taking the second point of each pair onto the first (Kabsch
-/// in 2D), or with the rotation given.
+/// Least-squares rigid motion taking the second point of each pair onto the first
+/// (`slam_geom::align_se2`), or with the rotation given (none when the points fix none).
 fn rigid(pairs: &[([f64; 2], [f64; 2])], yaw: Option<f64>) -> Motion {
+    if yaw.is_none() {
+        let weighted: Vec<WeightedPair> = pairs
+            .iter()
+            .map(|(e, l)| (Point2::from(*l), Point2::from(*e), 1.0))
+            .collect();
+        if let Some(fit) = align_se2(&weighted) {
+            return Motion {
+                x: fit.translation[0],
+                y: fit.translation[1],
+                yaw: fit.rotation,
+            };
+        }
+    }
     let n = pairs.len().max(1) as f64;
     let (mut ce, mut cl) = ([0.0; 2], [0.0; 2]);
     for (e, l) in pairs {
         ce = [ce[0] + e[0] / n, ce[1] + e[1] / n];
         cl = [cl[0] + l[0] / n, cl[1] + l[1] / n];
     }
-    let yaw = yaw.unwrap_or_else(|| {
-        let (mut cross, mut dot) = (0.0, 0.0);
-        for (e, l) in pairs {
-            let (a, b) = ([l[0] - cl[0], l[1] - cl[1]], [e[0] - ce[0], e[1] - ce[1]]);
-            cross += a[0] * b[1] - a[1] * b[0];
-            dot += a[0] * b[0] + a[1] * b[1];
-        }
-        cross.atan2(dot)
-    });
+    let yaw = yaw.unwrap_or(0.0);
     let (sin, cos) = yaw.sin_cos();
     Motion {
         x: ce[0] - (cos * cl[0] - sin * cl[1]),
