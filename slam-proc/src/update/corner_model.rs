@@ -8,7 +8,7 @@
 use nalgebra::Matrix4x3;
 use nalgebra::{Matrix4, Vector2, Vector4};
 
-use crate::observation::Prepared;
+use crate::filter::observation::Prepared;
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;
 
@@ -42,18 +42,18 @@ impl WorldObservation {
 /// Takes `observation` from the sensor frame of `pose` to the world.
 #[cfg(test)]
 pub(crate) fn to_world(pose: &Pose2, observation: &Prepared) -> WorldObservation {
-    Frame::new(pose).to_world(observation)
+    PoseTransform::new(pose).to_world(observation)
 }
 
 /// A particle's pose with its rotation evaluated once, for all of a scan's observations.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Frame {
+pub(crate) struct PoseTransform {
     pose: Pose2,
     sin: f64,
     cos: f64,
 }
 
-impl Frame {
+impl PoseTransform {
     pub fn new(pose: &Pose2) -> Self {
         let (sin, cos) = pose.yaw.sin_cos();
         Self {

@@ -13,15 +13,15 @@
 //!    with the wall lines that match under the fit: corners close together fix the
 //!    heading poorly, long walls well).
 //! 4. Fewer than two consistent matches, or a fit beyond the per-step limits: the wall
-//!    lines matched under the prior, fused with it ([`crate::line_motion`]); without a
+//!    lines matched under the prior, fused with it ([`crate::motion::line_motion`]); without a
 //!    line either, the prior.
 
 use nalgebra::{Cholesky, Matrix3, Matrix4, Matrix4x3, Vector2, Vector3, Vector4};
 
-use crate::chi2::quantile_even;
 use crate::config::SlamConfig;
-use crate::line_motion;
-use crate::observation::{LineObservation, OdometryInput, Prepared};
+use crate::filter::observation::{LineObservation, OdometryInput, Prepared};
+use crate::math::chi2::quantile_even;
+use crate::motion::line_motion;
 use crate::rigid_fit::{Prior, kabsch, normal_equations, refine};
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;

@@ -13,7 +13,7 @@
 
 use nalgebra::{Cholesky, Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 
-use crate::observation::LineObservation;
+use crate::filter::observation::LineObservation;
 use crate::rigid_fit::{Prior, gauss_newton};
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;

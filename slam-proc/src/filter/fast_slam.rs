@@ -5,20 +5,22 @@ use std::time::Instant;
 use rand::Rng;
 use rayon::prelude::*;
 
-use crate::chi2::Gates;
 use crate::config::SlamConfig;
-use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
-use crate::jcbb::PoseUncertainty;
+use crate::filter::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
+use crate::math::chi2::Gates;
+use crate::update::jcbb::PoseUncertainty;
 use slam_geom::MapCorner;
 
-use crate::map::{CornerMap, CornerState};
-use crate::motion::{Motion, MotionEstimator, MotionSource};
-use crate::observation::{LineObservation, MeasuredMotion, Observation, OdometryInput, Prepared};
-use crate::particle::{Particle, ScanContext, Scratch};
-use crate::path::PathPose;
-use crate::predict::{self, MotionNoise};
-use crate::resample::{effective_sample_size, log_sum_exp, normalise, systematic};
-use crate::rng::Streams;
+use crate::filter::observation::{
+    LineObservation, MeasuredMotion, Observation, OdometryInput, Prepared,
+};
+use crate::filter::particle::{Particle, ScanContext, Scratch};
+use crate::filter::resample::{effective_sample_size, log_sum_exp, normalise, systematic};
+use crate::filter::rng::Streams;
+use crate::map::corner_map::{CornerMap, CornerState};
+use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
+use crate::motion::predict::{self, MotionNoise};
+use crate::path::particle_path::PathPose;
 use slam_geom::Pose2;
 use stage_kit::SettingError;
 
