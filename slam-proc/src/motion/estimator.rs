@@ -497,6 +497,14 @@ mod tests {
             .collect()
     }
 
+    /// An estimator that has seen [`scene`] as its first scan, and that scene.
+    fn after_scene(config: &SlamConfig) -> (MotionEstimator, Vec<Prepared>) {
+        let mut estimator = MotionEstimator::new(config);
+        let previous = scene();
+        estimator.estimate(0, &previous, &[], None, config);
+        (estimator, previous)
+    }
+
     fn scene() -> Vec<Prepared> {
         vec![
             corner(3.0, 1.0, 0.5, 1.2),
@@ -575,9 +583,7 @@ mod tests {
     #[test]
     fn recovers_a_step_from_corners_despite_a_wrong_match() {
         let config = SlamConfig::default();
-        let mut estimator = MotionEstimator::new(&config);
-        let previous = scene();
-        estimator.estimate(0, &previous, &[], None, &config);
+        let (mut estimator, previous) = after_scene(&config);
         let truth = Pose2::new(0.12, 0.03, 0.15);
         let mut current = seen_from(&truth, &previous);
         // An outlier: a corner whose descriptor matches corner 0 but sits 0.4 m off.
@@ -602,9 +608,7 @@ mod tests {
     #[test]
     fn falls_back_to_constant_velocity_without_matches() {
         let config = SlamConfig::default();
-        let mut estimator = MotionEstimator::new(&config);
-        let previous = scene();
-        estimator.estimate(0, &previous, &[], None, &config);
+        let (mut estimator, previous) = after_scene(&config);
         let step = Pose2::new(0.1, 0.0, 0.05);
         let current = seen_from(&step, &previous);
         estimator.estimate(10, &current, &[], None, &config);
