@@ -116,6 +116,7 @@ pub(crate) fn innovation(observed: &Vector4<f64>, corner: &Vector4<f64>) -> Vect
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::finite_difference::nudged;
 
     #[test]
     fn jacobians_match_finite_differences() {
@@ -127,12 +128,7 @@ mod tests {
         let w = to_world(&pose, &observation);
         let h = 1e-7;
         for k in 0..3 {
-            let mut moved = pose;
-            match k {
-                0 => moved.x += h,
-                1 => moved.y += h,
-                _ => moved.yaw += h,
-            }
+            let moved = nudged(&pose, k, h);
             let numeric = innovation(&to_world(&moved, &observation).z, &w.z) / h;
             for row in 0..4 {
                 assert!((numeric[row] - w.pose_jacobian()[(row, k)]).abs() < 1e-5);
