@@ -18,15 +18,15 @@
 
 pub mod backoff;
 pub mod connector;
+pub mod decoded_scan;
 pub mod emulator;
-pub mod frame;
 pub mod geometry;
-pub mod lines;
 pub mod notices;
 pub mod publisher;
 pub mod ranges;
 pub mod scip;
 pub mod sensor;
+pub mod text_lines;
 pub mod time_sync;
 
 #[cfg(test)]
@@ -34,7 +34,7 @@ mod test_stream;
 
 pub use backoff::Backoff;
 pub use connector::{AddressError, Connect, TcpConnector, resolve};
-pub use frame::Frame;
+pub use decoded_scan::DecodedScan;
 pub use geometry::{GeometryError, RangingPlan, ScanRequest};
 pub use notices::ConnectionNotices;
 pub use publisher::{Driver, DriverConfig, DriverError, DriverStats, Finish, ScanSink};

@@ -22,7 +22,7 @@ use stage_kit::say_err;
 
 use crate::backoff::Backoff;
 use crate::connector::Connect;
-use crate::frame::Frame;
+use crate::decoded_scan::DecodedScan;
 use crate::geometry::{GeometryError, RangingPlan, ScanRequest};
 use crate::notices::ConnectionNotices;
 use crate::ranges::ranges_m;
@@ -69,13 +69,13 @@ impl Default for DriverConfig {
 
 /// Where scans go.
 pub trait ScanSink {
-    fn publish(&mut self, frame: &Frame<'_>) -> Result<(), PublishError>;
+    fn publish(&mut self, decoded: &DecodedScan<'_>) -> Result<(), PublishError>;
 }
 
 impl ScanSink for Outlet<LaserScan> {
-    fn publish(&mut self, frame: &Frame<'_>) -> Result<(), PublishError> {
+    fn publish(&mut self, decoded: &DecodedScan<'_>) -> Result<(), PublishError> {
         let mut filled = Ok(());
-        Outlet::publish(self, |scan| filled = frame.fill(scan))?;
+        Outlet::publish(self, |scan| filled = decoded.fill(scan))?;
         // The geometry never asks for more beams than a LaserScan holds; should it, the
         // message went out short and that is reported.
         filled.map_err(|source| PublishError::Failed {
@@ -334,7 +334,7 @@ where
             intensities.clear();
             // Intensities are at most 18 bits: exact in f32.
             intensities.extend(data.intensities.iter().map(|&i| i as f32));
-            let frame = Frame {
+            let decoded = DecodedScan {
                 seq: self.stats.published,
                 stamp_ns,
                 frame_id: &self.config.frame_id,
@@ -342,7 +342,7 @@ where
                 ranges: &ranges,
                 intensities: &intensities,
             };
-            match self.sink.publish(&frame) {
+            match self.sink.publish(&decoded) {
                 Ok(()) => {}
                 Err(PublishError::Stopped(_)) => return SessionEnd::Finished(Finish::Stopped),
                 Err(e) => return SessionEnd::Fatal(e.into()),
@@ -413,9 +413,9 @@ mod tests {
     struct Collect(Vec<(u64, u64, Vec<f32>)>);
 
     impl ScanSink for Collect {
-        fn publish(&mut self, frame: &Frame<'_>) -> Result<(), PublishError> {
+        fn publish(&mut self, decoded: &DecodedScan<'_>) -> Result<(), PublishError> {
             self.0
-                .push((frame.seq, frame.stamp_ns, frame.ranges.to_vec()));
+                .push((decoded.seq, decoded.stamp_ns, decoded.ranges.to_vec()));
             Ok(())
         }
     }

@@ -8,10 +8,10 @@
 use std::io::{self, Read, Write};
 use std::time::{Duration, Instant};
 
-use crate::lines::{LineError, LineReader};
 use crate::scip::{
     Command, Information, Ranging, Reply, ScanData, ScipError, SensorParams, Status, TimeMode,
 };
+use crate::text_lines::{LineError, LineReader};
 use crate::time_sync::{ClockSample, SensorClock, TimeSyncError};
 
 /// Lines a reply may have: a full scan of 8192 beams with intensities is 768 data lines.

@@ -8,7 +8,7 @@
 //!   REP 117 invalid ranges.
 //! - [`Vehicle`]: a pure-pursuit follower of the path with limited yaw rate and
 //!   acceleration; [`Odometer`] integrates its motion with noise.
-//! - [`Simulation`]: ties them together into deterministic [`Frame`]s for a seed.
+//! - [`Simulation`]: ties them together into deterministic [`SimulatedScan`]s for a seed.
 //! - [`check_rate`]: the real-time rates the process accepts ([`RATE_RANGE`]).
 //!
 //! Metres, radians and seconds throughout; poses are `world_from_robot` and the sensor sits
@@ -37,7 +37,7 @@ pub use rate::{RATE_RANGE, check_rate, parse_rate};
 pub use ray_caster::RayCaster;
 pub use sensor::SensorConfig;
 pub use sim_error::SimError;
-pub use simulation::{Frame, Simulation};
+pub use simulation::{SimulatedScan, Simulation};
 pub use slam_geom::TrueCorner;
 pub use slam_geom::{Point2, Pose2, wrap_angle};
 pub use stage_kit::SettingError;

@@ -14,7 +14,7 @@ const MAX_STEP: f64 = 0.01;
 
 /// One scan with what the simulator knows about it.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Frame {
+pub struct SimulatedScan {
     /// 0, 1, 2, ...
     pub seq: u64,
     /// Simulated time of the scan, `seq * period`, nanoseconds from 0.
@@ -100,7 +100,7 @@ impl Simulation {
 
     /// The scan at the current time, then the vehicle moves on by one period. `None` once
     /// the frame at the end of the path has been returned.
-    pub fn next_frame(&mut self) -> Option<Frame> {
+    pub fn next_frame(&mut self) -> Option<SimulatedScan> {
         if self.done {
             return None;
         }
@@ -109,7 +109,7 @@ impl Simulation {
         self.lidar
             .scan(&self.caster, pose, &mut self.scan_rng, &mut ranges);
         let (linear_velocity, angular_velocity) = self.odometer.velocity();
-        let frame = Frame {
+        let frame = SimulatedScan {
             seq: self.seq,
             stamp_ns: self.seq * self.lidar.config().period_ns(),
             pose,

@@ -3,15 +3,15 @@
 
 use lidar_sim::geometry::Segment;
 use lidar_sim::{
-    BUILTIN_WORLDS, Frame, Point2, RayCaster, SensorConfig, Simulation, Vehicle, VehicleConfig,
-    World, visible_corners, wrap_angle,
+    BUILTIN_WORLDS, Point2, RayCaster, SensorConfig, SimulatedScan, Simulation, Vehicle,
+    VehicleConfig, World, visible_corners, wrap_angle,
 };
 
 fn world(name: &str) -> World {
     World::builtin(name).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn frames(seed: u64, n: usize) -> Vec<Frame> {
+fn frames(seed: u64, n: usize) -> Vec<SimulatedScan> {
     let mut sim = Simulation::new(
         world("office"),
         SensorConfig::default(),
@@ -23,7 +23,7 @@ fn frames(seed: u64, n: usize) -> Vec<Frame> {
 }
 
 /// Frames compared bit for bit (NaN dropouts included).
-fn bits(f: &Frame) -> (u64, u64, [u64; 6], Vec<u32>) {
+fn bits(f: &SimulatedScan) -> (u64, u64, [u64; 6], Vec<u32>) {
     let p = [
         f.pose.x,
         f.pose.y,

@@ -60,7 +60,7 @@ pub struct SvgInput<'a> {
 }
 
 /// The world-to-canvas mapping.
-struct Frame {
+struct SvgView {
     /// Pixels per metre.
     k: f64,
     x0: f64,
@@ -74,7 +74,7 @@ struct Frame {
     u: f64,
 }
 
-impl Frame {
+impl SvgView {
     fn px(&self, p: [f64; 2]) -> [f64; 2] {
         [
             self.x0 + (p[0] - self.min[0]) * self.k,
@@ -86,63 +86,63 @@ impl Frame {
 /// Renders the picture. Deterministic: the same input gives the same bytes.
 pub fn render_svg(input: &SvgInput<'_>) -> String {
     let header_h = 50.0 + 19.0 * input.subtitle.len() as f64;
-    let frame = frame(input, header_h);
-    let canvas_h = header_h + frame.map_h + FOOTER_H;
+    let view = view(input, header_h);
+    let canvas_h = header_h + view.map_h + FOOTER_H;
     let mut svg = String::with_capacity(64 * 1024);
     // Writing to a String cannot fail, hence the ignored results below.
     let _ = writeln!(
         svg,
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.0} {h:.0}" font-family="{FONT}">"#,
-        w = frame.canvas_w,
+        w = view.canvas_w,
         h = canvas_h
     );
     let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let _ = writeln!(
         svg,
         r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#e2e2e2" stroke-width="1"/>"##,
-        frame.x0, frame.y0, frame.map_w, frame.map_h
+        view.x0, view.y0, view.map_w, view.map_h
     );
-    draw_cells(&mut svg, &frame, input);
+    draw_cells(&mut svg, &view, input);
     for p in input.true_corners {
-        let [x, y] = frame.px(*p);
+        let [x, y] = view.px(*p);
         let _ = writeln!(
             svg,
             r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="none" stroke="{TRUE_CORNER}" stroke-width="{:.2}"/>"#,
-            7.0 * frame.u,
-            1.5 * frame.u
+            7.0 * view.u,
+            1.5 * view.u
         );
     }
     // The truth underlays the estimate as a wide pale band, so a good estimate runs inside it.
     let truth_style = format!(
         r#"stroke="{TRUTH}" stroke-opacity="0.55" stroke-width="{:.2}""#,
-        5.0 * frame.u
+        5.0 * view.u
     );
-    polyline(&mut svg, &frame, input.ground_truth, &truth_style);
+    polyline(&mut svg, &view, input.ground_truth, &truth_style);
     let dr_style = format!(
         r#"stroke="{DEAD_RECKONING}" stroke-width="{:.2}" stroke-dasharray="{:.1} {:.1}""#,
-        1.4 * frame.u,
-        7.0 * frame.u,
-        4.0 * frame.u
+        1.4 * view.u,
+        7.0 * view.u,
+        4.0 * view.u
     );
-    polyline(&mut svg, &frame, input.dead_reckoning, &dr_style);
-    let estimate_style = format!(r#"stroke="{ESTIMATE}" stroke-width="{:.2}""#, 1.8 * frame.u);
-    polyline(&mut svg, &frame, input.trajectory, &estimate_style);
-    draw_endpoints(&mut svg, &frame, input.trajectory);
+    polyline(&mut svg, &view, input.dead_reckoning, &dr_style);
+    let estimate_style = format!(r#"stroke="{ESTIMATE}" stroke-width="{:.2}""#, 1.8 * view.u);
+    polyline(&mut svg, &view, input.trajectory, &estimate_style);
+    draw_endpoints(&mut svg, &view, input.trajectory);
     for corner in input.map_corners {
         map_corner_glyph(
             &mut svg,
-            frame.u,
-            frame.px([corner.x, corner.y]),
+            view.u,
+            view.px([corner.x, corner.y]),
             corner.heading,
         );
     }
     draw_header(&mut svg, input);
-    draw_footer(&mut svg, &frame, input, header_h + frame.map_h);
+    draw_footer(&mut svg, &view, input, header_h + view.map_h);
     svg.push_str("</svg>\n");
     svg
 }
 
-fn frame(input: &SvgInput<'_>, header_h: f64) -> Frame {
+fn view(input: &SvgInput<'_>, header_h: f64) -> SvgView {
     let mut min = [f64::INFINITY; 2];
     let mut max = [f64::NEG_INFINITY; 2];
     let mut include = |p: [f64; 2]| {
@@ -189,7 +189,7 @@ fn frame(input: &SvgInput<'_>, header_h: f64) -> Frame {
     let k = (MAX_MAP_W / dx).min(MAX_MAP_H / dy);
     let (map_w, map_h) = (dx * k, dy * k);
     let canvas_w = (map_w + 2.0 * MARGIN).max(MIN_CANVAS_W);
-    Frame {
+    SvgView {
         k,
         x0: (canvas_w - map_w) / 2.0,
         y0: header_h,
@@ -205,11 +205,11 @@ fn frame(input: &SvgInput<'_>, header_h: f64) -> Frame {
 /// Draws the grid cells as one path per state, with runs of neighbouring cells in a row
 /// merged into one rectangle: the file stays small even for a long run. Cells too small to
 /// see are merged into coarser ones, occupied if any of them is: a wall stays visible.
-fn draw_cells(svg: &mut String, frame: &Frame, input: &SvgInput<'_>) {
+fn draw_cells(svg: &mut String, view: &SvgView, input: &SvgInput<'_>) {
     if input.cells.is_empty() || !input.cell_m.is_finite() || input.cell_m <= 0.0 {
         return;
     }
-    let factor = (MIN_CELL_PX / (input.cell_m * frame.k)).ceil().max(1.0) as i64;
+    let factor = (MIN_CELL_PX / (input.cell_m * view.k)).ceil().max(1.0) as i64;
     let cell = input.cell_m * factor as f64;
     let mut merged: Vec<GridCell> = Vec::with_capacity(input.cells.len());
     for c in input.cells {
@@ -231,15 +231,15 @@ fn draw_cells(svg: &mut String, frame: &Frame, input: &SvgInput<'_>) {
     // path holds small integers.
     let (sin, cos) = input.cells_placement.rotation.sin_cos();
     let [tx, ty] = input.cells_placement.translation;
-    let scale = cell * frame.k;
+    let scale = cell * view.k;
     let transform = format!(
         "matrix({a:.6} {b:.6} {c:.6} {d:.6} {e:.3} {f:.3})",
         a = scale * cos,
         b = -scale * sin,
         c = -scale * sin,
         d = -scale * cos,
-        e = frame.x0 + (tx - frame.min[0]) * frame.k,
-        f = frame.y0 + (frame.max[1] - ty) * frame.k
+        e = view.x0 + (tx - view.min[0]) * view.k,
+        f = view.y0 + (view.max[1] - ty) * view.k
     );
     let (mut lo, mut hi) = ([i64::MAX; 2], [i64::MIN; 2]);
     for c in &merged {
@@ -305,14 +305,14 @@ fn run_path<'a>(cells: impl Iterator<Item = &'a GridCell>) -> String {
 }
 
 /// A polyline, leaving out points within half a pixel of the last one drawn.
-fn polyline(svg: &mut String, frame: &Frame, points: &[[f64; 2]], style: &str) {
+fn polyline(svg: &mut String, view: &SvgView, points: &[[f64; 2]], style: &str) {
     if points.len() < 2 {
         return;
     }
     let mut coords = String::with_capacity(points.len() * 12);
     let mut last: Option<[f64; 2]> = None;
     for (i, p) in points.iter().enumerate() {
-        let q = frame.px(*p);
+        let q = view.px(*p);
         if !(q[0].is_finite() && q[1].is_finite()) {
             continue;
         }
@@ -331,22 +331,22 @@ fn polyline(svg: &mut String, frame: &Frame, points: &[[f64; 2]], style: &str) {
 }
 
 /// Marks where the estimate starts (hollow) and ends (filled).
-fn draw_endpoints(svg: &mut String, frame: &Frame, trajectory: &[[f64; 2]]) {
+fn draw_endpoints(svg: &mut String, view: &SvgView, trajectory: &[[f64; 2]]) {
     let (Some(first), Some(last)) = (trajectory.first(), trajectory.last()) else {
         return;
     };
-    let [x, y] = frame.px(*first);
+    let [x, y] = view.px(*first);
     let _ = writeln!(
         svg,
         r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="white" stroke="{ESTIMATE}" stroke-width="{:.2}"/>"#,
-        5.0 * frame.u,
-        2.0 * frame.u
+        5.0 * view.u,
+        2.0 * view.u
     );
-    let [x, y] = frame.px(*last);
+    let [x, y] = view.px(*last);
     let _ = writeln!(
         svg,
         r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="{ESTIMATE}"/>"#,
-        4.5 * frame.u
+        4.5 * view.u
     );
 }
 
@@ -393,7 +393,7 @@ fn draw_header(svg: &mut String, input: &SvgInput<'_>) {
 }
 
 /// The scale bar on the left of the footer, the legend after it, the note under both.
-fn draw_footer(svg: &mut String, frame: &Frame, input: &SvgInput<'_>, top: f64) {
+fn draw_footer(svg: &mut String, view: &SvgView, input: &SvgInput<'_>, top: f64) {
     let y = top + 34.0;
     if !input.note.is_empty() {
         let _ = writeln!(
@@ -403,8 +403,8 @@ fn draw_footer(svg: &mut String, frame: &Frame, input: &SvgInput<'_>, top: f64) 
             escape(input.note)
         );
     }
-    let metres = nice_length(0.2 * frame.map_w / frame.k);
-    let bar = metres * frame.k;
+    let metres = nice_length(0.2 * view.map_w / view.k);
+    let bar = metres * view.k;
     let x = MARGIN;
     let _ = writeln!(
         svg,

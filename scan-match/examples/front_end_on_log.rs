@@ -21,7 +21,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use lidar_replay::LogFormat;
 use scan_match::{FrontEnd, FrontEndConfig, MatchStatus};
-use slam_eval::{Trajectory, read_relations, score};
+use slam_eval::{Score, Trajectory, read_relations, score};
 
 /// Relations spanning less than this are scored on their own as well.
 const SHORT_RELATION_NS: u64 = 60_000_000_000;
@@ -171,17 +171,7 @@ fn main() -> Result<()> {
     if let Some(relations) = &args.relations {
         let trajectory = Trajectory::read_tum(&args.out)?;
         let relations = read_relations(relations)?;
-        let s = score(&trajectory, &relations, 1_000_000);
-        println!(
-            "relations {} used {}: translation {:.4} +- {:.4} m (max {:.3}), rotation {:.4} +- {:.4} deg",
-            s.relations,
-            s.used,
-            s.translation_m.mean,
-            s.translation_m.std,
-            s.translation_m.max,
-            s.rotation_deg.mean,
-            s.rotation_deg.std
-        );
+        print_score("relations", &score(&trajectory, &relations, 1_000_000));
         // Drift over minutes is the loop closure's to fix; the front end's own accuracy
         // shows on the short relations.
         let short: Vec<_> = relations
@@ -189,17 +179,23 @@ fn main() -> Result<()> {
             .filter(|r| r.t2_ns.abs_diff(r.t1_ns) < SHORT_RELATION_NS)
             .cloned()
             .collect();
-        let s = score(&trajectory, &short, 1_000_000);
-        println!(
-            "relations under 60 s {} used {}: translation {:.4} +- {:.4} m (max {:.3}), rotation {:.4} +- {:.4} deg",
-            s.relations,
-            s.used,
-            s.translation_m.mean,
-            s.translation_m.std,
-            s.translation_m.max,
-            s.rotation_deg.mean,
-            s.rotation_deg.std
+        print_score(
+            "relations under 60 s",
+            &score(&trajectory, &short, 1_000_000),
         );
     }
     Ok(())
+}
+
+fn print_score(label: &str, s: &Score) {
+    println!(
+        "{label} {} used {}: translation {:.4} +- {:.4} m (max {:.3}), rotation {:.4} +- {:.4} deg",
+        s.relations,
+        s.used,
+        s.translation_m.mean,
+        s.translation_m.std,
+        s.translation_m.max,
+        s.rotation_deg.mean,
+        s.rotation_deg.std
+    );
 }

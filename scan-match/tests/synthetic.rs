@@ -9,7 +9,7 @@ use scan_match::{
     OdometryStatus, ScanInput,
 };
 use slam_geom::{Pose2, wrap_angle};
-use world::{HOKUYO, SICK, corridor, raycast, room};
+use world::{HOKUYO, SICK, corridor, corridor_with_recess, raycast, room};
 
 const PERIOD_NS: u64 = 100_000_000;
 
@@ -306,14 +306,7 @@ fn without_odometry_a_corridors_weak_evidence_says_when_the_robot_moves_and_stop
     // A corridor whose only feature along its length is a shallow recess: the scan says
     // little about the motion along it, but not nothing. Its sides are 25 cm: a face not
     // much longer than the 20 cm of wall a normal is fitted over gives no normal at all.
-    let walls = vec![
-        ((-100.0, -1.0), (100.0, -1.0)),
-        ((-100.0, 1.0), (2.0, 1.0)),
-        ((2.0, 1.0), (2.0, 1.25)),
-        ((2.0, 1.25), (2.6, 1.25)),
-        ((2.6, 1.25), (2.6, 1.0)),
-        ((2.6, 1.0), (100.0, 1.0)),
-    ];
+    let walls = corridor_with_recess(2.0, 2.6, 0.25);
     let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
     let step = Pose2::new(0.1, 0.0, 0.0);
     let mut truth = Pose2::IDENTITY;
@@ -342,14 +335,7 @@ fn without_odometry_a_recess_that_comes_into_view_teaches_the_motion_along_a_cor
     // few metres. The velocity guess starts at standing, and standing is all the bare
     // walls can confirm: the front end learns the robot moves only if the recess reaches
     // its map, although it has not (by its own estimate) moved a keyframe's distance.
-    let walls = vec![
-        ((-100.0, -1.0), (100.0, -1.0)),
-        ((-100.0, 1.0), (8.0, 1.0)),
-        ((8.0, 1.0), (8.0, 1.4)),
-        ((8.0, 1.4), (9.2, 1.4)),
-        ((9.2, 1.4), (9.2, 1.0)),
-        ((9.2, 1.0), (100.0, 1.0)),
-    ];
+    let walls = corridor_with_recess(8.0, 9.2, 0.4);
     let run = |config: FrontEndConfig| {
         let mut front_end = FrontEnd::new(config).unwrap();
         let mut estimates = Vec::new();

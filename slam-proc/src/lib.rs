@@ -34,45 +34,33 @@
 //! # Ok::<(), slam_proc::SettingError>(())
 //! ```
 
-mod chi2;
 mod config;
-mod corner_model;
-mod drift;
-mod estimate;
-mod grid;
-mod jcbb;
-mod kalman;
-mod kld;
-mod likelihood_field;
-mod linalg;
-mod line_motion;
+mod filter;
+mod localize;
 mod localize_config;
-mod localizer;
 mod map;
-pub mod memory;
+mod math;
 mod motion;
-mod observation;
-mod particle;
 mod path;
-mod persistent;
-mod pose_arg;
-mod pose_graph;
-mod predict;
-mod resample;
 mod rigid_fit;
-mod rng;
-mod slam;
+mod update;
+
+// config.rs and rigid_fit.rs name these modules by their crate-root paths.
+use filter::observation;
+use path::pose_graph;
 
 pub use config::SlamConfig;
-pub use estimate::{Estimate, StageTiming};
-pub use likelihood_field::{BeamModel, LikelihoodField};
+pub use filter::estimate::{Estimate, StageTiming};
+pub use filter::fast_slam::{FastSlam, FilterStats};
+pub use filter::memory;
+pub use filter::observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
+pub use localize::likelihood_field::{BeamModel, LikelihoodField};
+pub use localize::localizer::{
+    Localization, LocalizeError, LocalizeStats, Localizer, ScanRanges, Start,
+};
+pub use localize::pose_arg::{PoseArgError, parse_pose};
 pub use localize_config::LocalizeConfig;
-pub use localizer::{Localization, LocalizeError, LocalizeStats, Localizer, ScanRanges, Start};
-
-pub use observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
-pub use path::PathPose;
-pub use pose_arg::{PoseArgError, parse_pose};
-pub use slam::{FastSlam, FilterStats};
+pub use path::particle_path::PathPose;
 pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;
 pub use stage_kit::SettingError;

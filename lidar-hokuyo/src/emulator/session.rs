@@ -10,9 +10,9 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
 use super::{SentScan, Shared, measure};
-use crate::lines::LineReader;
 use crate::scip::{Command, Information, Ranging, Reply, Status, TimeMode, data_line, encode};
 use crate::scip::{information_line, scan_body};
+use crate::text_lines::LineReader;
 
 /// Longest sleep between two looks at the stop flag.
 const POLL: Duration = Duration::from_millis(20);

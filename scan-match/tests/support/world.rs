@@ -52,6 +52,19 @@ pub fn corridor() -> Vec<Segment> {
     ]
 }
 
+/// [`corridor`] with a recess `depth` metres deep into its left wall between `from` and
+/// `to` along x: the one feature along its length.
+pub fn corridor_with_recess(from: f64, to: f64, depth: f64) -> Vec<Segment> {
+    vec![
+        ((-100.0, -1.0), (100.0, -1.0)),
+        ((-100.0, 1.0), (from, 1.0)),
+        ((from, 1.0), (from, 1.0 + depth)),
+        ((from, 1.0 + depth), (to, 1.0 + depth)),
+        ((to, 1.0 + depth), (to, 1.0)),
+        ((to, 1.0), (100.0, 1.0)),
+    ]
+}
+
 fn square(cx: f64, cy: f64, half: f64) -> Vec<Segment> {
     let c = [
         (cx - half, cy - half),

@@ -13,15 +13,15 @@
 //!    with the wall lines that match under the fit: corners close together fix the
 //!    heading poorly, long walls well).
 //! 4. Fewer than two consistent matches, or a fit beyond the per-step limits: the wall
-//!    lines matched under the prior, fused with it ([`crate::line_motion`]); without a
+//!    lines matched under the prior, fused with it ([`crate::motion::line_motion`]); without a
 //!    line either, the prior.
 
 use nalgebra::{Cholesky, Matrix3, Matrix4, Matrix4x3, Vector2, Vector3, Vector4};
 
-use crate::chi2::quantile_even;
 use crate::config::SlamConfig;
-use crate::line_motion;
-use crate::observation::{LineObservation, OdometryInput, Prepared};
+use crate::filter::observation::{LineObservation, OdometryInput, Prepared};
+use crate::math::chi2::quantile_even;
+use crate::motion::line_motion;
 use crate::rigid_fit::{Prior, normal_equations, refine};
 use slam_geom::Pose2;
 use slam_geom::align_se2;
@@ -498,6 +498,14 @@ mod tests {
             .collect()
     }
 
+    /// An estimator that has seen [`scene`] as its first scan, and that scene.
+    fn after_scene(config: &SlamConfig) -> (MotionEstimator, Vec<Prepared>) {
+        let mut estimator = MotionEstimator::new(config);
+        let previous = scene();
+        estimator.estimate(0, &previous, &[], None, config);
+        (estimator, previous)
+    }
+
     fn scene() -> Vec<Prepared> {
         vec![
             corner(3.0, 1.0, 0.5, 1.2),
@@ -576,9 +584,7 @@ mod tests {
     #[test]
     fn recovers_a_step_from_corners_despite_a_wrong_match() {
         let config = SlamConfig::default();
-        let mut estimator = MotionEstimator::new(&config);
-        let previous = scene();
-        estimator.estimate(0, &previous, &[], None, &config);
+        let (mut estimator, previous) = after_scene(&config);
         let truth = Pose2::new(0.12, 0.03, 0.15);
         let mut current = seen_from(&truth, &previous);
         // An outlier: a corner whose descriptor matches corner 0 but sits 0.4 m off.
@@ -603,9 +609,7 @@ mod tests {
     #[test]
     fn falls_back_to_constant_velocity_without_matches() {
         let config = SlamConfig::default();
-        let mut estimator = MotionEstimator::new(&config);
-        let previous = scene();
-        estimator.estimate(0, &previous, &[], None, &config);
+        let (mut estimator, previous) = after_scene(&config);
         let step = Pose2::new(0.1, 0.0, 0.05);
         let current = seen_from(&step, &previous);
         estimator.estimate(10, &current, &[], None, &config);

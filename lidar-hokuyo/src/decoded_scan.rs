@@ -6,7 +6,7 @@ use crate::geometry::RangingPlan;
 
 /// A scan with everything a `LaserScan` needs.
 #[derive(Debug, Clone, Copy)]
-pub struct Frame<'a> {
+pub struct DecodedScan<'a> {
     /// Published scans before this one: 0, 1, 2, ... without gaps, across reconnections.
     pub seq: u64,
     /// Host time (CLOCK_REALTIME, ns) of the first beam.
@@ -19,7 +19,7 @@ pub struct Frame<'a> {
     pub intensities: &'a [f32],
 }
 
-impl Frame<'_> {
+impl DecodedScan<'_> {
     /// Writes the scan into a (zeroed) `LaserScan`.
     pub fn fill(&self, scan: &mut LaserScan) -> Result<(), CapacityError> {
         scan.header = Header::new(self.seq, self.stamp_ns, self.frame_id);
@@ -39,7 +39,7 @@ mod tests {
     fn fills_every_field() {
         let plan = RangingPlan::new(&SensorParams::utm_30lx(), &ScanRequest::default()).unwrap();
         let ranges = vec![1.5f32; 1081];
-        let frame = Frame {
+        let decoded = DecodedScan {
             seq: 7,
             stamp_ns: 123_456_789,
             frame_id: "laser",
@@ -48,7 +48,7 @@ mod tests {
             intensities: &[],
         };
         let mut scan = LaserScan::boxed_zeroed();
-        frame.fill(&mut scan).unwrap();
+        decoded.fill(&mut scan).unwrap();
         assert_eq!(scan.header.seq, 7);
         assert_eq!(scan.header.stamp_ns, 123_456_789);
         assert_eq!(scan.header.frame_id(), "laser");

@@ -6,10 +6,10 @@ use std::f64::consts::PI;
 
 use nalgebra::{Matrix4, Vector4};
 
-use crate::corner_model::innovation;
 #[cfg(test)]
-use crate::linalg::spd_inverse4;
-use crate::linalg::{joseph_sum, mul4};
+use crate::math::linalg::spd_inverse4;
+use crate::math::linalg::{joseph_sum, mul4};
+use crate::update::corner_model::innovation;
 use slam_geom::wrap_angle;
 
 /// The smallest opening angle kept off 0 and pi: an update never turns a corner into a

@@ -9,16 +9,16 @@ use std::time::Instant;
 
 use nalgebra::Matrix3;
 use rand::Rng;
-use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
-use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
-use crate::kld::{Bins, kld_count};
-use crate::likelihood_field::{BeamModel, LikelihoodField};
+use crate::filter::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
+use crate::filter::observation::MeasuredMotion;
+use crate::filter::resample::{effective_sample_size, heaviest, normalise};
+use crate::filter::rng::Streams;
+use crate::localize::kld::{Bins, kld_count};
+use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
 use crate::localize_config::LocalizeConfig;
-use crate::observation::MeasuredMotion;
-use crate::resample::{effective_sample_size, normalise};
-use crate::rng::Streams;
+use crate::motion::predict::{self, MotionNoise};
 use map_sink::GridMap;
 use slam_geom::Pose2;
 use stage_kit::SettingError;
@@ -189,18 +189,16 @@ impl Localizer {
         let streams = Streams::new(seed);
         let mut rng = streams.resample(u64::MAX);
         let poses: Vec<Pose2> = match start {
-            Start::Known(pose) => (0..config.min_particles.max(1))
-                .map(|_| {
-                    let dx: f64 = rng.sample(StandardNormal);
-                    let dy: f64 = rng.sample(StandardNormal);
-                    let dyaw: f64 = rng.sample(StandardNormal);
-                    Pose2::new(
-                        pose.x + config.initial_sigma_xy * dx,
-                        pose.y + config.initial_sigma_xy * dy,
-                        pose.yaw + config.initial_sigma_yaw * dyaw,
-                    )
-                })
-                .collect(),
+            Start::Known(pose) => {
+                // Independent normal offsets in x, y and yaw, as a step's noise.
+                let spread = MotionNoise {
+                    sigma_xy: config.initial_sigma_xy,
+                    sigma_yaw: config.initial_sigma_yaw,
+                };
+                (0..config.min_particles.max(1))
+                    .map(|_| predict::sample(&pose, &spread, &mut rng))
+                    .collect()
+            }
             Start::Global => {
                 let cells = field.free_cells();
                 if cells == 0 {
@@ -327,19 +325,14 @@ impl Localizer {
     fn predict(&mut self, delta: &Pose2) {
         let c = &self.config;
         let (t, r) = (delta.translation_norm(), delta.yaw.abs());
-        let sigma_xy = (c.xy_variance_per_metre * t + c.xy_variance_per_radian * r).sqrt();
-        let sigma_yaw = (c.yaw_variance_per_metre * t + c.yaw_variance_per_radian * r).sqrt();
+        let noise = MotionNoise {
+            sigma_xy: (c.xy_variance_per_metre * t + c.xy_variance_per_radian * r).sqrt(),
+            sigma_yaw: (c.yaw_variance_per_metre * t + c.yaw_variance_per_radian * r).sqrt(),
+        };
         let scan = self.stats.scans;
         for (i, pose) in self.poses.iter_mut().enumerate() {
             let mut rng = self.streams.particle(scan, i);
-            let nx: f64 = rng.sample(StandardNormal);
-            let ny: f64 = rng.sample(StandardNormal);
-            let nyaw: f64 = rng.sample(StandardNormal);
-            let noisy = Pose2::new(
-                delta.x + sigma_xy * nx,
-                delta.y + sigma_xy * ny,
-                delta.yaw + sigma_yaw * nyaw,
-            );
+            let noisy = predict::sample(delta, &noise, &mut rng);
             *pose = pose.compose(&noisy);
         }
     }
@@ -444,12 +437,7 @@ impl Localizer {
     fn summarise_and_resample(&mut self, resample: bool) -> (Pose2, Pose2, Matrix3<f64>, f64) {
         normalise(&self.log_weights, &mut self.weights);
         let effective = effective_sample_size(&self.weights);
-        let mut best = 0;
-        for (i, w) in self.weights.iter().enumerate() {
-            if *w > self.weights[best] {
-                best = i;
-            }
-        }
+        let best = heaviest(&self.weights);
         let best_pose = self.poses.get(best).copied().unwrap_or(Pose2::IDENTITY);
         let (mean, covariance) = weighted_mean_and_covariance(
             self.poses.iter().copied().zip(self.weights.iter().copied()),

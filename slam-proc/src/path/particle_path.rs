@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use slam_geom::{Pose2, wrap_angle};
 
-use crate::pose_graph::{self, GraphNoise};
+use crate::path::pose_graph::{self, GraphNoise};
 
 /// One pose of a path: the scan's stamp and the particle's pose after that scan's update.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +81,7 @@ impl Path {
     }
 
     /// The poses from the first scan to the last, the loop closures' jumps spread back over
-    /// the drift they undid, all closures at once (see [`crate::pose_graph`]).
+    /// the drift they undid, all closures at once (see [`crate::path::pose_graph`]).
     pub fn smoothed(&self, noise: &GraphNoise) -> Vec<PathPose> {
         let (mut poses, closures) = self.nodes();
         pose_graph::smooth(&mut poses, &closures, noise);

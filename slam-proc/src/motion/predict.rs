@@ -6,7 +6,7 @@ use rand::Rng;
 use rand_distr::StandardNormal;
 
 use crate::config::SlamConfig;
-use crate::motion::{Motion, MotionSource};
+use crate::motion::estimator::{Motion, MotionSource};
 use slam_geom::Pose2;
 
 /// Standard deviations of one step's noise, in the particle's frame before the step.

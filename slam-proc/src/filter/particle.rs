@@ -7,16 +7,16 @@ use nalgebra::{Vector3, Vector4};
 use rand::Rng;
 use rand_distr::StandardNormal;
 
-use crate::chi2::Gates;
 use crate::config::SlamConfig;
-use crate::corner_model::{Frame, WorldObservation};
-use crate::drift::revisit_covariance;
-use crate::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
-use crate::kalman;
-use crate::linalg::sample_information_form3;
-use crate::map::{CornerMap, CornerState};
-use crate::observation::Prepared;
-use crate::path::{self, Closure, Path, PathPose};
+use crate::filter::observation::Prepared;
+use crate::map::corner_map::{CornerMap, CornerState};
+use crate::math::chi2::Gates;
+use crate::math::linalg::sample_information_form3;
+use crate::path::particle_path::{self, Closure, Path, PathPose};
+use crate::update::corner_model::{PoseTransform, WorldObservation};
+use crate::update::drift::revisit_covariance;
+use crate::update::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
+use crate::update::kalman;
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;
 
@@ -114,10 +114,10 @@ impl Particle {
     ) -> f64 {
         let config = context.config;
         scratch.world.clear();
-        let mut frame = Frame::new(&self.pose);
+        let mut transform = PoseTransform::new(&self.pose);
         scratch
             .world
-            .extend(context.observations.iter().map(|o| frame.to_world(o)));
+            .extend(context.observations.iter().map(|o| transform.to_world(o)));
 
         // The weight is the likelihood of the scan under the predicted pose, its
         // uncertainty included, from the usual association: the same whether or not a
@@ -174,8 +174,8 @@ impl Particle {
             }
             // The step the next constant-velocity prior repeats takes the correction only
             // up to three sigma of the step's noise (see `increment`). The correction in
-            // the predicted frame: `frame` is still the predicted pose's.
-            let (x, y) = frame.to_local(corrected.x, corrected.y);
+            // the predicted frame: `transform` is still the predicted pose's.
+            let (x, y) = transform.to_local(corrected.x, corrected.y);
             let correction = Pose2::new(x, y, wrap_angle(corrected.yaw - predicted.yaw));
             let p = &context.pose.covariance;
             let bound = |v: f64, variance: f64| {
@@ -187,9 +187,9 @@ impl Particle {
                 bound(correction.y, p[(1, 1)]),
                 bound(correction.yaw, p[(2, 2)]),
             ));
-            frame = Frame::new(&self.pose);
+            transform = PoseTransform::new(&self.pose);
             for (world, observation) in scratch.world.iter_mut().zip(context.observations) {
-                *world = frame.to_world(observation);
+                *world = transform.to_world(observation);
             }
         }
 
@@ -243,7 +243,7 @@ impl Particle {
         // spares an arctangent per tentative corner and particle.
         let (range, cos_half_fov) = (config.view_range, context.cos_half_fov);
         let in_view = |corner: &CornerState| {
-            let (x, y) = frame.to_local(corner.mean.x, corner.mean.y);
+            let (x, y) = transform.to_local(corner.mean.x, corner.mean.y);
             let r2 = x * x + y * y;
             r2 <= range * range && x >= r2.sqrt() * cos_half_fov
         };
@@ -253,7 +253,7 @@ impl Particle {
     }
 
     /// After a loop closed at `landed`: moves the corners mapped since `closure.from` as
-    /// the path that mapped them will be spread (see [`crate::path`]), so the map stays the
+    /// the path that mapped them will be spread (see [`crate::path::particle_path`]), so the map stays the
     /// one its path implies. Left as they were, the corners of the drifted stretch would
     /// pull the particle back into its drift when it sees them again.
     fn reanchor_since(&mut self, closure: &Closure, landed: Pose2) {
@@ -270,7 +270,7 @@ impl Particle {
             from: 0,
             drifted: closure.drifted,
         };
-        path::spread(&mut spread, raw.len(), &jump);
+        particle_path::spread(&mut spread, raw.len(), &jump);
         let first = closure.from as u64;
         self.map.reanchor(first..first + raw.len() as u64, |scan| {
             let i = usize::try_from(scan - first).ok()?;

@@ -16,9 +16,9 @@ use std::ops::Range;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
-use crate::corner_model::{WorldObservation, innovation};
-use crate::linalg::{spd_inverse4, spd_log_det3, spd_solve3};
-use crate::map::CornerState;
+use crate::map::corner_map::CornerState;
+use crate::math::linalg::{spd_inverse4, spd_log_det3, spd_solve3};
+use crate::update::corner_model::{WorldObservation, innovation};
 
 /// The pose uncertainty shared by every observation of a scan.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -330,8 +330,8 @@ impl Jcbb {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::corner_model::to_world;
-    use crate::observation::Prepared;
+    use crate::filter::observation::Prepared;
+    use crate::update::corner_model::to_world;
     use nalgebra::{Matrix4, Vector4};
     use slam_geom::Pose2;
 
@@ -399,7 +399,7 @@ mod tests {
             .iter()
             .map(|o| to_world(&pose, o))
             .collect();
-        let gates = crate::chi2::Gates::new(0.999);
+        let gates = crate::math::chi2::Gates::new(0.999);
         let (pairings, lists) =
             candidates(&observations, &corners, &uncertainty, gates.individual());
         // Both observations are individually compatible with both corners.
@@ -437,7 +437,7 @@ mod tests {
                 to_world(&pose, &o)
             })
             .collect();
-        let gates = crate::chi2::Gates::new(0.999999);
+        let gates = crate::math::chi2::Gates::new(0.999999);
         let (pairings, lists) =
             candidates(&observations, &corners, &uncertainty, gates.individual());
         let mut jcbb = Jcbb::default();
@@ -486,7 +486,7 @@ mod tests {
             .map(|_| to_world(&Pose2::IDENTITY, &observation(0.0, 0.0)))
             .collect();
         let uncertainty = PoseUncertainty::from_variances(0.01, 0.01, 0.001);
-        let mut gates = crate::chi2::Gates::new(0.99);
+        let mut gates = crate::math::chi2::Gates::new(0.99);
         gates.ensure(10);
         let (pairings, lists) =
             candidates(&observations, &corners, &uncertainty, gates.individual());

@@ -13,7 +13,7 @@
 
 use nalgebra::{Cholesky, Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 
-use crate::observation::LineObservation;
+use crate::filter::observation::LineObservation;
 use crate::rigid_fit::{Prior, gauss_newton};
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;
@@ -266,6 +266,7 @@ pub(crate) fn fit(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::finite_difference::nudged;
     use std::f64::consts::PI;
 
     /// `line` (in the previous frame) as seen from `previous_from_current`.
@@ -310,12 +311,7 @@ mod tests {
         assert!((m.line.x - 2.0).abs() < 1e-12 && (wrap_angle(m.line.y - 0.7)).abs() < 1e-12);
         let h = 1e-7;
         for k in 0..3 {
-            let mut shifted = t;
-            match k {
-                0 => shifted.x += h,
-                1 => shifted.y += h,
-                _ => shifted.yaw += h,
-            }
+            let shifted = nudged(&t, k, h);
             let numeric = (moved(&line, &shifted).line - m.line) / h;
             for row in 0..2 {
                 assert!((numeric[row] - m.pose_jacobian[(row, k)]).abs() < 1e-5);

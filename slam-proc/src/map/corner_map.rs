@@ -10,8 +10,8 @@ use nalgebra::{Matrix4, Vector2, Vector4};
 
 use slam_geom::{MapCorner, Pose2, wrap_angle};
 
-use crate::grid::SpatialGrid;
-use crate::persistent::PersistentArray;
+use crate::map::grid::SpatialGrid;
+use crate::map::persistent::PersistentArray;
 
 /// A corner's Gaussian estimate in the world, `(x, y, heading, angle)`.
 #[derive(Debug, Clone, Copy, PartialEq)]

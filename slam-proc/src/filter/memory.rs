@@ -162,22 +162,24 @@ fn cgroup_room() -> Option<u64> {
     let membership = std::fs::read_to_string("/proc/self/cgroup").ok()?;
     let read = |path: PathBuf| std::fs::read_to_string(path).ok();
     let (v2, v1) = cgroup_dirs(&membership);
-    for dir in v2 {
-        if let (Some(limit), Some(usage)) = (
-            read(dir.join("memory.max")),
-            read(dir.join("memory.current")),
-        ) {
-            let stat = read(dir.join("memory.stat")).unwrap_or_default();
-            return room_under_limit(&limit, &usage, &stat, "inactive_file");
-        }
-    }
-    for dir in v1 {
-        if let (Some(limit), Some(usage)) = (
-            read(dir.join("memory.limit_in_bytes")),
-            read(dir.join("memory.usage_in_bytes")),
-        ) {
-            let stat = read(dir.join("memory.stat")).unwrap_or_default();
-            return room_under_limit(&limit, &usage, &stat, "total_inactive_file");
+    // Each version's limit, usage and reclaimable page-cache counter, v2 first.
+    let versions = [
+        (v2, "memory.max", "memory.current", "inactive_file"),
+        (
+            v1,
+            "memory.limit_in_bytes",
+            "memory.usage_in_bytes",
+            "total_inactive_file",
+        ),
+    ];
+    for (dirs, limit_file, usage_file, inactive) in versions {
+        for dir in dirs {
+            if let (Some(limit), Some(usage)) =
+                (read(dir.join(limit_file)), read(dir.join(usage_file)))
+            {
+                let stat = read(dir.join("memory.stat")).unwrap_or_default();
+                return room_under_limit(&limit, &usage, &stat, inactive);
+            }
         }
     }
     None

@@ -8,7 +8,7 @@
 
 use std::sync::Arc;
 
-use crate::persistent::PersistentArray;
+use crate::map::persistent::PersistentArray;
 
 /// Buckets of the hash. Maps of up to tens of thousands of corners keep a few entries per
 /// bucket; distant cells sharing a bucket only cost a comparison.

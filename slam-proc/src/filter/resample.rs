@@ -44,6 +44,18 @@ pub(crate) fn effective_sample_size(weights: &[f64]) -> f64 {
     }
 }
 
+/// The index of the largest weight, the first of equals: ties must not depend on anything
+/// but the order. 0 for no weights.
+pub(crate) fn heaviest(weights: &[f64]) -> usize {
+    let mut best = 0;
+    for (i, w) in weights.iter().enumerate() {
+        if *w > weights[best] {
+            best = i;
+        }
+    }
+    best
+}
+
 /// Systematic resampling: one uniform `u` in `[0, 1)` places N evenly spaced pointers on
 /// the cumulative weights, so particle `i` gets `floor(N w_i)` or `ceil(N w_i)` copies.
 /// Writes the parent index of each new particle to `parents`, in order.
@@ -134,5 +146,12 @@ mod tests {
     fn effective_sample_size_spans_one_to_n() {
         assert!((effective_sample_size(&[0.25; 4]) - 4.0).abs() < 1e-12);
         assert!((effective_sample_size(&[1.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_heaviest_is_the_first_of_equal_largest_weights() {
+        assert_eq!(heaviest(&[0.1, 0.4, 0.1, 0.4]), 1);
+        assert_eq!(heaviest(&[0.7, 0.2, 0.1]), 0);
+        assert_eq!(heaviest(&[]), 0);
     }
 }

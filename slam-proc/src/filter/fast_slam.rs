@@ -5,20 +5,24 @@ use std::time::Instant;
 use rand::Rng;
 use rayon::prelude::*;
 
-use crate::chi2::Gates;
 use crate::config::SlamConfig;
-use crate::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
-use crate::jcbb::PoseUncertainty;
+use crate::filter::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
+use crate::math::chi2::Gates;
+use crate::update::jcbb::PoseUncertainty;
 use slam_geom::MapCorner;
 
-use crate::map::{CornerMap, CornerState};
-use crate::motion::{Motion, MotionEstimator, MotionSource};
-use crate::observation::{LineObservation, MeasuredMotion, Observation, OdometryInput, Prepared};
-use crate::particle::{Particle, ScanContext, Scratch};
-use crate::path::PathPose;
-use crate::predict::{self, MotionNoise};
-use crate::resample::{effective_sample_size, log_sum_exp, normalise, systematic};
-use crate::rng::Streams;
+use crate::filter::observation::{
+    LineObservation, MeasuredMotion, Observation, OdometryInput, Prepared,
+};
+use crate::filter::particle::{Particle, ScanContext, Scratch};
+use crate::filter::resample::{
+    effective_sample_size, heaviest, log_sum_exp, normalise, systematic,
+};
+use crate::filter::rng::Streams;
+use crate::map::corner_map::{CornerMap, CornerState};
+use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
+use crate::motion::predict::{self, MotionNoise};
+use crate::path::particle_path::PathPose;
 use slam_geom::Pose2;
 use stage_kit::SettingError;
 
@@ -464,27 +468,15 @@ impl FastSlam {
             .extend(self.particles.iter().map(|p| p.log_weight));
         normalise(&self.log_weights, &mut self.weights);
         let effective = effective_sample_size(&self.weights);
-        // The first of equals: ties must not depend on anything but the order.
-        let mut best = 0;
-        for (i, w) in self.weights.iter().enumerate() {
-            if *w > self.weights[best] {
-                best = i;
-            }
-        }
+        let best = heaviest(&self.weights);
         self.best = best;
         let best_pose = self.particles.get(best).map_or(Pose2::IDENTITY, |p| p.pose);
-        let samples = self
-            .particles
-            .iter()
-            .zip(&self.weights)
-            .map(|(p, w)| (p.pose, *w));
-        let (mean, covariance) = weighted_mean_and_covariance(samples);
-        let increments = self
-            .particles
-            .iter()
-            .zip(&self.weights)
-            .map(|(p, w)| (p.increment, *w));
-        let (increment, _) = weighted_mean_and_covariance(increments);
+        let weighted = |pose_of: fn(&Particle) -> Pose2| {
+            let samples = self.particles.iter().zip(&self.weights);
+            weighted_mean_and_covariance(samples.map(|(p, w)| (pose_of(p), *w)))
+        };
+        let (mean, covariance) = weighted(|p| p.pose);
+        let (increment, _) = weighted(|p| p.increment);
         self.motion.set_last_motion(increment);
 
         let n = self.particles.len();

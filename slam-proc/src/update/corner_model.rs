@@ -8,7 +8,7 @@
 use nalgebra::Matrix4x3;
 use nalgebra::{Matrix4, Vector2, Vector4};
 
-use crate::observation::Prepared;
+use crate::filter::observation::Prepared;
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;
 
@@ -42,18 +42,18 @@ impl WorldObservation {
 /// Takes `observation` from the sensor frame of `pose` to the world.
 #[cfg(test)]
 pub(crate) fn to_world(pose: &Pose2, observation: &Prepared) -> WorldObservation {
-    Frame::new(pose).to_world(observation)
+    PoseTransform::new(pose).to_world(observation)
 }
 
 /// A particle's pose with its rotation evaluated once, for all of a scan's observations.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Frame {
+pub(crate) struct PoseTransform {
     pose: Pose2,
     sin: f64,
     cos: f64,
 }
 
-impl Frame {
+impl PoseTransform {
     pub fn new(pose: &Pose2) -> Self {
         let (sin, cos) = pose.yaw.sin_cos();
         Self {
@@ -116,6 +116,7 @@ pub(crate) fn innovation(observed: &Vector4<f64>, corner: &Vector4<f64>) -> Vect
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::finite_difference::nudged;
 
     #[test]
     fn jacobians_match_finite_differences() {
@@ -127,12 +128,7 @@ mod tests {
         let w = to_world(&pose, &observation);
         let h = 1e-7;
         for k in 0..3 {
-            let mut moved = pose;
-            match k {
-                0 => moved.x += h,
-                1 => moved.y += h,
-                _ => moved.yaw += h,
-            }
+            let moved = nudged(&pose, k, h);
             let numeric = innovation(&to_world(&moved, &observation).z, &w.z) / h;
             for row in 0..4 {
                 assert!((numeric[row] - w.pose_jacobian()[(row, k)]).abs() < 1e-5);

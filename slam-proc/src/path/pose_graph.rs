@@ -12,14 +12,14 @@
 //! the closures spanning it: a step that drifts more takes more of the correction, and a
 //! stretch that two loops share is bent only as far as both allow.
 //!
-//! Spreading each jump back on its own (see [`crate::path::spread`]) is this solution for one
+//! Spreading each jump back on its own (see [`crate::path::particle_path::spread`]) is this solution for one
 //! closure; with several, a later loop spread over a stretch an earlier one had pinned to
 //! the old map would undo it.
 
 use nalgebra::{DMatrix, DVector};
 use slam_geom::{Pose2, wrap_angle};
 
-use crate::path::{Closure, PathPose, spread};
+use crate::path::particle_path::{Closure, PathPose, spread};
 
 /// The variances of the chain's steps.
 #[derive(Debug, Clone, Copy, PartialEq)]

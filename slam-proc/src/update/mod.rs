@@ -1,0 +1,7 @@
+//! The measurement update of one particle: the corner observation model, data association,
+//! the Kalman update of matched corners, and the uncertainty a revisit allows for.
+
+pub(crate) mod corner_model;
+pub(crate) mod drift;
+pub(crate) mod jcbb;
+pub(crate) mod kalman;
