@@ -14,10 +14,6 @@
 
 use std::path::Path;
 
-use crate::messages::{
-    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
-    WorldCorners,
-};
 use crate::topic::{self, Topic};
 use crate::transport::{Delivery, MAX_SUBSCRIBERS, subscriber_queue};
 
@@ -72,45 +68,48 @@ fn service<T>(
     }
 }
 
-/// What decides which services a run has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// What decides which services a run has: the source's delivery, which every stage passes
+/// on, and each topic the run publishes with the number of stages that read it (the
+/// launcher's topology table, `launch::topology`, counts them).
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunShape {
-    /// The source's delivery, which every stage passes on.
     pub delivery: Delivery,
-    /// The simulator: ground truth and the world's corners.
-    pub simulated: bool,
-    /// A source that publishes odometry.
-    pub odometry: bool,
-    /// The recorder (slam-record): one more subscriber on every topic.
-    pub recorded: bool,
+    pub topics: Vec<(&'static str, usize)>,
 }
 
-/// The services of a pipeline run and what they can take, as the stages create and open
-/// them: the histories of their `Outlet::create` calls (the path always lossless), the
-/// scans read by feature-proc and map-sink, every other topic by one stage, and every topic
-/// by the recorder too when there is one.
-pub fn pipeline_services(shape: RunShape) -> Vec<ServiceSize> {
-    let d = shape.delivery;
-    let one = 1 + usize::from(shape.recorded);
-    let mut services = vec![
-        service::<LaserScan>(topic::SCAN, d, 0, 1 + one),
-        service::<Features>(topic::FEATURES, d, 0, one),
-        service::<PoseEstimate>(topic::POSE, d, 0, one),
-        service::<MapSnapshot>(topic::MAP, d, 1, one),
-        service::<PathChunk>(topic::PATH, Delivery::Lossless, 0, one),
-    ];
-    if shape.odometry {
-        services.push(service::<Odometry>(topic::ODOMETRY, d, 0, one));
-    }
-    if shape.simulated {
-        services.push(service::<GroundTruthPose>(topic::GROUND_TRUTH, d, 0, one));
-        services.push(service::<WorldCorners>(topic::WORLD_CORNERS, d, 1, one));
-    }
-    services
+/// The service of the topic named `topic_name` with `subscribers` readers, as the stages
+/// create it: the histories of their `Outlet::create` calls, the path always lossless.
+/// `None` for a name that is no topic of [`crate::topic`].
+pub fn service_size(
+    topic_name: &str,
+    delivery: Delivery,
+    subscribers: usize,
+) -> Option<ServiceSize> {
+    let (d, n) = (delivery, subscribers);
+    Some(match topic_name {
+        t if t == topic::SCAN.name() => service(topic::SCAN, d, 0, n),
+        t if t == topic::ODOMETRY.name() => service(topic::ODOMETRY, d, 0, n),
+        t if t == topic::GROUND_TRUTH.name() => service(topic::GROUND_TRUTH, d, 0, n),
+        t if t == topic::WORLD_CORNERS.name() => service(topic::WORLD_CORNERS, d, 1, n),
+        t if t == topic::FEATURES.name() => service(topic::FEATURES, d, 0, n),
+        t if t == topic::POSE.name() => service(topic::POSE, d, 0, n),
+        t if t == topic::MAP.name() => service(topic::MAP, d, 1, n),
+        t if t == topic::PATH.name() => service(topic::PATH, Delivery::Lossless, 0, n),
+        _ => return None,
+    })
+}
+
+/// The services of a pipeline run and what they can take.
+pub fn pipeline_services(shape: &RunShape) -> Vec<ServiceSize> {
+    shape
+        .topics
+        .iter()
+        .filter_map(|&(name, subscribers)| service_size(name, shape.delivery, subscribers))
+        .collect()
 }
 
 /// The bytes of /dev/shm a run of `shape` may take.
-pub fn pipeline_bytes(shape: RunShape) -> u64 {
+pub fn pipeline_bytes(shape: &RunShape) -> u64 {
     pipeline_services(shape)
         .iter()
         .map(|s| s.bytes)
@@ -176,7 +175,7 @@ pub fn free_bytes(dir: &Path) -> std::io::Result<u64> {
 }
 
 /// Refuses a run of `shape` when `free` bytes of /dev/shm cannot hold its services.
-pub fn check_room(shape: RunShape, free: u64) -> Result<(), ShmError> {
+pub fn check_room(shape: &RunShape, free: u64) -> Result<(), ShmError> {
     let need = pipeline_bytes(shape);
     if need <= free {
         return Ok(());
@@ -210,15 +209,36 @@ mod tests {
         assert_eq!(sample_slots(Delivery::Latest, 0, 99), 16 * 42 + 2);
     }
 
+    use crate::messages::LaserScan;
+
+    const TOPICS: [&str; 8] = [
+        topic::SCAN.name(),
+        topic::ODOMETRY.name(),
+        topic::GROUND_TRUTH.name(),
+        topic::WORLD_CORNERS.name(),
+        topic::FEATURES.name(),
+        topic::POSE.name(),
+        topic::MAP.name(),
+        topic::PATH.name(),
+    ];
+
+    /// A lockstep simulated run's services: the scans read by feature-proc and map-sink,
+    /// every other topic by one stage; `extra` more readers on every topic (a recorder).
+    fn simulated(delivery: Delivery, extra: usize) -> RunShape {
+        RunShape {
+            delivery,
+            topics: TOPICS
+                .into_iter()
+                .filter(|&t| t != topic::ODOMETRY.name())
+                .map(|t| (t, 1 + usize::from(t == topic::SCAN.name()) + extra))
+                .collect(),
+        }
+    }
+
     #[test]
     fn a_run_s_need_is_the_sum_of_its_segments() {
-        let lockstep = RunShape {
-            delivery: Delivery::Lossless,
-            simulated: true,
-            odometry: false,
-            recorded: false,
-        };
-        let services = pipeline_services(lockstep);
+        let lockstep = simulated(Delivery::Lossless, 0);
+        let services = pipeline_services(&lockstep);
         assert_eq!(services.len(), 7);
         let scan = &services[0];
         assert_eq!(scan.topic, "lidar/scan");
@@ -226,7 +246,7 @@ mod tests {
             scan.bytes,
             8 * (std::mem::size_of::<LaserScan>() as u64 + SAMPLE_OVERHEAD)
         );
-        let need = pipeline_bytes(lockstep);
+        let need = pipeline_bytes(&lockstep);
         assert_eq!(
             need,
             services.iter().map(|s| s.bytes).sum::<u64>() + MANAGEMENT_BYTES
@@ -236,31 +256,39 @@ mod tests {
         assert!((3 << 20..16 << 20).contains(&need), "{need}");
         // Real time queues 40 messages per subscriber: several times more, still within a
         // container's default 64 MiB.
-        let live = RunShape {
-            delivery: Delivery::Latest,
-            ..lockstep
-        };
-        assert!((4 * need..64 << 20).contains(&pipeline_bytes(live)));
-        // The recorder reads every topic: one more subscriber's slots on each.
-        let recorded = RunShape {
-            recorded: true,
-            ..lockstep
-        };
-        assert!(pipeline_bytes(recorded) > need);
-        assert_eq!(pipeline_services(recorded).len(), services.len());
+        let live = simulated(Delivery::Latest, 0);
+        assert!((4 * need..64 << 20).contains(&pipeline_bytes(&live)));
+        // A recorder reads every topic: one more subscriber's slots on each.
+        let recorded = simulated(Delivery::Lossless, 1);
+        assert!(pipeline_bytes(&recorded) > need);
+        assert_eq!(pipeline_services(&recorded).len(), services.len());
+    }
+
+    #[test]
+    fn every_topic_has_a_size_and_nothing_else_has() {
+        for name in TOPICS {
+            let size = service_size(name, Delivery::Lossless, 1).expect("a topic");
+            assert_eq!(size.topic, name);
+        }
+        assert_eq!(service_size("lidar/scans", Delivery::Lossless, 1), None);
     }
 
     #[test]
     fn too_little_room_is_refused_with_both_figures_and_the_largest_services() {
         let shape = RunShape {
             delivery: Delivery::Lossless,
-            simulated: false,
-            odometry: true,
-            recorded: false,
+            topics: vec![
+                (topic::SCAN.name(), 2),
+                (topic::ODOMETRY.name(), 1),
+                (topic::FEATURES.name(), 1),
+                (topic::POSE.name(), 1),
+                (topic::MAP.name(), 1),
+                (topic::PATH.name(), 1),
+            ],
         };
-        let need = pipeline_bytes(shape);
-        assert!(check_room(shape, need).is_ok());
-        let error = check_room(shape, 1 << 20).unwrap_err().to_string();
+        let need = pipeline_bytes(&shape);
+        assert!(check_room(&shape, need).is_ok());
+        let error = check_room(&shape, 1 << 20).unwrap_err().to_string();
         assert!(
             error.starts_with(&format!(
                 "/dev/shm has 1 MiB free, but the run's shared memory may take {} MiB \

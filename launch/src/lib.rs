@@ -29,6 +29,7 @@
 //!   refused before anything starts (`slam_proc::memory`).
 
 pub mod bench;
+pub mod cli;
 pub mod closing;
 pub mod config;
 pub mod losses;
@@ -39,3 +40,4 @@ pub mod stage;
 pub mod stall;
 pub mod status;
 pub mod supervisor;
+pub mod topology;

@@ -6,114 +6,15 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use ipc_types::{Domain, shutdown};
+use launch::cli::Args;
 use launch::config::{RunConfig, SourceKind};
 use launch::relations::relations_beside;
 use launch::stall::StallLimits;
 use launch::supervisor::{self, Display, Outcome, StagePlan};
+use launch::topology::{self, Role, RunKind};
 use map_sink::write_atomic;
 use slam_eval::{METRICS_FILE, Metrics, ScoreSummary};
 use stage_kit::{say, say_err};
-
-/// Runs a scan source (lidar-sim, lidar-replay or lidar-hokuyo) -> feature-proc -> slam-proc
-/// -> map-sink as separate processes over iceoryx2 shared memory in a domain of their own,
-/// and writes trajectory, map, picture and metrics into the output directory.
-///
-/// Every setting can also come from a TOML file (--config) with the keys `source`,
-/// `relations`, `stall_warning`, `stall_limit`, `map`, `localize` and `initial_pose` and the
-/// sections [sim], [replay], [hokuyo], [features], [front_end], [slam], [grid] and [record];
-/// options given here override the file. Keys a section does not know are refused by the
-/// process that reads it.
-#[derive(Debug, Parser)]
-#[command(name = "slam-launch", version)]
-struct Args {
-    /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit`, `map`,
-    /// `localize`, `initial_pose` and [sim], [replay], [hokuyo], [features], [front_end],
-    /// [slam], [grid], [record] sections.
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
-    /// Where the scans come from (default: sim; --replay implies replay).
-    #[arg(long, value_enum)]
-    source: Option<SourceKind>,
-    /// World to simulate: hall, office, corridor or a world file (JSON).
-    #[arg(long)]
-    world: Option<String>,
-    /// Replay this recorded log instead of simulating.
-    #[arg(long, value_name = "FILE")]
-    replay: Option<PathBuf>,
-    /// Format of the replayed log: seed-csv, carmen or mcap (a run.mcap of --record; the
-    /// default for a file named *.mcap).
-    #[arg(long)]
-    format: Option<String>,
-    /// HOST:PORT of a live Hokuyo scanner (with --source hokuyo).
-    #[arg(long)]
-    addr: Option<String>,
-    /// Do not use the odometry of a replayed log.
-    #[arg(long)]
-    no_odometry: bool,
-    /// Scans to simulate or replay (0 = the whole path of the world, the whole log).
-    #[arg(long)]
-    frames: Option<u64>,
-    /// Scans per second (a replay: times the log's own speed); 0 = lockstep: nothing is lost
-    /// and a run repeats exactly.
-    #[arg(long)]
-    rate: Option<f64>,
-    /// Seed of the simulator's noise and of the particle filter.
-    #[arg(long)]
-    seed: Option<u64>,
-    /// Particles of the filter.
-    #[arg(long)]
-    particles: Option<usize>,
-    /// Edge of the occupancy grid's cells (map.pgm), metres; default 0.05.
-    #[arg(long, value_name = "METRES")]
-    resolution: Option<f64>,
-    /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
-    #[arg(long)]
-    odometry: bool,
-    /// Ground-truth relations (t1 t2 x y z roll pitch yaw, Kuemmerle et al. 2009) to score
-    /// the run against: trajectory.tum, dead_reckoning.tum and trajectory_online.tum, where
-    /// written. A replay of DIR/NAME.clf is scored against DIR/NAME.relations without this
-    /// option if that file exists.
-    #[arg(long, value_name = "FILE")]
-    relations: Option<PathBuf>,
-    /// Seconds a stage may make no progress before the console names it (default 10).
-    #[arg(long, value_name = "SECONDS")]
-    stall_warning: Option<f64>,
-    /// Seconds a stage may make no progress before the run fails with its name (default
-    /// 120; at least --stall-warning).
-    #[arg(long, value_name = "SECONDS")]
-    stall_limit: Option<f64>,
-    /// Output directory (default: runs/<world or log name>).
-    #[arg(long, value_name = "DIR")]
-    out: Option<PathBuf>,
-    /// iceoryx2 domain of this run (default: a fresh one).
-    #[arg(long)]
-    domain: Option<String>,
-    /// Directory with the pipeline's executables (default: this program's directory).
-    #[arg(long, value_name = "DIR")]
-    bin_dir: Option<PathBuf>,
-    /// No progress output, only the final summary.
-    #[arg(long)]
-    quiet: bool,
-    /// A saved map (a run's output directory): the run maps on top of it, extending its
-    /// landmarks, or with --localize localizes on it.
-    #[arg(long, value_name = "DIR")]
-    map: Option<PathBuf>,
-    /// Localize on --map without changing it; the status line says whether the pose has
-    /// converged.
-    #[arg(long)]
-    localize: bool,
-    /// Where the robot starts in --map's frame, `x,y,yaw` (metres, radians); localizing
-    /// without it searches the whole map.
-    #[arg(long, value_name = "X,Y,YAW", allow_hyphen_values = true)]
-    initial_pose: Option<String>,
-    /// Start the replay at this scan of the log (from 0).
-    #[arg(long, value_name = "SCAN")]
-    replay_start: Option<u64>,
-    /// Record every topic into OUT/run.mcap (slam-record), for Foxglove; in lockstep the
-    /// run stays lossless and deterministic.
-    #[arg(long)]
-    record: bool,
-}
 
 fn main() -> ExitCode {
     match run() {
@@ -129,11 +30,7 @@ fn run() -> Result<ExitCode> {
     let args = Args::parse();
     shutdown::install().context("cannot install the Ctrl-C handler")?;
 
-    let mut config = match &args.config {
-        Some(path) => RunConfig::load(path)?,
-        None => RunConfig::default(),
-    };
-    apply_overrides(&mut config, &args);
+    let mut config = args.run_config()?;
     config.validate()?;
     // slam-proc refuses it too, but as a stage that dies once map-sink is up.
     slam_proc::memory::check(config.slam.particles).context("refusing to start")?;
@@ -330,81 +227,9 @@ fn source_label(config: &RunConfig) -> String {
     }
 }
 
-fn apply_overrides(config: &mut RunConfig, args: &Args) {
-    if let Some(source) = args.source {
-        config.source = source;
-    } else if args.replay.is_some() {
-        config.source = SourceKind::Replay;
-    }
-    if let Some(file) = &args.replay {
-        config.replay.file = Some(file.clone());
-    }
-    if let Some(format) = &args.format {
-        config.replay.format = format.clone();
-    } else if let Some(file) = &args.replay
-        && file.extension().is_some_and(|e| e == "mcap")
-    {
-        config.replay.format = lidar_replay::LogFormat::Mcap.name().into();
-    }
-    if let Some(addr) = &args.addr {
-        config.hokuyo.addr = addr.clone();
-    }
-    if args.no_odometry {
-        config.replay.odometry = false;
-    }
-    if let Some(rate) = args.rate {
-        config.replay.rate = rate;
-    }
-    if let Some(world) = &args.world {
-        config.sim.world = world.clone();
-    }
-    if let Some(frames) = args.frames {
-        config.sim.frames = frames;
-        config.replay.frames = frames;
-    }
-    if let Some(relations) = &args.relations {
-        config.relations = Some(relations.clone());
-    }
-    if let Some(rate) = args.rate {
-        config.sim.rate = rate;
-    }
-    if let Some(seed) = args.seed {
-        config.sim.seed = seed;
-        config.slam.seed = seed;
-    }
-    if let Some(particles) = args.particles {
-        config.slam.particles = particles;
-    }
-    if args.odometry {
-        config.sim.odometry = true;
-    }
-    if let Some(seconds) = args.stall_warning {
-        config.stall_warning = seconds;
-    }
-    if let Some(seconds) = args.stall_limit {
-        config.stall_limit = seconds;
-    }
-    if let Some(resolution) = args.resolution {
-        config.grid.resolution = resolution;
-    }
-    if args.record {
-        config.record.enabled = true;
-    }
-    if let Some(dir) = &args.map {
-        config.map = Some(dir.clone());
-    }
-    if args.localize {
-        config.localize = true;
-    }
-    if let Some(pose) = &args.initial_pose {
-        config.initial_pose = Some(pose.clone());
-    }
-    if let Some(start) = args.replay_start {
-        config.replay.start = start;
-    }
-}
-
-/// The processes of a simulated run, consumers first and the source last.
+/// The processes of the run, in the topology's start order (consumers first, the source
+/// last): each with the run's domain, the subscribers it waits for as the topology counts
+/// them, and its own settings.
 fn plan(
     config: &RunConfig,
     domain: &Domain,
@@ -412,16 +237,40 @@ fn plan(
     out: &Path,
     config_dir: &Path,
 ) -> Result<Vec<StagePlan>> {
-    let program = |name: &str| -> Result<PathBuf> {
-        let path = bin_dir.join(name);
-        if !path.is_file() {
-            bail!(
-                "{} not found; build the workspace first (cargo build --release)",
-                path.display()
-            );
-        }
-        Ok(path)
-    };
+    let run = RunKind::of(config);
+    topology::stages(&run)
+        .map(|stage| {
+            let program = bin_dir.join(stage.binary);
+            if !program.is_file() {
+                bail!(
+                    "{} not found; build the workspace first (cargo build --release)",
+                    program.display()
+                );
+            }
+            let mut args = vec!["--domain".to_owned(), domain.name().to_owned()];
+            if let Some(subscribers) = topology::waits_for_subscribers(stage, &run) {
+                args.extend(["--subscribers".to_owned(), subscribers.to_string()]);
+            }
+            args.extend(settings_args(stage.role, config, out, config_dir)?);
+            Ok(StagePlan {
+                name: stage.binary.into(),
+                program,
+                args,
+                // The recording is a by-product: the run goes on without it.
+                expendable: stage.role == Role::Recorder,
+            })
+        })
+        .collect()
+}
+
+/// A stage's arguments besides its topics: the settings of its config section, those the
+/// launcher interprets as options and the rest as a file of their own.
+fn settings_args(
+    role: Role,
+    config: &RunConfig,
+    out: &Path,
+    config_dir: &Path,
+) -> Result<Vec<String>> {
     let section_as = |name: &str, table: &toml::Table, flag: &str| -> Result<Vec<String>> {
         if table.is_empty() {
             return Ok(Vec::new());
@@ -431,204 +280,110 @@ fn plan(
         Ok(vec![flag.into(), path.display().to_string()])
     };
     let section = |name: &str, table: &toml::Table| section_as(name, table, "--config");
-    let d = domain.name().to_owned();
-    // The recorder subscribes to every topic: each publisher waits for it too.
-    let recorder = config.record.extra_subscribers();
-    // feature-proc and map-sink take the scans; slam-proc too when its beams weight the
-    // particles on a saved map.
-    let scan_subscribers = (2 + usize::from(config.localize) + recorder).to_string();
-
-    let mut sink: Vec<String> = vec![
-        "--domain".into(),
-        d.clone(),
-        "--out".into(),
-        out.display().to_string(),
-        "--status".into(),
-        "--title".into(),
-        format!(
-            "{}: {} particles, seed {}",
-            source_label(config),
-            config.slam.particles,
-            config.slam.seed
-        ),
-    ];
-    sink.push(format!("--resolution={}", config.grid.resolution));
-    // map-sink scores: it writes metrics.json and map.svg once, at the end, and the score
-    // belongs in both (see slam_eval::score_run).
-    if let Some(relations) = &config.relations {
-        sink.push("--relations".into());
-        sink.push(relations.display().to_string());
-    }
-    let mut slam = vec![
-        "--domain".into(),
-        d.clone(),
-        "--particles".into(),
-        config.slam.particles.to_string(),
-        "--seed".into(),
-        config.slam.seed.to_string(),
-        "--map-every".into(),
-        config.slam.map_every.to_string(),
-        // map-sink takes the poses.
-        "--subscribers".into(),
-        (1 + recorder).to_string(),
-    ];
-    if let Some(dir) = &config.map {
-        slam.push("--map".into());
-        slam.push(dir.display().to_string());
-    }
-    if config.localize {
-        slam.push("--localize".into());
-    }
-    if let Some(pose) = &config.initial_pose {
-        slam.push(format!("--initial-pose={pose}"));
-    }
-    slam.extend(section("slam", &config.slam.extra)?);
-    // slam-proc takes the features.
-    let mut features = vec![
-        "--domain".into(),
-        d.clone(),
-        "--subscribers".into(),
-        (1 + recorder).to_string(),
-    ];
-    features.extend(section("features", &config.features)?);
-    features.extend(section_as(
-        "front_end",
-        &config.front_end,
-        "--front-end-config",
-    )?);
-    let source = match config.source {
-        SourceKind::Sim => sim_stage(config, &d, &scan_subscribers, &section, &program)?,
-        SourceKind::Replay => {
-            let mut args = vec![
-                "--format".into(),
-                config.replay.format.clone(),
-                "--file".into(),
-                config
-                    .replay
-                    .file
-                    .as_deref()
-                    .map(|f| f.display().to_string())
-                    .unwrap_or_default(),
-                "--rate".into(),
-                config.replay.rate.to_string(),
-                "--domain".into(),
-                d.clone(),
-                "--subscribers".into(),
-                scan_subscribers.clone(),
-                "--frames".into(),
-                config.replay.frames.to_string(),
-            ];
-            if !config.replay.odometry {
-                args.push("--no-odometry".into());
-            }
-            if config.replay.start > 0 {
-                args.push(format!("--skip={}", config.replay.start));
-            }
-            if let Some(window) = config.replay.reorder_window {
-                args.push(format!("--reorder-window={window}"));
-            }
-            StagePlan {
-                name: "lidar-replay".into(),
-                program: program("lidar-replay")?,
-                args,
-                expendable: false,
-            }
+    let out = out.display().to_string();
+    let path = |p: &Path| p.display().to_string();
+    Ok(match role {
+        Role::Recorder => flag_values([("--out", Some(out))]),
+        Role::Sink => {
+            let title = format!(
+                "{}: {} particles, seed {}",
+                source_label(config),
+                config.slam.particles,
+                config.slam.seed
+            );
+            let mut args = flag_values([
+                ("--out", Some(out)),
+                ("--title", Some(title)),
+                // map-sink scores: it writes metrics.json and map.svg once, at the end, and
+                // the score belongs in both (see slam_eval::score_run).
+                ("--relations", config.relations.as_deref().map(path)),
+            ]);
+            args.push("--status".into());
+            args.push(format!("--resolution={}", config.grid.resolution));
+            args
         }
-        SourceKind::Hokuyo => {
-            let mut args = vec![
-                "--addr".into(),
-                config.hokuyo.addr.clone(),
-                "--domain".into(),
-                d.clone(),
-                "--subscribers".into(),
-                scan_subscribers.clone(),
-            ];
-            for (key, value) in &config.hokuyo.extra {
-                args.push(format!("--{}", key.replace('_', "-")));
-                args.push(match value {
-                    toml::Value::String(s) => s.clone(),
-                    other => other.to_string(),
-                });
+        Role::Filter => {
+            let mut args = flag_values([
+                ("--particles", Some(config.slam.particles.to_string())),
+                ("--seed", Some(config.slam.seed.to_string())),
+                ("--map-every", Some(config.slam.map_every.to_string())),
+                ("--map", config.map.as_deref().map(path)),
+            ]);
+            if config.localize {
+                args.push("--localize".into());
             }
-            StagePlan {
-                name: "lidar-hokuyo".into(),
-                program: program("lidar-hokuyo")?,
-                args,
-                expendable: false,
+            if let Some(pose) = &config.initial_pose {
+                args.push(format!("--initial-pose={pose}"));
             }
+            args.extend(section("slam", &config.slam.extra)?);
+            args
         }
-    };
-
-    let mut stages = Vec::new();
-    if config.record.enabled {
-        stages.push(StagePlan {
-            name: "slam-record".into(),
-            program: program("slam-record")?,
-            args: vec![
-                "--domain".into(),
-                d.clone(),
-                "--out".into(),
-                out.display().to_string(),
-            ],
-            expendable: true,
-        });
-    }
-    stages.extend([
-        StagePlan {
-            name: "map-sink".into(),
-            program: program("map-sink")?,
-            args: sink,
-            expendable: false,
+        Role::Perception => {
+            let mut args = section("features", &config.features)?;
+            args.extend(section_as(
+                "front_end",
+                &config.front_end,
+                "--front-end-config",
+            )?);
+            args
+        }
+        Role::Source => match config.source {
+            SourceKind::Sim => {
+                let mut args = flag_values([
+                    ("--world", Some(config.sim.world.clone())),
+                    ("--frames", Some(config.sim.frames.to_string())),
+                    ("--rate", Some(config.sim.rate.to_string())),
+                    ("--seed", Some(config.sim.seed.to_string())),
+                ]);
+                if config.sim.odometry {
+                    args.push("--odometry".into());
+                }
+                args.extend(section("sim", &config.sim.extra)?);
+                args
+            }
+            SourceKind::Replay => {
+                let mut args = flag_values([
+                    ("--format", Some(config.replay.format.clone())),
+                    (
+                        "--file",
+                        Some(config.replay.file.as_deref().map(path).unwrap_or_default()),
+                    ),
+                    ("--rate", Some(config.replay.rate.to_string())),
+                    ("--frames", Some(config.replay.frames.to_string())),
+                ]);
+                if !config.replay.odometry {
+                    args.push("--no-odometry".into());
+                }
+                if config.replay.start > 0 {
+                    args.push(format!("--skip={}", config.replay.start));
+                }
+                if let Some(window) = config.replay.reorder_window {
+                    args.push(format!("--reorder-window={window}"));
+                }
+                args
+            }
+            SourceKind::Hokuyo => {
+                let mut args = vec!["--addr".into(), config.hokuyo.addr.clone()];
+                for (key, value) in &config.hokuyo.extra {
+                    args.push(format!("--{}", key.replace('_', "-")));
+                    args.push(match value {
+                        toml::Value::String(s) => s.clone(),
+                        other => other.to_string(),
+                    });
+                }
+                args
+            }
         },
-        StagePlan {
-            name: "slam-proc".into(),
-            program: program("slam-proc")?,
-            args: slam,
-            expendable: false,
-        },
-        StagePlan {
-            name: "feature-proc".into(),
-            program: program("feature-proc")?,
-            args: features,
-            expendable: false,
-        },
-        source,
-    ]);
-    Ok(stages)
+    })
 }
 
-/// The simulator's stage.
-fn sim_stage(
-    config: &RunConfig,
-    domain: &str,
-    scan_subscribers: &str,
-    section: &dyn Fn(&str, &toml::Table) -> Result<Vec<String>>,
-    program: &dyn Fn(&str) -> Result<PathBuf>,
-) -> Result<StagePlan> {
-    let mut sim = vec![
-        "--world".into(),
-        config.sim.world.clone(),
-        "--frames".into(),
-        config.sim.frames.to_string(),
-        "--rate".into(),
-        config.sim.rate.to_string(),
-        "--seed".into(),
-        config.sim.seed.to_string(),
-        "--domain".into(),
-        domain.to_owned(),
-        "--subscribers".into(),
-        scan_subscribers.to_owned(),
-    ];
-    if config.sim.odometry {
-        sim.push("--odometry".into());
-    }
-    sim.extend(section("sim", &config.sim.extra)?);
-    Ok(StagePlan {
-        name: "lidar-sim".into(),
-        program: program("lidar-sim")?,
-        args: sim,
-        expendable: false,
-    })
+/// `--flag value` for each flag that has a value, in order.
+fn flag_values<const N: usize>(flags: [(&str, Option<String>); N]) -> Vec<String> {
+    flags
+        .into_iter()
+        .filter_map(|(flag, value)| Some([flag.to_owned(), value?]))
+        .flatten()
+        .collect()
 }
 
 /// metrics.json, if the run wrote a readable one.

@@ -6,14 +6,16 @@ use std::path::Path;
 use ipc_types::Delivery;
 use ipc_types::shm::{self, RunShape, SHM_DIR, ShmError};
 
-use crate::config::{RunConfig, SourceKind};
+use crate::config::RunConfig;
+use crate::topology::{self, RunKind};
 
 /// Environment variable that replaces the free space of /dev/shm in the start check, in
 /// bytes; for tests, which cannot always mount a small tmpfs. A SIGBUS is still explained
 /// with the real figure.
 pub const FREE_OVERRIDE_ENV: &str = "SLAM_LAUNCH_SHM_FREE";
 
-/// Which services the run will have.
+/// Which services the run will have: its delivery, and each topic published with its
+/// readers, from the topology table.
 pub fn run_shape(config: &RunConfig) -> RunShape {
     RunShape {
         delivery: if config.lockstep() {
@@ -21,14 +23,7 @@ pub fn run_shape(config: &RunConfig) -> RunShape {
         } else {
             Delivery::Latest
         },
-        simulated: config.source == SourceKind::Sim,
-        odometry: match config.source {
-            SourceKind::Sim => config.sim.odometry,
-            // The log may have none; a replay that publishes none only needs less.
-            SourceKind::Replay => config.replay.odometry,
-            SourceKind::Hokuyo => false,
-        },
-        recorded: config.record.enabled,
+        topics: topology::services(&RunKind::of(config)),
     }
 }
 
@@ -44,7 +39,7 @@ pub fn check(config: &RunConfig) -> Result<(), ShmError> {
             source,
         })?,
     };
-    shm::check_room(run_shape(config), free)
+    shm::check_room(&run_shape(config), free)
 }
 
 /// How a death by SIGBUS reads: in a pipeline over shared memory it is almost always a page
@@ -63,41 +58,44 @@ pub fn sigbus_explanation() -> String {
 mod tests {
     use super::*;
 
+    use crate::config::SourceKind;
+
+    fn topics(shape: &RunShape) -> Vec<&str> {
+        shape.topics.iter().map(|t| t.0).collect()
+    }
+
     #[test]
     fn the_shape_follows_the_source_and_its_rate() {
         let mut config = RunConfig::default();
+        let shape = run_shape(&config);
+        assert_eq!(shape.delivery, Delivery::Lossless);
         assert_eq!(
-            run_shape(&config),
-            RunShape {
-                delivery: Delivery::Lossless,
-                simulated: true,
-                odometry: false,
-                recorded: false,
-            }
+            topics(&shape),
+            [
+                "lidar/scan",
+                "sim/ground_truth",
+                "sim/world_corners",
+                "perception/features",
+                "slam/pose",
+                "slam/map",
+                "slam/path"
+            ]
         );
         config.source = SourceKind::Hokuyo;
-        assert_eq!(
-            run_shape(&config),
-            RunShape {
-                delivery: Delivery::Latest,
-                simulated: false,
-                odometry: false,
-                recorded: false,
-            }
-        );
+        let shape = run_shape(&config);
+        assert_eq!(shape.delivery, Delivery::Latest);
+        assert!(!topics(&shape).contains(&"robot/odometry"));
+        assert!(!topics(&shape).contains(&"sim/ground_truth"));
         config.source = SourceKind::Replay;
         config.replay.rate = 1.0;
-        assert_eq!(
-            run_shape(&config),
-            RunShape {
-                delivery: Delivery::Latest,
-                simulated: false,
-                odometry: true,
-                recorded: false,
-            }
-        );
+        let shape = run_shape(&config);
+        assert_eq!(shape.delivery, Delivery::Latest);
+        assert!(shape.topics.contains(&("robot/odometry", 1)));
         config.record.enabled = true;
-        assert!(run_shape(&config).recorded);
+        assert!(run_shape(&config).topics.contains(&("robot/odometry", 2)));
+        // Localizing, slam-proc reads the scans too.
+        config.localize = true;
+        assert_eq!(run_shape(&config).topics[0], ("lidar/scan", 4));
     }
 
     #[test]

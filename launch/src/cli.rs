@@ -1,0 +1,187 @@
+//! slam-launch's command line, and its options layered over the config file: an option
+//! given replaces the file's key, a key the file has replaces the default.
+
+use std::path::{Path, PathBuf};
+
+use clap::Parser;
+use figment::Figment;
+use figment::providers::Serialized;
+use figment::value::Value;
+use serde::Serialize;
+
+use crate::config::{ConfigError, RunConfig, SourceKind};
+
+/// Runs a scan source (lidar-sim, lidar-replay or lidar-hokuyo) -> feature-proc -> slam-proc
+/// -> map-sink as separate processes over iceoryx2 shared memory in a domain of their own,
+/// and writes trajectory, map, picture and metrics into the output directory.
+///
+/// Every setting can also come from a TOML file (--config) with the keys `source`,
+/// `relations`, `stall_warning`, `stall_limit`, `map`, `localize` and `initial_pose` and the
+/// sections [sim], [replay], [hokuyo], [features], [front_end], [slam], [grid] and [record];
+/// options given here override the file. Keys a section does not know are refused by the
+/// process that reads it.
+#[derive(Debug, Parser)]
+#[command(name = "slam-launch", version)]
+pub struct Args {
+    /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit`, `map`,
+    /// `localize`, `initial_pose` and [sim], [replay], [hokuyo], [features], [front_end],
+    /// [slam], [grid], [record] sections.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Where the scans come from (default: sim; --replay implies replay).
+    #[arg(long, value_enum)]
+    source: Option<SourceKind>,
+    /// World to simulate: hall, office, corridor or a world file (JSON).
+    #[arg(long)]
+    world: Option<String>,
+    /// Replay this recorded log instead of simulating.
+    #[arg(long, value_name = "FILE")]
+    replay: Option<PathBuf>,
+    /// Format of the replayed log: seed-csv, carmen or mcap (a run.mcap of --record; the
+    /// default for a file named *.mcap).
+    #[arg(long)]
+    format: Option<String>,
+    /// HOST:PORT of a live Hokuyo scanner (with --source hokuyo).
+    #[arg(long)]
+    addr: Option<String>,
+    /// Do not use the odometry of a replayed log.
+    #[arg(long)]
+    no_odometry: bool,
+    /// Scans to simulate or replay (0 = the whole path of the world, the whole log).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Scans per second (a replay: times the log's own speed); 0 = lockstep: nothing is lost
+    /// and a run repeats exactly.
+    #[arg(long)]
+    rate: Option<f64>,
+    /// Seed of the simulator's noise and of the particle filter.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Particles of the filter.
+    #[arg(long)]
+    particles: Option<usize>,
+    /// Edge of the occupancy grid's cells (map.pgm), metres; default 0.05.
+    #[arg(long, value_name = "METRES")]
+    resolution: Option<f64>,
+    /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
+    #[arg(long)]
+    odometry: bool,
+    /// Ground-truth relations (t1 t2 x y z roll pitch yaw, Kuemmerle et al. 2009) to score
+    /// the run against: trajectory.tum, dead_reckoning.tum and trajectory_online.tum, where
+    /// written. A replay of DIR/NAME.clf is scored against DIR/NAME.relations without this
+    /// option if that file exists.
+    #[arg(long, value_name = "FILE")]
+    relations: Option<PathBuf>,
+    /// Seconds a stage may make no progress before the console names it (default 10).
+    #[arg(long, value_name = "SECONDS")]
+    stall_warning: Option<f64>,
+    /// Seconds a stage may make no progress before the run fails with its name (default
+    /// 120; at least --stall-warning).
+    #[arg(long, value_name = "SECONDS")]
+    stall_limit: Option<f64>,
+    /// Output directory (default: runs/<world or log name>).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// iceoryx2 domain of this run (default: a fresh one).
+    #[arg(long)]
+    pub domain: Option<String>,
+    /// Directory with the pipeline's executables (default: this program's directory).
+    #[arg(long, value_name = "DIR")]
+    pub bin_dir: Option<PathBuf>,
+    /// No progress output, only the final summary.
+    #[arg(long)]
+    pub quiet: bool,
+    /// A saved map (a run's output directory): the run maps on top of it, extending its
+    /// landmarks, or with --localize localizes on it.
+    #[arg(long, value_name = "DIR")]
+    map: Option<PathBuf>,
+    /// Localize on --map without changing it; the status line says whether the pose has
+    /// converged.
+    #[arg(long)]
+    localize: bool,
+    /// Where the robot starts in --map's frame, `x,y,yaw` (metres, radians); localizing
+    /// without it searches the whole map.
+    #[arg(long, value_name = "X,Y,YAW", allow_hyphen_values = true)]
+    initial_pose: Option<String>,
+    /// Start the replay at this scan of the log (from 0).
+    #[arg(long, value_name = "SCAN")]
+    replay_start: Option<u64>,
+    /// Record every topic into OUT/run.mcap (slam-record), for Foxglove; in lockstep the
+    /// run stays lossless and deterministic.
+    #[arg(long)]
+    record: bool,
+}
+
+impl Args {
+    /// The run's configuration: the defaults, the config file's keys over them and the
+    /// options given over both (merged by figment, key by key). Not yet validated.
+    pub fn run_config(&self) -> Result<RunConfig, ConfigError> {
+        let file = match &self.config {
+            Some(path) => RunConfig::load(path)?,
+            None => RunConfig::default(),
+        };
+        self.options()?
+            .into_iter()
+            .fold(
+                Figment::from(Serialized::defaults(file)),
+                |figment, (key, value)| figment.merge(Serialized::default(key, value)),
+            )
+            .extract()
+            .map_err(|e| ConfigError::Invalid(format!("the options over the config file: {e}")))
+    }
+
+    /// The config keys the options given set, each with its value. One option may set
+    /// several keys (`--seed` seeds the simulator and the filter).
+    fn options(&self) -> Result<Vec<(&'static str, Value)>, ConfigError> {
+        let mcap = self
+            .replay
+            .as_deref()
+            .filter(|file| file.extension().is_some_and(|e| e == "mcap"))
+            .map(|_| lidar_replay::LogFormat::Mcap.name().to_owned());
+        let given: [(&'static str, Option<Value>); 23] = [
+            (
+                "source",
+                value(
+                    self.source
+                        .or(self.replay.as_ref().map(|_| SourceKind::Replay)),
+                )?,
+            ),
+            (
+                "replay.file",
+                value(self.replay.as_deref().map(Path::to_path_buf))?,
+            ),
+            ("replay.format", value(self.format.clone().or(mcap))?),
+            ("hokuyo.addr", value(self.addr.clone())?),
+            ("replay.odometry", value(self.no_odometry.then_some(false))?),
+            ("replay.rate", value(self.rate)?),
+            ("sim.rate", value(self.rate)?),
+            ("sim.world", value(self.world.clone())?),
+            ("sim.frames", value(self.frames)?),
+            ("replay.frames", value(self.frames)?),
+            ("relations", value(self.relations.clone())?),
+            ("sim.seed", value(self.seed)?),
+            ("slam.seed", value(self.seed)?),
+            ("slam.particles", value(self.particles)?),
+            ("sim.odometry", value(self.odometry.then_some(true))?),
+            ("stall_warning", value(self.stall_warning)?),
+            ("stall_limit", value(self.stall_limit)?),
+            ("grid.resolution", value(self.resolution)?),
+            ("record.enabled", value(self.record.then_some(true))?),
+            ("map", value(self.map.clone())?),
+            ("localize", value(self.localize.then_some(true))?),
+            ("initial_pose", value(self.initial_pose.clone())?),
+            ("replay.start", value(self.replay_start)?),
+        ];
+        Ok(given
+            .into_iter()
+            .filter_map(|(key, value)| Some((key, value?)))
+            .collect())
+    }
+}
+
+/// An option's value as figment holds it, if the option was given.
+fn value<T: Serialize>(given: Option<T>) -> Result<Option<Value>, ConfigError> {
+    given
+        .map(|v| Value::serialize(v).map_err(|e| ConfigError::Invalid(format!("{e}"))))
+        .transpose()
+}

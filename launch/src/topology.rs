@@ -1,0 +1,552 @@
+//! The pipeline's topology as data: every stage, the topics it publishes and the topics it
+//! reads. slam-launch takes from this table which stages a run starts, how many subscribers
+//! each publisher waits for (`--subscribers`) and how many readers each service is sized for
+//! in /dev/shm ([`crate::shm_room`]); docs/ARCHITECTURE.md's topic table is checked against
+//! it. A stage's own main opens the same topics; the table is what the launcher knows of it.
+
+use ipc_types::topic;
+
+use crate::config::{RunConfig, SourceKind};
+
+/// What the topology of a run depends on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunKind {
+    pub source: SourceKind,
+    /// The source publishes odometry.
+    pub odometry: bool,
+    /// slam-proc localizes on a saved map, weighting its particles by the scans' beams.
+    pub localize: bool,
+    /// slam-record records every topic (`--record`).
+    pub recorded: bool,
+}
+
+impl RunKind {
+    /// The kind of run `config` describes.
+    pub fn of(config: &RunConfig) -> Self {
+        Self {
+            source: config.source,
+            odometry: match config.source {
+                SourceKind::Sim => config.sim.odometry,
+                // The log may have none; a replay that publishes none only needs less.
+                SourceKind::Replay => config.replay.odometry,
+                SourceKind::Hokuyo => false,
+            },
+            localize: config.localize,
+            recorded: config.record.enabled,
+        }
+    }
+}
+
+/// A condition on the run under which a stage runs, publishes or reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum When {
+    Always,
+    /// The run's scans come from this source.
+    Source(SourceKind),
+    /// The source publishes odometry.
+    Odometry,
+    /// slam-proc localizes on a saved map.
+    Localize,
+    /// The run is recorded.
+    Recorded,
+}
+
+impl When {
+    pub fn holds(self, run: &RunKind) -> bool {
+        match self {
+            When::Always => true,
+            When::Source(source) => run.source == source,
+            When::Odometry => run.odometry,
+            When::Localize => run.localize,
+            When::Recorded => run.recorded,
+        }
+    }
+}
+
+/// What a stage does in the pipeline.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// Publishes the scans (a simulator, a replay or a live driver).
+    Source,
+    /// Scans to features, and the scan-matching front end.
+    Perception,
+    /// The particle filter: poses and maps.
+    Filter,
+    /// Writes the run's results.
+    Sink,
+    /// Records every topic into `run.mcap`.
+    Recorder,
+}
+
+/// A topic a stage publishes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Publication {
+    pub topic: &'static str,
+    pub when: When,
+}
+
+/// A topic a stage reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reading {
+    pub topic: &'static str,
+    pub when: When,
+    /// The stage reads the topic if some stage publishes it, and does without otherwise
+    /// (`Inlet::try_open`): ground truth, odometry.
+    pub if_published: bool,
+}
+
+/// One process of the pipeline.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stage {
+    /// The executable, which is also the stage's name on the console.
+    pub binary: &'static str,
+    pub role: Role,
+    /// When the run has this stage.
+    pub runs: When,
+    pub publishes: &'static [Publication],
+    pub reads: &'static [Reading],
+    /// The topic whose subscribers the stage waits for before it publishes, counted into its
+    /// `--subscribers`.
+    pub waits_for: Option<&'static str>,
+}
+
+const fn publishes(topic: &'static str) -> Publication {
+    Publication {
+        topic,
+        when: When::Always,
+    }
+}
+
+const fn reads(topic: &'static str) -> Reading {
+    Reading {
+        topic,
+        when: When::Always,
+        if_published: false,
+    }
+}
+
+const fn reads_if_published(topic: &'static str) -> Reading {
+    Reading {
+        topic,
+        when: When::Always,
+        if_published: true,
+    }
+}
+
+const SCAN: &str = topic::SCAN.name();
+const ODOMETRY: &str = topic::ODOMETRY.name();
+const GROUND_TRUTH: &str = topic::GROUND_TRUTH.name();
+const WORLD_CORNERS: &str = topic::WORLD_CORNERS.name();
+const FEATURES: &str = topic::FEATURES.name();
+const POSE: &str = topic::POSE.name();
+const PATH: &str = topic::PATH.name();
+const MAP: &str = topic::MAP.name();
+
+/// A source's odometry, when the robot has some (and a replay is not told to drop it).
+const SOURCE_ODOMETRY: Publication = Publication {
+    topic: ODOMETRY,
+    when: When::Odometry,
+};
+
+/// Every stage, in the order they start: consumers first, so that nothing a source
+/// publishes finds no reader, and the source last.
+pub const STAGES: &[Stage] = &[
+    Stage {
+        binary: "slam-record",
+        role: Role::Recorder,
+        runs: When::Recorded,
+        publishes: &[],
+        reads: &[
+            reads(SCAN),
+            reads_if_published(GROUND_TRUTH),
+            reads_if_published(WORLD_CORNERS),
+            reads_if_published(ODOMETRY),
+            reads(FEATURES),
+            reads(POSE),
+            reads(MAP),
+            reads(PATH),
+        ],
+        waits_for: None,
+    },
+    Stage {
+        binary: "map-sink",
+        role: Role::Sink,
+        runs: When::Always,
+        publishes: &[],
+        reads: &[
+            reads(SCAN),
+            reads_if_published(GROUND_TRUTH),
+            reads_if_published(WORLD_CORNERS),
+            reads(MAP),
+            reads(POSE),
+            reads(PATH),
+        ],
+        waits_for: None,
+    },
+    Stage {
+        binary: "slam-proc",
+        role: Role::Filter,
+        runs: When::Always,
+        publishes: &[publishes(POSE), publishes(MAP), publishes(PATH)],
+        reads: &[
+            reads(FEATURES),
+            // The beams weight the particles on a saved map.
+            Reading {
+                topic: SCAN,
+                when: When::Localize,
+                if_published: false,
+            },
+        ],
+        waits_for: Some(POSE),
+    },
+    Stage {
+        binary: "feature-proc",
+        role: Role::Perception,
+        runs: When::Always,
+        publishes: &[publishes(FEATURES)],
+        reads: &[reads(SCAN), reads_if_published(ODOMETRY)],
+        waits_for: Some(FEATURES),
+    },
+    Stage {
+        binary: "lidar-sim",
+        role: Role::Source,
+        runs: When::Source(SourceKind::Sim),
+        publishes: &[
+            publishes(SCAN),
+            publishes(GROUND_TRUTH),
+            publishes(WORLD_CORNERS),
+            SOURCE_ODOMETRY,
+        ],
+        reads: &[],
+        waits_for: Some(SCAN),
+    },
+    Stage {
+        binary: "lidar-replay",
+        role: Role::Source,
+        runs: When::Source(SourceKind::Replay),
+        publishes: &[publishes(SCAN), SOURCE_ODOMETRY],
+        reads: &[],
+        waits_for: Some(SCAN),
+    },
+    Stage {
+        binary: "lidar-hokuyo",
+        role: Role::Source,
+        runs: When::Source(SourceKind::Hokuyo),
+        publishes: &[publishes(SCAN)],
+        reads: &[],
+        waits_for: Some(SCAN),
+    },
+];
+
+/// Every topic of the pipeline, in the order of the services' table.
+pub const TOPICS: &[&str] = &[
+    SCAN,
+    ODOMETRY,
+    GROUND_TRUTH,
+    WORLD_CORNERS,
+    FEATURES,
+    POSE,
+    MAP,
+    PATH,
+];
+
+/// The stages a run of `run` starts, in their start order.
+pub fn stages(run: &RunKind) -> impl Iterator<Item = &'static Stage> + '_ {
+    STAGES.iter().filter(|stage| stage.runs.holds(run))
+}
+
+/// Whether a stage of the run publishes `topic`.
+pub fn published(run: &RunKind, topic: &str) -> bool {
+    stages(run).any(|stage| {
+        stage
+            .publishes
+            .iter()
+            .any(|p| p.topic == topic && p.when.holds(run))
+    })
+}
+
+/// How many stages of the run read `topic` (when it is published).
+pub fn subscribers(run: &RunKind, topic: &str) -> usize {
+    stages(run)
+        .filter(|stage| {
+            stage
+                .reads
+                .iter()
+                .any(|r| r.topic == topic && r.when.holds(run))
+        })
+        .count()
+}
+
+/// The topics the run publishes, each with its number of readers: the services it has.
+pub fn services(run: &RunKind) -> Vec<(&'static str, usize)> {
+    TOPICS
+        .iter()
+        .filter(|topic| published(run, topic))
+        .map(|&topic| (topic, subscribers(run, topic)))
+        .collect()
+}
+
+/// The stage's `--subscribers` in a run of `run`: the readers of the topic it waits for.
+pub fn waits_for_subscribers(stage: &Stage, run: &RunKind) -> Option<usize> {
+    stage.waits_for.map(|topic| subscribers(run, topic))
+}
+
+/// The stages of every kind of run that read `topic`, as `binary` or `binary (condition)`,
+/// for the documentation's table.
+pub fn readers_text(topic: &str) -> Vec<String> {
+    // Downstream order: the source's readers first.
+    STAGES
+        .iter()
+        .rev()
+        .flat_map(|stage| {
+            stage
+                .reads
+                .iter()
+                .filter(move |r| r.topic == topic)
+                .map(move |r| {
+                    let mut conditions = Vec::new();
+                    if let Some(text) = condition_text(stage.runs) {
+                        conditions.push(text);
+                    }
+                    if let Some(text) = condition_text(r.when) {
+                        conditions.push(text);
+                    }
+                    if r.if_published {
+                        conditions.push("if published");
+                    }
+                    if conditions.is_empty() {
+                        stage.binary.to_owned()
+                    } else {
+                        format!("{} ({})", stage.binary, conditions.join(", "))
+                    }
+                })
+        })
+        .collect()
+}
+
+/// The stages that publish `topic`, as `binary` or `binary (condition)`.
+pub fn publishers_text(topic: &str) -> Vec<String> {
+    STAGES
+        .iter()
+        .flat_map(|stage| {
+            stage
+                .publishes
+                .iter()
+                .filter(move |p| p.topic == topic)
+                .map(move |p| match condition_text(p.when) {
+                    Some(text) => format!("{} ({text})", stage.binary),
+                    None => stage.binary.to_owned(),
+                })
+        })
+        .collect()
+}
+
+fn condition_text(when: When) -> Option<&'static str> {
+    match when {
+        When::Always | When::Source(_) => None,
+        When::Odometry => Some("with odometry"),
+        When::Localize => Some("--localize"),
+        When::Recorded => Some("--record"),
+    }
+}
+
+/// The topic table of docs/ARCHITECTURE.md: each topic, who publishes it, who reads it.
+pub fn markdown_table() -> String {
+    let mut text = String::from("| topic | published by | read by |\n|---|---|---|\n");
+    for topic in TOPICS {
+        text.push_str(&format!(
+            "| `{topic}` | {} | {} |\n",
+            publishers_text(topic).join(", "),
+            readers_text(topic).join(", ")
+        ));
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn every_run() -> Vec<RunKind> {
+        let mut runs = Vec::new();
+        for source in [SourceKind::Sim, SourceKind::Replay, SourceKind::Hokuyo] {
+            for odometry in [false, true] {
+                for localize in [false, true] {
+                    for recorded in [false, true] {
+                        runs.push(RunKind {
+                            source,
+                            odometry: odometry && source != SourceKind::Hokuyo,
+                            localize,
+                            recorded,
+                        });
+                    }
+                }
+            }
+        }
+        runs
+    }
+
+    const PLAIN: RunKind = RunKind {
+        source: SourceKind::Sim,
+        odometry: false,
+        localize: false,
+        recorded: false,
+    };
+
+    #[test]
+    fn every_topic_read_has_exactly_one_publisher() {
+        for run in every_run() {
+            for stage in stages(&run) {
+                for reading in stage.reads.iter().filter(|r| r.when.holds(&run)) {
+                    let publishers = stages(&run)
+                        .flat_map(|s| s.publishes)
+                        .filter(|p| p.topic == reading.topic && p.when.holds(&run))
+                        .count();
+                    let expected = if reading.if_published { 0..=1 } else { 1..=1 };
+                    assert!(
+                        expected.contains(&publishers),
+                        "{} reads {} with {publishers} publishers in {run:?}",
+                        stage.binary,
+                        reading.topic
+                    );
+                }
+            }
+        }
+        for topic in TOPICS {
+            assert_eq!(
+                STAGES
+                    .iter()
+                    .filter(|s| s.role != Role::Source)
+                    .flat_map(|s| s.publishes)
+                    .filter(|p| p.topic == *topic)
+                    .count()
+                    + usize::from(
+                        STAGES.iter().any(|s| s.role == Role::Source
+                            && s.publishes.iter().any(|p| p.topic == *topic))
+                    ),
+                1,
+                "{topic}: one stage, or the sources, publish it"
+            );
+        }
+    }
+
+    #[test]
+    fn every_run_has_one_source_and_every_stage_publishing_is_read() {
+        for run in every_run() {
+            assert_eq!(
+                stages(&run).filter(|s| s.role == Role::Source).count(),
+                1,
+                "{run:?}"
+            );
+            assert_eq!(
+                stages(&run).last().map(|s| s.role),
+                Some(Role::Source),
+                "the source starts last"
+            );
+            for (topic, readers) in services(&run) {
+                assert!(readers > 0, "{topic} has no reader in {run:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn subscriber_counts_per_configuration() {
+        let counts = |run: &RunKind| -> Vec<(&str, usize)> {
+            stages(run)
+                .filter_map(|s| waits_for_subscribers(s, run).map(|n| (s.binary, n)))
+                .collect()
+        };
+        assert_eq!(
+            counts(&PLAIN),
+            [("slam-proc", 1), ("feature-proc", 1), ("lidar-sim", 2)]
+        );
+        assert_eq!(
+            services(&PLAIN),
+            [
+                (SCAN, 2),
+                (GROUND_TRUTH, 1),
+                (WORLD_CORNERS, 1),
+                (FEATURES, 1),
+                (POSE, 1),
+                (MAP, 1),
+                (PATH, 1)
+            ]
+        );
+        let recorded = RunKind {
+            recorded: true,
+            ..PLAIN
+        };
+        assert_eq!(
+            counts(&recorded),
+            [("slam-proc", 2), ("feature-proc", 2), ("lidar-sim", 3)]
+        );
+        assert!(
+            services(&recorded)
+                .iter()
+                .zip(services(&PLAIN))
+                .all(|(with, without)| with.0 == without.0 && with.1 == without.1 + 1),
+            "the recorder reads every topic"
+        );
+        let localize = RunKind {
+            source: SourceKind::Replay,
+            localize: true,
+            ..PLAIN
+        };
+        assert_eq!(
+            counts(&localize),
+            [("slam-proc", 1), ("feature-proc", 1), ("lidar-replay", 3)]
+        );
+        assert_eq!(
+            services(&localize),
+            [(SCAN, 3), (FEATURES, 1), (POSE, 1), (MAP, 1), (PATH, 1)]
+        );
+        let odometry = RunKind {
+            odometry: true,
+            ..PLAIN
+        };
+        assert_eq!(counts(&odometry), counts(&PLAIN));
+        let with: Vec<_> = services(&odometry);
+        assert_eq!(with.len(), services(&PLAIN).len() + 1);
+        assert!(with.contains(&(ODOMETRY, 1)), "feature-proc reads it");
+        let recorded_odometry = RunKind {
+            recorded: true,
+            ..odometry
+        };
+        assert!(services(&recorded_odometry).contains(&(ODOMETRY, 2)));
+    }
+
+    #[test]
+    fn hokuyo_publishes_scans_only() {
+        let run = RunKind {
+            source: SourceKind::Hokuyo,
+            ..PLAIN
+        };
+        assert_eq!(
+            services(&run).iter().map(|s| s.0).collect::<Vec<_>>(),
+            [SCAN, FEATURES, POSE, MAP, PATH]
+        );
+    }
+
+    #[test]
+    fn every_topic_has_a_service_size() {
+        for topic in TOPICS {
+            assert!(
+                ipc_types::shm::service_size(topic, ipc_types::Delivery::Lossless, 1).is_some(),
+                "{topic}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_architecture_doc_shows_this_table() {
+        let doc = include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../docs/ARCHITECTURE.md"
+        ));
+        let table = markdown_table();
+        assert!(
+            doc.contains(&table),
+            "docs/ARCHITECTURE.md's topic table is not the topology's; it should read:\n{table}"
+        );
+    }
+}

@@ -1,0 +1,117 @@
+//! slam-launch's options over its config file: an option given replaces the file's key, a
+//! key the file has replaces the default, and the file's errors are the file's.
+
+use std::path::PathBuf;
+
+use clap::Parser;
+use launch::cli::Args;
+use launch::config::{RunConfig, SourceKind};
+
+/// A config file of its own for each test, removed when the test ends.
+struct ConfigFile(PathBuf);
+
+impl ConfigFile {
+    fn new(name: &str, text: &str) -> Self {
+        let path = std::env::temp_dir().join(format!(
+            "slam-launch-cli-{}-{name}.toml",
+            std::process::id()
+        ));
+        std::fs::write(&path, text).expect("temp file written");
+        Self(path)
+    }
+
+    fn config(&self, options: &[&str]) -> RunConfig {
+        let path = self.0.display().to_string();
+        let argv = ["slam-launch", "--config", path.as_str()]
+            .into_iter()
+            .chain(options.iter().copied());
+        Args::try_parse_from(argv)
+            .expect("options parse")
+            .run_config()
+            .expect("configuration layers")
+    }
+}
+
+impl Drop for ConfigFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+#[test]
+fn an_option_overrides_the_file_and_the_file_overrides_the_default() {
+    let file = ConfigFile::new(
+        "layers",
+        "stall_warning = 20\n[sim]\nworld = 'hall'\nframes = 300\nseed = 4\nrange_noise = 0.02\n\
+         [slam]\nparticles = 50\nresample_threshold = 0.4\n",
+    );
+    let config = file.config(&["--world", "corridor", "--seed", "7", "--odometry"]);
+    // Given as options: over the file.
+    assert_eq!(config.sim.world, "corridor");
+    assert_eq!(config.sim.seed, 7);
+    assert_eq!(config.slam.seed, 7);
+    assert!(config.sim.odometry);
+    // Only in the file: over the defaults, the keys the launcher passes on included.
+    assert_eq!(config.sim.frames, 300);
+    assert_eq!(config.slam.particles, 50);
+    assert_eq!(config.stall_warning, 20.0);
+    assert_eq!(config.sim.extra["range_noise"].as_float(), Some(0.02));
+    assert!(config.slam.extra.contains_key("resample_threshold"));
+    // In neither: the defaults.
+    let defaults = RunConfig::default();
+    assert_eq!(config.stall_limit, defaults.stall_limit);
+    assert_eq!(config.slam.map_every, defaults.slam.map_every);
+    assert_eq!(config.grid, defaults.grid);
+    assert_eq!(config.source, SourceKind::Sim);
+
+    // Without options the file is the configuration as it was read.
+    assert_eq!(
+        file.config(&[]),
+        RunConfig::load(&file.0).expect("file loads")
+    );
+}
+
+#[test]
+fn a_replayed_log_sets_the_source_and_an_mcap_its_format() {
+    let file = ConfigFile::new("replay", "[replay]\nformat = 'seed-csv'\nrate = 2.0\n");
+    let config = file.config(&["--replay", "run.mcap", "--frames", "12", "--no-odometry"]);
+    assert_eq!(config.source, SourceKind::Replay);
+    assert_eq!(config.replay.file, Some(PathBuf::from("run.mcap")));
+    assert_eq!(config.replay.format, "mcap");
+    assert_eq!(config.replay.frames, 12);
+    assert_eq!(config.sim.frames, 12);
+    assert!(!config.replay.odometry);
+    assert_eq!(config.replay.rate, 2.0);
+    // --source and --format over what --replay implies.
+    let config = file.config(&[
+        "--replay", "run.mcap", "--format", "carmen", "--source", "sim",
+    ]);
+    assert_eq!(config.source, SourceKind::Sim);
+    assert_eq!(config.replay.format, "carmen");
+    // A log that is no recording keeps the file's format.
+    assert_eq!(
+        file.config(&["--replay", "log.csv"]).replay.format,
+        "seed-csv"
+    );
+}
+
+#[test]
+fn the_file_s_errors_are_still_the_file_s() {
+    let file = ConfigFile::new("typo", "[sim]\nworld = 'hall'\n[simulation]\nframes = 3\n");
+    let path = file.0.display().to_string();
+    let refusal = Args::try_parse_from(["slam-launch", "--config", path.as_str(), "--seed", "3"])
+        .expect("options parse")
+        .run_config()
+        .expect_err("unknown section refused");
+    // As slam-launch shows it ({:#}): the error and its sources.
+    let mut error = refusal.to_string();
+    let mut source = std::error::Error::source(&refusal);
+    while let Some(cause) = source {
+        error.push_str(&format!(": {cause}"));
+        source = cause.source();
+    }
+    assert!(
+        error.contains(&path) && error.contains("simulation"),
+        "{error}"
+    );
+}
