@@ -1,5 +1,7 @@
 //! What the filter reports after each scan.
 
+use std::time::Instant;
+
 use nalgebra::{Matrix3, Vector3};
 
 use slam_geom::Pose2;
@@ -18,6 +20,23 @@ pub struct StageTiming {
     pub resample_ns: u64,
     /// The whole call.
     pub total_ns: u64,
+}
+
+impl StageTiming {
+    /// The stages' durations from the instants that bound them: the start, the ends of the
+    /// motion estimate, the prediction and the update, and the end.
+    pub(crate) fn between(instants: [Instant; 5]) -> Self {
+        let [start, motion_done, predict_done, update_done, end] = instants;
+        let ns =
+            |from: Instant, to: Instant| u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX);
+        Self {
+            motion_ns: ns(start, motion_done),
+            predict_ns: ns(motion_done, predict_done),
+            update_ns: ns(predict_done, update_done),
+            resample_ns: ns(update_done, end),
+            total_ns: ns(start, end),
+        }
+    }
 }
 
 /// The pose estimate after one scan, in the map frame (the first pose is the origin).

@@ -439,8 +439,6 @@ impl FastSlam {
             .map_or(0, |p| p.map.confirmed_count());
         self.scans += 1;
         let end = Instant::now();
-        let ns =
-            |from: Instant, to: Instant| u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX);
         Estimate {
             best,
             mean,
@@ -449,13 +447,7 @@ impl FastSlam {
             particle_count: self.particles.len(),
             dead_reckoning: self.dead_reckoning,
             map_size,
-            timing: StageTiming {
-                motion_ns: ns(start, motion_done),
-                predict_ns: ns(motion_done, predict_done),
-                update_ns: ns(predict_done, update_done),
-                resample_ns: ns(update_done, end),
-                total_ns: ns(start, end),
-            },
+            timing: StageTiming::between([start, motion_done, predict_done, update_done, end]),
         }
     }
 

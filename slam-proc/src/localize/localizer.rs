@@ -298,8 +298,6 @@ impl Localizer {
         }
         self.stats.scans += 1;
         let end = Instant::now();
-        let ns =
-            |from: Instant, to: Instant| u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX);
         Localization {
             estimate: Estimate {
                 best,
@@ -309,13 +307,7 @@ impl Localizer {
                 particle_count: self.poses.len(),
                 dead_reckoning: self.dead_reckoning,
                 map_size: self.map_corners,
-                timing: StageTiming {
-                    motion_ns: ns(start, motion_done),
-                    predict_ns: ns(motion_done, predict_done),
-                    update_ns: ns(predict_done, update_done),
-                    resample_ns: ns(update_done, end),
-                    total_ns: ns(start, end),
-                },
+                timing: StageTiming::between([start, motion_done, predict_done, update_done, end]),
             },
             converged,
         }
