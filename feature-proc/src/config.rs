@@ -2,7 +2,7 @@
 //! on simulated scans alike.
 
 use serde::{Deserialize, Serialize};
-use stage_kit::settings::{SettingError, check, check_positive};
+use stage_kit::settings::{SettingError, check, check_non_negative, check_positive};
 
 /// Extraction thresholds. Metres and radians throughout (docs/CONVENTIONS.md).
 ///
@@ -87,30 +87,11 @@ impl FeatureConfig {
     /// on a configuration that fails this.
     pub fn validate(&self) -> Result<(), SettingError> {
         let half_pi = std::f64::consts::FRAC_PI_2;
-        let positive = [
-            ("max_range", self.max_range),
-            ("range_sigma", self.range_sigma),
-            ("split_threshold", self.split_threshold),
-            ("merge_angle", self.merge_angle),
-            ("min_line_length", self.min_line_length),
-            ("corner_max_gap", self.corner_max_gap),
-            ("corner_max_extension", self.corner_max_extension),
-        ];
-        check_positive(&positive)?;
-        let b = self.bearing_sigma;
-        check(
-            "bearing_sigma",
-            b,
-            b.is_finite() && b >= 0.0,
-            "must be finite and >= 0",
-        )?;
-        let g = self.merge_max_gap;
-        check(
-            "merge_max_gap",
-            g,
-            g.is_finite() && g >= 0.0,
-            "must be finite and >= 0",
-        )?;
+        check_positive(&stage_kit::named_fields!(self;
+            max_range, range_sigma, split_threshold, merge_angle, min_line_length, corner_max_gap,
+            corner_max_extension,
+        ))?;
+        check_non_negative(&stage_kit::named_fields!(self; bearing_sigma, merge_max_gap))?;
         let l = self.breakpoint_lambda;
         check(
             "breakpoint_lambda",

@@ -116,31 +116,13 @@ impl Default for FrontEndConfig {
 impl FrontEndConfig {
     /// Checks every field; the error names the first that is out of range.
     pub fn validate(&self) -> Result<(), SettingError> {
-        let positive = [
-            ("range_sigma", self.range_sigma),
-            ("voxel_size", self.voxel_size),
-            ("max_correspondence", self.max_correspondence),
-            ("convergence", self.convergence),
-            ("max_search_translation", self.max_search_translation),
-            ("max_search_yaw", self.max_search_yaw),
-            ("recovery_translation", self.recovery_translation),
-            ("recovery_yaw", self.recovery_yaw),
-            ("keyframe_distance", self.keyframe_distance),
-            ("keyframe_angle", self.keyframe_angle),
-            (
-                "degenerate_keyframe_interval",
-                self.degenerate_keyframe_interval,
-            ),
-            ("degeneracy_ratio", self.degeneracy_ratio),
-            ("odometry_gate", self.odometry_gate),
-            ("odometry_min_sigma_xy", self.odometry_min_sigma_xy),
-            ("odometry_min_sigma_yaw", self.odometry_min_sigma_yaw),
-            ("max_linear_speed", self.max_linear_speed),
-            ("max_angular_speed", self.max_angular_speed),
-            ("velocity_sigma_linear", self.velocity_sigma_linear),
-            ("velocity_sigma_angular", self.velocity_sigma_angular),
-        ];
-        check_positive(&positive)?;
+        check_positive(&stage_kit::named_fields!(self;
+            range_sigma, voxel_size, max_correspondence, convergence, max_search_translation,
+            max_search_yaw, recovery_translation, recovery_yaw, keyframe_distance, keyframe_angle,
+            degenerate_keyframe_interval, degeneracy_ratio, odometry_gate, odometry_min_sigma_xy,
+            odometry_min_sigma_yaw, max_linear_speed, max_angular_speed, velocity_sigma_linear,
+            velocity_sigma_angular,
+        ))?;
         check(
             "degeneracy_ratio",
             self.degeneracy_ratio,

@@ -234,73 +234,22 @@ impl SlamConfig {
     /// Checks that every parameter is usable; [`crate::FastSlam::new`] refuses a
     /// configuration that fails this.
     pub fn validate(&self) -> Result<(), SettingError> {
-        let positive = [
-            ("motion_max_translation", self.motion_max_translation),
-            ("motion_max_rotation", self.motion_max_rotation),
-            ("motion_prior_sigma_xy", self.motion_prior_sigma_xy),
-            ("motion_prior_sigma_yaw", self.motion_prior_sigma_yaw),
-            ("line_prior_sigma_xy", self.line_prior_sigma_xy),
-            ("line_prior_sigma_yaw", self.line_prior_sigma_yaw),
-            ("odometry_min_sigma_xy", self.odometry_min_sigma_xy),
-            ("odometry_min_sigma_yaw", self.odometry_min_sigma_yaw),
-            ("noise_xy_base", self.noise_xy_base),
-            ("noise_yaw_base", self.noise_yaw_base),
-            ("noise_fit_scale", self.noise_fit_scale),
-            ("noise_xy_floor", self.noise_xy_floor),
-            ("noise_yaw_floor", self.noise_yaw_floor),
-            ("search_radius", self.search_radius),
-            ("grid_cell_size", self.grid_cell_size),
-            ("view_range", self.view_range),
-            ("view_fov", self.view_fov),
-        ];
-        check_positive(&positive)?;
-        let non_negative = [
-            ("noise_xy_per_metre", self.noise_xy_per_metre),
-            ("noise_xy_per_radian", self.noise_xy_per_radian),
-            ("noise_yaw_per_radian", self.noise_yaw_per_radian),
-            ("noise_yaw_per_metre", self.noise_yaw_per_metre),
-            (
-                "observation_extra_sigma_xy",
-                self.observation_extra_sigma_xy,
-            ),
-            (
-                "observation_extra_sigma_angle",
-                self.observation_extra_sigma_angle,
-            ),
-            ("duplicate_radius", self.duplicate_radius),
-            ("duplicate_heading", self.duplicate_heading),
-            (
-                "measured_xy_variance_per_metre",
-                self.measured_xy_variance_per_metre,
-            ),
-            (
-                "measured_xy_variance_per_radian",
-                self.measured_xy_variance_per_radian,
-            ),
-            (
-                "measured_yaw_variance_per_metre",
-                self.measured_yaw_variance_per_metre,
-            ),
-            (
-                "measured_yaw_variance_per_radian",
-                self.measured_yaw_variance_per_radian,
-            ),
-            ("update_min_distance", self.update_min_distance),
-            ("update_min_rotation", self.update_min_rotation),
-            ("revisit_search_radius", self.revisit_search_radius),
-            ("revisit_min_distance", self.revisit_min_distance),
-            (
-                "revisit_sigma_xy_per_metre",
-                self.revisit_sigma_xy_per_metre,
-            ),
-            (
-                "revisit_sigma_yaw_per_metre",
-                self.revisit_sigma_yaw_per_metre,
-            ),
-            ("revisit_max_sigma_xy", self.revisit_max_sigma_xy),
-            ("revisit_max_sigma_yaw", self.revisit_max_sigma_yaw),
-        ];
-        check_non_negative(&non_negative)?;
+        check_positive(&stage_kit::named_fields!(self;
+            motion_max_translation, motion_max_rotation, motion_prior_sigma_xy,
+            motion_prior_sigma_yaw, line_prior_sigma_xy, line_prior_sigma_yaw,
+            odometry_min_sigma_xy, odometry_min_sigma_yaw, noise_xy_base, noise_yaw_base,
+            noise_fit_scale, noise_xy_floor, noise_yaw_floor, search_radius, grid_cell_size,
+            view_range, view_fov,
+        ))?;
+        check_non_negative(&stage_kit::named_fields!(self;
+            noise_xy_per_metre, noise_xy_per_radian, noise_yaw_per_radian, noise_yaw_per_metre,
+            observation_extra_sigma_xy, observation_extra_sigma_angle, duplicate_radius,
+            duplicate_heading, measured_xy_variance_per_metre, measured_xy_variance_per_radian,
+            measured_yaw_variance_per_metre, measured_yaw_variance_per_radian, update_min_distance,
+            update_min_rotation, revisit_search_radius, revisit_min_distance,
+            revisit_sigma_xy_per_metre, revisit_sigma_yaw_per_metre, revisit_max_sigma_xy,
+            revisit_max_sigma_yaw,
+        ))?;
         let probabilities = [
             ("motion_gate_probability", self.motion_gate_probability),
             ("motion_inlier_probability", self.motion_inlier_probability),

@@ -127,40 +127,15 @@ impl LocalizeConfig {
             (0.0..1.0).contains(&self.min_effective_fraction),
             "must be in [0, 1)",
         )?;
-        let positive = [
-            ("localize.kld_epsilon", self.kld_epsilon),
-            ("localize.kld_bin_xy", self.kld_bin_xy),
-            ("localize.kld_bin_yaw", self.kld_bin_yaw),
-            ("localize.sigma_hit", self.sigma_hit),
-            ("localize.search_sigma_hit", self.search_sigma_hit),
-            ("localize.beam_floor", self.beam_floor),
-            ("localize.beam_exponent", self.beam_exponent),
-            ("localize.max_distance", self.max_distance),
-            ("localize.converged_sigma_xy", self.converged_sigma_xy),
-            ("localize.converged_sigma_yaw", self.converged_sigma_yaw),
-        ];
-        check_positive(&positive)?;
-        let non_negative = [
-            ("localize.kld_z", self.kld_z),
-            ("localize.update_min_distance", self.update_min_distance),
-            ("localize.update_min_rotation", self.update_min_rotation),
-            ("localize.xy_variance_per_metre", self.xy_variance_per_metre),
-            (
-                "localize.xy_variance_per_radian",
-                self.xy_variance_per_radian,
-            ),
-            (
-                "localize.yaw_variance_per_metre",
-                self.yaw_variance_per_metre,
-            ),
-            (
-                "localize.yaw_variance_per_radian",
-                self.yaw_variance_per_radian,
-            ),
-            ("localize.initial_sigma_xy", self.initial_sigma_xy),
-            ("localize.initial_sigma_yaw", self.initial_sigma_yaw),
-        ];
-        check_non_negative(&non_negative)?;
+        check_positive(&stage_kit::named_fields!(self, "localize.";
+            kld_epsilon, kld_bin_xy, kld_bin_yaw, sigma_hit, search_sigma_hit, beam_floor,
+            beam_exponent, max_distance, converged_sigma_xy, converged_sigma_yaw,
+        ))?;
+        check_non_negative(&stage_kit::named_fields!(self, "localize.";
+            kld_z, update_min_distance, update_min_rotation, xy_variance_per_metre,
+            xy_variance_per_radian, yaw_variance_per_metre, yaw_variance_per_radian,
+            initial_sigma_xy, initial_sigma_yaw,
+        ))?;
         Ok(())
     }
 }

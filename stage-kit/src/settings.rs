@@ -105,6 +105,19 @@ pub fn check_non_negative(fields: &[(&'static str, f64)]) -> Result<(), SettingE
     })
 }
 
+/// The named `f64` fields of a config as `[(name, value), ...]`, for [`check_positive`] and
+/// [`check_non_negative`]: each field is written once and its name is its spelling, with a
+/// prefix for a nested section's (`named_fields!(self, "localize."; kld_z)`).
+#[macro_export]
+macro_rules! named_fields {
+    ($config:expr, $prefix:literal; $($field:ident),+ $(,)?) => {
+        [$((concat!($prefix, stringify!($field)), $config.$field)),+]
+    };
+    ($config:expr; $($field:ident),+ $(,)?) => {
+        [$((stringify!($field), $config.$field)),+]
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -150,5 +163,29 @@ mod tests {
         assert_eq!(check_positive(&fields).unwrap_err().field, "b");
         assert_eq!(check_non_negative(&fields).unwrap_err().field, "c");
         assert!(check_non_negative(&fields[..2]).is_ok());
+    }
+
+    #[test]
+    fn named_fields_are_checked_under_their_own_names() {
+        struct Gains {
+            gain: f64,
+            floor: f64,
+        }
+        let gains = Gains {
+            gain: 2.0,
+            floor: -1.0,
+        };
+        assert_eq!(
+            named_fields!(gains; gain, floor),
+            [("gain", 2.0), ("floor", -1.0)]
+        );
+        assert_eq!(
+            check_non_negative(&named_fields!(gains, "section."; gain, floor)),
+            Err(SettingError {
+                field: "section.floor",
+                value: -1.0,
+                reason: "must be finite and >= 0",
+            })
+        );
     }
 }
