@@ -42,7 +42,6 @@ pub mod losses;
 mod message;
 pub mod messages;
 pub mod progress;
-pub mod rate;
 pub mod shm;
 pub mod shutdown;
 pub mod topic;

@@ -33,21 +33,3 @@ pub fn request() {
     let flag = FLAG.get_or_init(|| Arc::new(AtomicBool::new(false)));
     flag.store(true, Ordering::Relaxed);
 }
-
-/// Longest nap of [`sleep_until`]: how late a stop may be noticed while waiting.
-pub const SLEEP_SLICE: std::time::Duration = std::time::Duration::from_millis(50);
-
-/// Sleeps until `due` in naps of at most [`SLEEP_SLICE`], so a stop is noticed promptly
-/// however long the wait. Returns false when a stop was requested first.
-pub fn sleep_until(due: std::time::Instant) -> bool {
-    loop {
-        if requested() {
-            return false;
-        }
-        let left = due.saturating_duration_since(std::time::Instant::now());
-        if left.is_zero() {
-            return true;
-        }
-        std::thread::sleep(left.min(SLEEP_SLICE));
-    }
-}

@@ -11,7 +11,7 @@ use ipc_types::prelude::*;
 use lidar_hokuyo::{
     ConnectionNotices, Driver, DriverConfig, DriverStats, Finish, ScanRequest, TcpConnector,
 };
-use stage_kit::{say, say_err};
+use stage_kit::{SourceArgs, say, say_err};
 
 /// Live Hokuyo lidar (UTM-30LX-EW, UST-10LX/20LX, ...) on the shared-memory scan topic.
 #[derive(Debug, Parser)]
@@ -20,9 +20,8 @@ struct Args {
     /// HOST:PORT of the sensor.
     #[arg(long, default_value = "192.168.0.10:10940")]
     addr: String,
-    /// iceoryx2 domain of the run.
-    #[arg(long, default_value = "default")]
-    domain: String,
+    #[command(flatten)]
+    source: SourceArgs,
     /// First bearing to measure, radians (x forward, counter-clockwise); default: the
     /// sensor's first step.
     #[arg(long, allow_negative_numbers = true)]
@@ -42,9 +41,6 @@ struct Args {
         action = clap::ArgAction::Set
     )]
     intensities: bool,
-    /// Scan subscribers to wait for (at most 10 s) before connecting to the sensor.
-    #[arg(long, default_value_t = 1)]
-    subscribers: usize,
     /// Scans to publish before stopping; 0 = until Ctrl-C.
     #[arg(long, default_value_t = 0)]
     frames: u64,
@@ -74,7 +70,7 @@ fn run() -> Result<()> {
         ..DriverConfig::default()
     };
 
-    let domain = Domain::new(&args.domain)?;
+    let domain = Domain::new(&args.source.domain)?;
     let node = domain.node("lidar-hokuyo")?;
     // A live sensor never waits for a slow subscriber: the oldest scans are dropped instead.
     let mut scans = Outlet::create(&domain, &node, topic::SCAN, Delivery::Latest, 0)?;
@@ -82,11 +78,13 @@ fn run() -> Result<()> {
     std::io::stdout()
         .flush()
         .context("cannot write to stdout")?;
-    match scans.wait_for_subscribers(args.subscribers, Some(Duration::from_secs(10))) {
+    let wait = SourceArgs::REAL_TIME_WAIT;
+    match scans.wait_for_subscribers(args.source.subscribers, Some(wait)) {
         Ok(true) => {}
         Ok(false) => say_err(&format!(
-            "lidar-hokuyo: fewer than {} subscribers after 10 s; starting anyway",
-            args.subscribers
+            "lidar-hokuyo: fewer than {} subscribers after {} s; starting anyway",
+            args.source.subscribers,
+            wait.as_secs()
         )),
         Err(_) if shutdown::requested() => return Ok(()),
         Err(e) => return Err(e.into()),

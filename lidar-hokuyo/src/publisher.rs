@@ -18,6 +18,7 @@
 use std::time::{Duration, Instant};
 
 use ipc_types::{LaserScan, Outlet, PublishError};
+use stage_kit::pacing::sleep_until;
 use stage_kit::say_err;
 
 use crate::backoff::Backoff;
@@ -219,7 +220,8 @@ where
             if let Some(notice) = self.notices.failure(Instant::now(), &lost, &reason) {
                 console(&notice);
             }
-            if sleep_unless_stopped(delay, &self.stop) {
+            // In slices, so that a stop does not wait out the back-off.
+            if !sleep_until(Instant::now() + delay, &self.stop) {
                 return Ok(Finish::Stopped);
             }
         }
@@ -355,21 +357,6 @@ where
             // The sensor works: the next loss starts the back-off afresh.
             backoff.reset();
         }
-    }
-}
-
-/// Sleeps `delay` in short naps; true if a stop came first.
-fn sleep_unless_stopped(delay: Duration, stop: &dyn Fn() -> bool) -> bool {
-    let end = Instant::now() + delay;
-    loop {
-        if stop() {
-            return true;
-        }
-        let left = end.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            return false;
-        }
-        std::thread::sleep(left.min(Duration::from_millis(20)));
     }
 }
 

@@ -17,7 +17,7 @@ pub fn fill_scan(scan: &mut LaserScan, seq: u64, record: &ScanRecord) -> Result<
 }
 
 /// Writes `record` with its row-major (x, y, yaw) `covariance` (see
-/// [`crate::OdometryCovariance`]) into a (zeroed) message. `seq` is that of the scan the pose
+/// [`stage_kit::odometry_covariance::OdometryCovariance`]) into a (zeroed) message. `seq` is that of the scan the pose
 /// goes with: the scan of the same `FLASER` line, else the next scan to be published.
 pub fn fill_odometry(
     message: &mut Odometry,

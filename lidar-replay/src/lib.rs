@@ -21,7 +21,8 @@
 //!   ([`seed_csv::NOMINAL_PERIOD_NS`]).
 //! * Ranges follow REP 117 (NaN = error, +inf = no return) in the sensor frame of
 //!   docs/CONVENTIONS.md (x forward, y left).
-//! * [`Pacer`] replays in lockstep (rate 0) or at the log's pace scaled by a rate;
+//! * A replay goes in lockstep (rate 0) or at the log's pace scaled by a speed factor
+//!   ([`check_rate`]; `stage_kit::pacing::Pacer` keeps the time);
 //!   [`fill_scan`] and [`fill_odometry`] write the messages in place, the odometry with a
 //!   covariance that grows with the motion ([`OdometryCovariance`]), as the logs give none.
 
@@ -45,9 +46,10 @@ pub use format::{
     open_log_until,
 };
 pub use lines::{MAX_LINE_BYTES, StopFlag};
-pub use odometry_noise::{LOG_ODOMETRY_NOISE, OdometryCovariance, OdometryNoise};
-pub use pacing::{Pacer, RATE_RANGE, check_rate, parse_rate};
+pub use odometry_noise::LOG_ODOMETRY_NOISE;
+pub use pacing::{RATE_RANGE, SPEED_FACTOR, check_rate, parse_rate};
 pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 pub use reorder::{Records, ReorderConfig, ReorderCounts};
 pub use seed_csv::SeedCsvReader;
+pub use stage_kit::odometry_covariance::{OdometryCovariance, OdometryNoise};
 pub use summary::{ReplaySummary, SUMMARY_HEAD};

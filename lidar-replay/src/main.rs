@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -11,11 +11,12 @@ use iceoryx2::prelude::{Node, ipc};
 use ipc_types::prelude::*;
 use lidar_replay::reorder::{DEFAULT_REORDER_CAP, DEFAULT_REORDER_WINDOW_NS};
 use lidar_replay::{
-    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError, Pacer, ReadError,
-    Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
+    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError, ReadError, Records,
+    ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
 };
 use recorder::Recorded;
-use stage_kit::{say, say_err};
+use stage_kit::pacing::Pacer;
+use stage_kit::{SourceArgs, say, say_err};
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
 /// log has it, Odometry (published before the scan it goes with, with the same stamp).
@@ -43,12 +44,8 @@ struct Args {
     /// one, nothing is lost.
     #[arg(long, default_value_t = 0.0, value_parser = lidar_replay::parse_rate)]
     rate: f64,
-    /// iceoryx2 domain of the run.
-    #[arg(long, default_value = "default")]
-    domain: String,
-    /// Scan subscribers to wait for before streaming (lockstep loses nothing at start).
-    #[arg(long, default_value_t = 1)]
-    subscribers: usize,
+    #[command(flatten)]
+    source: SourceArgs,
     /// Do not publish the log's odometry.
     #[arg(long)]
     no_odometry: bool,
@@ -70,8 +67,6 @@ struct Args {
     reorder_cap: usize,
 }
 
-/// A real-time source does not wait long for its subscribers, as a live sensor would not.
-const REAL_TIME_SUBSCRIBER_WAIT: Duration = Duration::from_secs(10);
 /// How long the first odometry waits for a subscriber. feature-proc looks for the odometry
 /// topic once it has found the scans, which may be after the first odometry is due; without
 /// this wait the first readings would be lost, and which ones would depend on timing.
@@ -117,24 +112,16 @@ impl Streams {
         } else {
             Delivery::Latest
         };
-        let domain = Domain::new(&args.domain)?;
+        let domain = Domain::new(&args.source.domain)?;
         let node = domain.node("lidar-replay")?;
-        let odometry = if odometry {
-            Some(Outlet::create(
-                &domain,
-                &node,
-                topic::ODOMETRY,
-                delivery,
-                0,
-            )?)
-        } else {
-            None
-        };
+        let odometry = odometry
+            .then(|| Outlet::create(&domain, &node, topic::ODOMETRY, delivery, 0))
+            .transpose()?;
         let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
         say("ready");
 
-        let wait = (!pacer.is_lockstep()).then_some(REAL_TIME_SUBSCRIBER_WAIT);
-        scans.wait_for_subscribers(args.subscribers, wait)?;
+        let wait = (!pacer.is_lockstep()).then_some(SourceArgs::REAL_TIME_WAIT);
+        scans.wait_for_subscribers(args.source.subscribers, wait)?;
         Ok(Self {
             scans,
             odometry,
@@ -164,7 +151,8 @@ impl Streams {
                 ));
             }
         }
-        if !sleep_until(self.pacer.due(stamp_ns, Instant::now())) {
+        // Sliced, so a long wait (a slow rate, a gap in the log) does not hold up Ctrl-C.
+        if !self.pacer.wait(stamp_ns, shutdown::requested) {
             return Ok(false);
         }
         outlet.publish(fill)?;
@@ -175,7 +163,7 @@ impl Streams {
     /// Publishes a scan stamped `stamp_ns` when it is due. `Ok(false)` when Ctrl-C came
     /// first.
     fn scan(&mut self, stamp_ns: u64, fill: impl FnOnce(&mut LaserScan)) -> Result<bool> {
-        if !sleep_until(self.pacer.due(stamp_ns, Instant::now())) {
+        if !self.pacer.wait(stamp_ns, shutdown::requested) {
             return Ok(false);
         }
         self.scans.publish(fill)?;
@@ -277,7 +265,7 @@ fn replay_log(args: &Args) -> Result<()> {
                         continue;
                     }
                     let seq = streams.published;
-                    let covariance = odometry_covariance.update(&pose);
+                    let covariance = odometry_covariance.update(pose.pose());
                     streams.odometry(pose.stamp_ns, |message| {
                         fill_odometry(message, seq, &pose, covariance)
                     })?
@@ -409,13 +397,4 @@ fn finish(streams: &Streams, summary: &mut ReplaySummary) -> Result<()> {
 fn report(summary: &ReplaySummary) {
     say_err(&summary.to_string());
     ipc_types::losses::report(&summary.losses());
-}
-
-/// Sleeps until `due` (at once when `None` or past). Returns false when Ctrl-C came first.
-fn sleep_until(due: Option<Instant>) -> bool {
-    match due {
-        // Sliced, so a long wait (a slow rate, a gap in the log) does not hold up Ctrl-C.
-        Some(due) => shutdown::sleep_until(due),
-        None => !shutdown::requested(),
-    }
 }

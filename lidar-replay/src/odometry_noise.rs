@@ -1,25 +1,8 @@
-//! The covariance sent with a log's odometry, which carries none.
-//!
-//! Consumers (slam-proc) read an odometry message's covariance as that of the integrated
-//! pose, and the uncertainty of the increment between two messages as its growth, as
-//! lidar-sim publishes it. So the covariance here grows as a random walk with the distance
-//! driven and the angle turned, whatever the message rate.
+//! The noise behind the covariance sent with a log's odometry, which carries none; it grows
+//! along the motion with [`stage_kit::odometry_covariance::OdometryCovariance`], as
+//! lidar-sim's does.
 
-use crate::record::OdometryRecord;
-use slam_geom::wrap_angle;
-
-/// Random-walk standard deviations of wheel odometry.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OdometryNoise {
-    /// Forward error, metres per sqrt(metre driven).
-    pub sigma_forward: f64,
-    /// Sideways error, metres per sqrt(metre driven).
-    pub sigma_lateral: f64,
-    /// Heading error from driving, radians per sqrt(metre driven).
-    pub sigma_yaw_per_m: f64,
-    /// Heading error from turning, radians per sqrt(radian turned).
-    pub sigma_yaw_per_rad: f64,
-}
+use stage_kit::odometry_covariance::OdometryNoise;
 
 /// A nominal wheel odometry of an indoor robot of the logs' era (a B21, a Pioneer): five
 /// times the simulator's forward and heading errors, since real wheels slip and the logs
@@ -30,91 +13,3 @@ pub const LOG_ODOMETRY_NOISE: OdometryNoise = OdometryNoise {
     sigma_yaw_per_m: 0.025,
     sigma_yaw_per_rad: 0.1,
 };
-
-/// Integrates [`OdometryNoise`] along the odometry poses it is given, in order.
-#[derive(Debug, Clone)]
-pub struct OdometryCovariance {
-    noise: OdometryNoise,
-    /// Variances of position (each axis) and heading so far.
-    position: f64,
-    yaw: f64,
-    last: Option<(f64, f64, f64)>,
-}
-
-impl OdometryCovariance {
-    pub fn new(noise: OdometryNoise) -> Self {
-        Self {
-            noise,
-            position: 0.0,
-            yaw: 0.0,
-            last: None,
-        }
-    }
-
-    /// The row-major (x, y, yaw) covariance of `pose`, after the motion since the previous
-    /// pose. Position variance is the same on both axes: the forward and sideways errors
-    /// mix as the robot turns, so neither world axis knows which is which.
-    pub fn update(&mut self, pose: &OdometryRecord) -> [f64; 9] {
-        if let Some((x, y, yaw)) = self.last {
-            let driven = (pose.x - x).hypot(pose.y - y);
-            let turned = wrap_angle(pose.yaw - yaw).abs();
-            let n = &self.noise;
-            self.position += (n.sigma_forward.powi(2) + n.sigma_lateral.powi(2)) * driven;
-            self.yaw += n.sigma_yaw_per_m.powi(2) * driven + n.sigma_yaw_per_rad.powi(2) * turned;
-        }
-        self.last = Some((pose.x, pose.y, pose.yaw));
-        [
-            self.position,
-            0.0,
-            0.0,
-            0.0,
-            self.position,
-            0.0,
-            0.0,
-            0.0,
-            self.yaw,
-        ]
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn pose(x: f64, y: f64, yaw: f64) -> OdometryRecord {
-        OdometryRecord {
-            line: 1,
-            stamp_ns: 0,
-            x,
-            y,
-            yaw,
-            linear_velocity: 0.0,
-            angular_velocity: 0.0,
-        }
-    }
-
-    #[test]
-    fn covariance_grows_with_distance_and_turn_only() {
-        let noise = OdometryNoise {
-            sigma_forward: 0.1,
-            sigma_lateral: 0.2,
-            sigma_yaw_per_m: 0.3,
-            sigma_yaw_per_rad: 0.4,
-        };
-        let mut covariance = OdometryCovariance::new(noise);
-        assert_eq!(
-            covariance.update(&pose(5.0, 5.0, 3.0)),
-            [0.0; 9],
-            "the start"
-        );
-        let standing = covariance.update(&pose(5.0, 5.0, 3.0));
-        assert_eq!(standing, [0.0; 9], "standing still adds nothing");
-        // 5 m driven and a 0.5 rad turn across the +-pi seam.
-        let moved = covariance.update(&pose(8.0, 9.0, 3.0 + 0.5 - 2.0 * std::f64::consts::PI));
-        let position = (0.01 + 0.04) * 5.0;
-        let yaw = 0.09 * 5.0 + 0.16 * 0.5;
-        assert!((moved[0] - position).abs() < 1e-12 && moved[4] == moved[0]);
-        assert!((moved[8] - yaw).abs() < 1e-12);
-        assert_eq!([moved[1], moved[2], moved[3], moved[5]], [0.0; 4]);
-    }
-}

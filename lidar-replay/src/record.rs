@@ -1,5 +1,6 @@
 //! What a log yields: scans and odometry, in log order, with the line they came from.
 
+use slam_geom::Pose2;
 pub use slam_geom::ScanGeometry;
 
 /// One scan of a log, ranges already in REP 117 form (NaN = error, +inf = no return).
@@ -30,6 +31,13 @@ pub struct OdometryRecord {
     pub linear_velocity: f64,
     /// Yaw rate, rad/s (0 when the log does not say).
     pub angular_velocity: f64,
+}
+
+impl OdometryRecord {
+    /// The pose `odom_from_robot`.
+    pub fn pose(&self) -> Pose2 {
+        Pose2::new(self.x, self.y, self.yaw)
+    }
 }
 
 /// A record of a log, in the order it is to be published.

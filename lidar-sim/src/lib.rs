@@ -33,7 +33,7 @@ mod world_error;
 
 pub use lidar::LidarModel;
 pub use odometry::{Odometer, OdometryConfig};
-pub use rate::{RATE_RANGE, check_rate, parse_rate};
+pub use rate::{RATE_RANGE, SCANS_PER_SECOND, check_rate, parse_rate};
 pub use ray_caster::RayCaster;
 pub use sensor::SensorConfig;
 pub use sim_error::SimError;

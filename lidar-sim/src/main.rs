@@ -3,14 +3,15 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
 use lidar_sim::{SensorConfig, Simulation, VehicleConfig, World};
 use serde::Deserialize;
-use stage_kit::{say, say_err};
+use stage_kit::odometry_covariance::OdometryCovariance;
+use stage_kit::pacing::Pacer;
+use stage_kit::{SourceArgs, say, say_err};
 
 /// What `--config` may set: the sensor and the vehicle (every field optional).
 #[derive(Debug, Default, Deserialize)]
@@ -39,12 +40,8 @@ struct Args {
     /// Seed of the sensor and odometry noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// iceoryx2 domain of the run.
-    #[arg(long, default_value = "default")]
-    domain: String,
-    /// Scan subscribers to wait for before streaming (lockstep loses nothing at start).
-    #[arg(long, default_value_t = 1)]
-    subscribers: usize,
+    #[command(flatten)]
+    source: SourceArgs,
     /// Publish noisy wheel odometry as well.
     #[arg(long)]
     odometry: bool,
@@ -69,7 +66,7 @@ fn run() -> Result<()> {
         .collect();
     let sensor = settings.sensor.clone();
     let geometry = sensor.scan_geometry();
-    let odometry_noise = settings.vehicle.odometry.clone();
+    let mut odometry_covariance = OdometryCovariance::new(settings.vehicle.odometry.noise());
     let mut sim = Simulation::new(world, settings.sensor, settings.vehicle, args.seed)?;
 
     let delivery = if args.rate == 0.0 {
@@ -77,23 +74,16 @@ fn run() -> Result<()> {
     } else {
         Delivery::Latest
     };
-    let domain = Domain::new(&args.domain)?;
+    let domain = Domain::new(&args.source.domain)?;
     let node = domain.node("lidar-sim")?;
     // Everything a subscriber of the scans may want is created before the scan topic, so a
     // process that has found the scans finds the rest too.
     let truth = Outlet::create(&domain, &node, topic::GROUND_TRUTH, delivery, 0)?;
     let corners = Outlet::create(&domain, &node, topic::WORLD_CORNERS, delivery, 1)?;
-    let odometry = if args.odometry {
-        Some(Outlet::create(
-            &domain,
-            &node,
-            topic::ODOMETRY,
-            delivery,
-            0,
-        )?)
-    } else {
-        None
-    };
+    let odometry = args
+        .odometry
+        .then(|| Outlet::create(&domain, &node, topic::ODOMETRY, delivery, 0))
+        .transpose()?;
     // A message holds MAX_WORLD_CORNERS; the rest are not scored.
     let corners_left_out = true_corners
         .len()
@@ -113,18 +103,13 @@ fn run() -> Result<()> {
 
     let wait = match delivery {
         Delivery::Lossless => None,
-        // A live sensor does not wait for anyone for long.
-        Delivery::Latest => Some(Duration::from_secs(10)),
+        Delivery::Latest => Some(SourceArgs::REAL_TIME_WAIT),
     };
-    scans.wait_for_subscribers(args.subscribers, wait)?;
+    scans.wait_for_subscribers(args.source.subscribers, wait)?;
 
-    let period = (args.rate > 0.0).then(|| Duration::from_secs_f64(1.0 / args.rate));
-    let start = Instant::now();
+    let mut pacer = Pacer::new(args.rate);
     let mut published = 0u64;
     let mut last_stamp = 0;
-    // Odometry's covariance grows with the distance and turn it has integrated.
-    let mut odometry_variance = [0.0f64; 3];
-    let mut last_odometry: Option<lidar_sim::Pose2> = None;
     while args.frames == 0 || published < args.frames {
         if shutdown::requested() {
             break;
@@ -132,12 +117,9 @@ fn run() -> Result<()> {
         let Some(frame) = sim.next_frame() else {
             break;
         };
-        if let Some(period) = period {
-            // A slow rate means long waits: sliced, so Ctrl-C is not held up by them.
-            let due = start + period.mul_f64(published as f64);
-            if !shutdown::sleep_until(due) {
-                break;
-            }
+        // A slow rate means long waits: sliced, so Ctrl-C is not held up by them.
+        if !pacer.wait(Pacer::nth(published), shutdown::requested) {
+            break;
         }
         let header = Header::new(frame.seq, frame.stamp_ns, "laser");
         truth.publish(|message| {
@@ -146,23 +128,13 @@ fn run() -> Result<()> {
             message.pose = frame.pose.into();
         })?;
         if let Some(odometry) = &odometry {
-            if let Some(last) = last_odometry {
-                let step = (frame.odometry.x - last.x).hypot(frame.odometry.y - last.y);
-                let turn = lidar_sim::wrap_angle(frame.odometry.yaw - last.yaw).abs();
-                odometry_variance[0] += odometry_noise.sigma_forward.powi(2) * step;
-                odometry_variance[1] += odometry_noise.sigma_lateral.powi(2) * step;
-                odometry_variance[2] += odometry_noise.sigma_yaw_per_m.powi(2) * step
-                    + odometry_noise.sigma_yaw_per_rad.powi(2) * turn;
-            }
-            last_odometry = Some(frame.odometry);
-            let position_variance = odometry_variance[0] + odometry_variance[1];
+            // Grows with the distance and turn the odometry has integrated.
+            let covariance = odometry_covariance.update(frame.odometry);
             odometry.publish(|message| {
                 message.header = header;
                 message.header.set_frame_id("odom");
                 message.pose = frame.odometry.into();
-                message.covariance[0] = position_variance;
-                message.covariance[4] = position_variance;
-                message.covariance[8] = odometry_variance[2];
+                message.covariance = covariance;
                 message.linear_velocity = frame.linear_velocity;
                 message.angular_velocity = frame.angular_velocity;
             })?;

@@ -5,6 +5,7 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use crate::Pose2;
+use stage_kit::odometry_covariance::OdometryNoise;
 use stage_kit::settings::{SettingError, check_non_negative};
 
 /// Odometry error as random walks: each standard deviation grows with the square root of
@@ -34,6 +35,16 @@ impl Default for OdometryConfig {
 }
 
 impl OdometryConfig {
+    /// The noise as the covariance sent with the odometry integrates it.
+    pub fn noise(&self) -> OdometryNoise {
+        OdometryNoise {
+            sigma_forward: self.sigma_forward,
+            sigma_lateral: self.sigma_lateral,
+            sigma_yaw_per_m: self.sigma_yaw_per_m,
+            sigma_yaw_per_rad: self.sigma_yaw_per_rad,
+        }
+    }
+
     pub fn validate(&self) -> Result<(), SettingError> {
         check_non_negative(&[
             ("odometry.sigma_forward", self.sigma_forward),

@@ -98,41 +98,33 @@ impl Inlets {
     fn drain_all_but_poses(&self, recording: &mut Recording) -> Result<u64> {
         let mut taken = 0;
         if let Some(world) = &self.world {
-            while let Some(sample) = world.receive()? {
-                recording.world_corners(&sample)?;
-                taken += 1;
-            }
+            taken += drain(world, |m| recording.world_corners(m))?;
         }
         if let Some(truth) = &self.truth {
-            while let Some(sample) = truth.receive()? {
-                recording.ground_truth(&sample)?;
-                taken += 1;
-            }
+            taken += drain(truth, |m| recording.ground_truth(m))?;
         }
         if let Some(odometry) = &self.odometry {
-            while let Some(sample) = odometry.receive()? {
-                recording.odometry(&sample)?;
-                taken += 1;
-            }
+            taken += drain(odometry, |m| recording.odometry(m))?;
         }
-        while let Some(sample) = self.scans.receive()? {
-            recording.scan(&sample)?;
-            taken += 1;
-        }
-        while let Some(sample) = self.features.receive()? {
-            recording.features(&sample)?;
-            taken += 1;
-        }
-        while let Some(sample) = self.maps.receive()? {
-            recording.map(&sample)?;
-            taken += 1;
-        }
-        while let Some(sample) = self.path.receive()? {
-            recording.path_chunk(&sample)?;
-            taken += 1;
-        }
+        taken += drain(&self.scans, |m| recording.scan(m))?;
+        taken += drain(&self.features, |m| recording.features(m))?;
+        taken += drain(&self.maps, |m| recording.map(m))?;
+        taken += drain(&self.path, |m| recording.path_chunk(m))?;
         Ok(taken)
     }
+}
+
+/// Records every message queued on `inlet` with `record`; returns how many.
+fn drain<T: Message>(
+    inlet: &Inlet<T>,
+    mut record: impl FnMut(&T) -> Result<(), recorder::RecordError>,
+) -> Result<u64> {
+    let mut taken = 0;
+    while let Some(sample) = inlet.receive()? {
+        record(&sample)?;
+        taken += 1;
+    }
+    Ok(taken)
 }
 
 fn run() -> Result<()> {

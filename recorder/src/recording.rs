@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use ipc_types::{
-    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
+    Features, GroundTruthPose, Header, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
     WorldCorners,
 };
 
@@ -14,6 +14,7 @@ use crate::own::{FeaturesMessage, MapMessage, OdometryMessage, WorldCornersMessa
 use crate::path::{PathChunks, PathMessage};
 use crate::pose::{MAP_FRAME, PoseMessage};
 use crate::scan::ScanMessage;
+use crate::schema::ChannelMessage;
 use crate::transform::{BASE_FRAME, TransformMessage};
 
 /// The recording's file name in the run's directory.
@@ -93,21 +94,11 @@ impl Recording {
     }
 
     pub fn odometry(&mut self, odometry: &Odometry) -> Result<(), RecordError> {
-        let h = odometry.header;
-        if h.is_end_of_stream() {
-            return Ok(());
-        }
-        self.file
-            .write(&OdometryMessage::new(odometry), h.stamp_ns, h.sent_ns)
+        self.data(odometry.header, || OdometryMessage::new(odometry))
     }
 
     pub fn features(&mut self, features: &Features) -> Result<(), RecordError> {
-        let h = features.header;
-        if h.is_end_of_stream() {
-            return Ok(());
-        }
-        self.file
-            .write(&FeaturesMessage::new(features), h.stamp_ns, h.sent_ns)
+        self.data(features.header, || FeaturesMessage::new(features))
     }
 
     /// The estimate on `/slam/pose`, and `map → base_link` at it on `/tf`.
@@ -164,21 +155,24 @@ impl Recording {
     }
 
     pub fn ground_truth(&mut self, truth: &GroundTruthPose) -> Result<(), RecordError> {
-        let h = truth.header;
-        if h.is_end_of_stream() {
-            return Ok(());
-        }
-        self.file
-            .write(&GroundTruthMessage::new(truth), h.stamp_ns, h.sent_ns)
+        self.data(truth.header, || GroundTruthMessage::new(truth))
     }
 
     pub fn world_corners(&mut self, world: &WorldCorners) -> Result<(), RecordError> {
-        let h = world.header;
-        if h.is_end_of_stream() {
+        self.data(world.header, || WorldCornersMessage::new(world))
+    }
+
+    /// Records the message `make` makes of a pipeline message with `header`, stamped as it
+    /// was; an end-of-stream marker carries no data and is not recorded.
+    fn data<M: ChannelMessage>(
+        &mut self,
+        header: Header,
+        make: impl FnOnce() -> M,
+    ) -> Result<(), RecordError> {
+        if header.is_end_of_stream() {
             return Ok(());
         }
-        self.file
-            .write(&WorldCornersMessage::new(world), h.stamp_ns, h.sent_ns)
+        self.file.write(&make(), header.stamp_ns, header.sent_ns)
     }
 
     /// Writes the last map snapshot if it was held back, and closes the file with its

@@ -10,6 +10,11 @@
 //! - [`settings`]: a TOML settings file read into a library's config struct, with one error
 //!   type naming the file; [`SettingError`] and [`check`] for the range checks of those
 //!   structs.
+//! - [`odometry_covariance`]: the covariance a source without one sends with its odometry,
+//!   grown along the motion.
+//! - [`SourceArgs`]: the arguments every scan source takes (domain, subscribers).
+//! - [`pacing`]: a source's `--rate` (lockstep or real time) and the clock it publishes
+//!   by, with sleeps sliced so that a stop is not held up.
 //!
 //! ```no_run
 //! use std::process::ExitCode;
@@ -26,8 +31,12 @@
 
 mod console;
 mod exit;
+pub mod odometry_covariance;
+pub mod pacing;
 pub mod settings;
+mod source_args;
 
 pub use console::{say, say_err};
 pub use exit::main;
 pub use settings::{SettingError, SettingsFileError, check};
+pub use source_args::SourceArgs;

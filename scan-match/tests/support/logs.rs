@@ -11,7 +11,6 @@ use lidar_replay::{
 };
 use nalgebra::Matrix3;
 use scan_match::{OdometryInput, ScanInput};
-use slam_geom::Pose2;
 use slam_geom::ScanGeometry;
 
 /// One scan of a log with the odometry paired to it: the latest odometry record at or
@@ -55,9 +54,9 @@ pub fn load(path: &Path, format: LogFormat, limit: usize) -> Result<Vec<LoggedSc
         let Ok(record) = record else { continue };
         match record {
             LogRecord::Odometry(o) => {
-                let c = covariance.update(&o);
+                let c = covariance.update(o.pose());
                 odometry = Some(OdometryInput {
-                    odom_from_robot: Pose2::new(o.x, o.y, o.yaw),
+                    odom_from_robot: o.pose(),
                     covariance: Matrix3::from_row_slice(&c),
                 });
             }
