@@ -11,9 +11,10 @@ use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use common::*;
-use lidar_hokuyo::emulator::{Emulator, EmulatorConfig, Faults, intensity_of};
+use lidar_hokuyo::emulator::{Emulator, EmulatorConfig, EmulatorStats, Faults, intensity_of};
 use lidar_hokuyo::scip::{DataKind, Ranging};
 use lidar_hokuyo::{Connect, Sensor, TcpConnector};
+use test_child::{finish, terminate};
 
 const LIMIT: Duration = Duration::from_secs(60);
 
@@ -93,63 +94,54 @@ fn streams_the_recording_with_the_sensors_geometry_and_stamps() {
     clean_up(&domain);
 }
 
-#[test]
-fn a_damaged_scan_is_dropped_and_the_stream_goes_on() {
-    let emulator = emulator(|c| {
-        c.faults = Faults {
-            corrupt: BTreeSet::from([5]),
-            ..Faults::default()
-        }
-    });
-    let domain = unique_domain("damaged");
+/// Runs the driver for 30 scans against an emulator with the faults `inject` sets, in a
+/// domain named after `tag`, and checks that all 30 came, in order and without gaps.
+/// Returns them, the driver's stderr and the emulator's account.
+fn thirty_scans_with(
+    tag: &str,
+    inject: impl FnOnce(&mut Faults),
+) -> (Vec<Received>, String, EmulatorStats) {
+    let emulator = emulator(|c| inject(&mut c.faults));
+    let domain = unique_domain(tag);
     let mut child = spawn_driver(&emulator.addr().to_string(), &domain, &["--frames", "30"]);
     let (inlet, node) = subscribe(&domain, &mut child);
     let (scans, _) = receive(&inlet, LIMIT, |_| false);
     let output = finish(child, LIMIT);
     let log = stderr_of(&output);
     assert!(output.status.success(), "{log}");
+    assert_eq!(scans.len(), 30);
+    assert_contiguous(&scans);
+    let stats = emulator.stop();
+    drop((inlet, node));
+    clean_up(&domain);
+    (scans, log, stats)
+}
+
+#[test]
+fn a_damaged_scan_is_dropped_and_the_stream_goes_on() {
+    let (scans, log, stats) = thirty_scans_with("damaged", |f| f.corrupt = BTreeSet::from([5]));
     assert!(
         log.contains("dropped 1 damaged scans, 1 connections"),
         "{log}"
     );
     assert!(log.contains("checksum"), "{log}");
-
-    assert_eq!(scans.len(), 30);
-    assert_contiguous(&scans);
     let rows: Vec<usize> = (0..5).chain(6..31).collect();
     for (scan, &row) in scans.iter().zip(&rows) {
         assert_ranges(&scan.ranges, &seed_hall()[row], &format!("row {row}"));
     }
-    let stats = emulator.stop();
     assert_eq!(stats.connections, 1);
     assert!(stats.sent[5].corrupted);
-    drop((inlet, node));
-    clean_up(&domain);
 }
 
 #[test]
 fn a_connection_dropped_mid_scan_resumes_without_gaps() {
-    let emulator = emulator(|c| {
-        c.faults = Faults {
-            drop: BTreeSet::from([7]),
-            ..Faults::default()
-        }
-    });
-    let domain = unique_domain("dropped");
-    let mut child = spawn_driver(&emulator.addr().to_string(), &domain, &["--frames", "30"]);
-    let (inlet, node) = subscribe(&domain, &mut child);
-    let (scans, _) = receive(&inlet, LIMIT, |_| false);
-    let output = finish(child, LIMIT);
-    let log = stderr_of(&output);
-    assert!(output.status.success(), "{log}");
+    let (scans, log, stats) = thirty_scans_with("dropped", |f| f.drop = BTreeSet::from([7]));
     assert!(log.contains("reconnecting in 100ms"), "{log}");
     assert!(
         log.contains("dropped 0 damaged scans, 2 connections"),
         "{log}"
     );
 
-    assert_eq!(scans.len(), 30);
-    assert_contiguous(&scans);
     for (row, scan) in scans.iter().enumerate() {
         assert_ranges(&scan.ranges, &seed_hall()[row], &format!("row {row}"));
     }
@@ -159,10 +151,7 @@ fn a_connection_dropped_mid_scan_resumes_without_gaps() {
             .windows(2)
             .all(|p| p[1].header.stamp_ns > p[0].header.stamp_ns)
     );
-    let stats = emulator.stop();
     assert_eq!((stats.connections, stats.dropped_connections), (2, 1));
-    drop((inlet, node));
-    clean_up(&domain);
 }
 
 #[test]

@@ -5,12 +5,11 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
-use std::sync::mpsc::{self, Receiver};
 use std::time::{Duration, Instant};
 
 use common::*;
+use test_child::{finish, lines_of, terminate, wait_for_line};
 
 /// Generous for a loaded 2-core machine.
 const LIMIT: Duration = Duration::from_secs(60);
@@ -43,19 +42,6 @@ fn an_address_that_cannot_be_resolved_is_refused_at_start() {
     }
 }
 
-/// The lines of a child's pipe as they come.
-fn lines_of(pipe: impl std::io::Read + Send + 'static) -> Receiver<String> {
-    let (sender, lines) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(pipe).lines().map_while(Result::ok) {
-            if sender.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    lines
-}
-
 #[test]
 fn a_closed_port_shows_on_the_console_and_a_run_without_scans_fails() {
     // A port nobody listens on.
@@ -81,17 +67,9 @@ fn a_closed_port_shows_on_the_console_and_a_run_without_scans_fails() {
     let stdout = lines_of(child.stdout.take().unwrap());
     let stderr = lines_of(child.stderr.take().unwrap());
     // The log has every attempt: wait for the third (back-off 100, 200, then 400 ms).
-    let deadline = Instant::now() + LIMIT;
     let mut log = Vec::new();
-    while !log
-        .iter()
-        .any(|l: &String| l.contains("reconnecting in 400ms"))
-    {
-        let left = deadline.saturating_duration_since(Instant::now());
-        match stderr.recv_timeout(left) {
-            Ok(line) => log.push(line),
-            Err(e) => panic!("no third attempt ({e}): {log:?}"),
-        }
+    if let Err(e) = wait_for_line(&stderr, &mut log, "reconnecting in 400ms", LIMIT) {
+        panic!("no third attempt: {e}");
     }
     terminate(&child);
     let output = finish(child, LIMIT);

@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::net::TcpListener;
 use std::process::Child;
 use std::sync::Arc;
@@ -15,6 +15,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use common::*;
+use test_child::{finish, lines_of, terminate, wait_for_line};
 
 /// Generous for a loaded 2-core machine; the driver's reply timeout is 2 s.
 const LIMIT: Duration = Duration::from_secs(60);
@@ -89,35 +90,6 @@ impl Drop for Running {
     }
 }
 
-/// The child's stderr, line by line, as it comes.
-fn stderr_lines(child: &mut Child) -> Receiver<String> {
-    let stderr = child.stderr.take().unwrap();
-    let (sender, lines) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            if sender.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    lines
-}
-
-/// Collects lines into `seen` until one contains `text`, at most `limit`.
-fn wait_for_line(lines: &Receiver<String>, seen: &mut Vec<String>, text: &str, limit: Duration) {
-    let deadline = Instant::now() + limit;
-    while !seen.iter().any(|line| line.contains(text)) {
-        let left = deadline.saturating_duration_since(Instant::now());
-        match lines.recv_timeout(left) {
-            Ok(line) => seen.push(line),
-            Err(e) => panic!(
-                "no line with {text:?} ({e}); stderr so far:\n{}",
-                seen.join("\n")
-            ),
-        }
-    }
-}
-
 /// Runs the driver against `peer` until it has named the peer and come back for a second
 /// try, then stops it with SIGTERM during that try. Returns its stderr.
 fn named_retried_and_stopped(peer: &Peer, tag: &str, last_began: &str) -> String {
@@ -127,14 +99,14 @@ fn named_retried_and_stopped(peer: &Peer, tag: &str, last_began: &str) -> String
         &domain,
         &["--subscribers", "0"],
     )));
-    let lines = stderr_lines(child.0.as_mut().unwrap());
+    let lines = lines_of(child.0.as_mut().unwrap().stderr.take().unwrap());
     let mut seen = Vec::new();
     peer.wait_for_connection(LIMIT);
     let named = format!(
         "lidar-hokuyo: {}: not a SCIP sensor: no reply to QT within 2s, only ",
         peer.addr
     );
-    wait_for_line(&lines, &mut seen, &named, LIMIT);
+    wait_for_line(&lines, &mut seen, &named, LIMIT).unwrap();
     let line = seen.iter().find(|l| l.contains(&named)).unwrap();
     assert!(
         line.contains(&format!(

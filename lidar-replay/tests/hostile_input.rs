@@ -3,12 +3,12 @@
 //! with its heap capped (RLIMIT_DATA), so a reader that held a whole line would fail here
 //! instead of filling the machine's memory.
 
-use std::io::{BufRead, BufReader, Write};
-use std::os::unix::process::CommandExt;
+use std::io::Write;
 use std::path::PathBuf;
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc;
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+use test_child::{finish, lines_of, terminate, wait_for_line};
 
 /// Heap a replay may have. A replay needs a few MiB plus its longest line (1 MiB); a reader
 /// that held a 3 MiB line would get near this only with much more, and one that held
@@ -29,48 +29,22 @@ fn flaser(stamp: f64) -> String {
     format!("FLASER 180 {ranges} 0 0 0 0 0 0 {stamp} robot 0.1\n")
 }
 
-/// `lidar-replay` with `args` in a domain of its own, its heap capped at [`HEAP_LIMIT`].
+/// `lidar-replay` with `args` in a domain of its own, its heap capped at [`HEAP_LIMIT`] by
+/// prlimit(1), which then runs it as itself (same process, so a signal reaches the replay).
 fn spawn_replay(tag: &str, args: &[&str]) -> Child {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_lidar-replay"));
-    command
+    Command::new("prlimit")
+        .arg(format!("--data={HEAP_LIMIT}"))
+        .arg("--")
+        .arg(env!("CARGO_BIN_EXE_lidar-replay"))
         .args(args)
         .args([
             "--domain",
             &format!("replay-hostile-{tag}-{}", std::process::id()),
         ])
         .stdout(Stdio::null())
-        .stderr(Stdio::piped());
-    // SAFETY: setrlimit(2) is async-signal-safe and touches only the child.
-    unsafe {
-        command.pre_exec(|| {
-            let limit = libc::rlimit {
-                rlim_cur: HEAP_LIMIT,
-                rlim_max: HEAP_LIMIT,
-            };
-            if libc::setrlimit(libc::RLIMIT_DATA, &limit) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
-    }
-    command.spawn().expect("start lidar-replay")
-}
-
-/// Waits for `child` at most `limit`; kills it and fails past that.
-fn finish(mut child: Child, limit: Duration) -> Output {
-    let deadline = Instant::now() + limit;
-    while child.try_wait().unwrap().is_none() {
-        if Instant::now() > deadline {
-            let _ = child.kill();
-            let output = child.wait_with_output().unwrap();
-            panic!(
-                "still running after {limit:?}; stderr:\n{}",
-                String::from_utf8_lossy(&output.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    child.wait_with_output().unwrap()
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start lidar-replay under prlimit")
 }
 
 #[test]
@@ -165,36 +139,19 @@ fn sigterm_ends_a_replay_reading_an_endless_line() {
         ],
     );
     // Read stderr as it comes; the report of line 4 means the endless line is next.
-    let stderr = child.stderr.take().unwrap();
-    let (sender, lines) = mpsc::channel();
-    let reader = std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            if sender.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let deadline = Instant::now() + LIMIT;
+    let lines = lines_of(child.stderr.take().unwrap());
     let mut seen = Vec::new();
-    while !seen.iter().any(|l: &String| l.contains("line 4: ")) {
-        let left = deadline.saturating_duration_since(Instant::now());
-        match lines.recv_timeout(left) {
-            Ok(line) => seen.push(line),
-            Err(e) => {
-                let _ = child.kill();
-                panic!("no report of line 4 ({e}); stderr so far: {seen:?}");
-            }
-        }
+    if let Err(e) = wait_for_line(&lines, &mut seen, "line 4: ", LIMIT) {
+        let _ = child.kill();
+        panic!("no report of line 4: {e}");
     }
     // Reading a terabyte takes minutes: the replay is inside the endless line.
-    let pid = libc::pid_t::try_from(child.id()).unwrap();
-    // SAFETY: kill(2) on our own child process.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+    terminate(&child);
     let signalled = Instant::now();
     let output = finish(child, LIMIT);
     let stopped_in = signalled.elapsed();
-    reader.join().unwrap();
-    seen.extend(lines.try_iter());
+    // The child has gone: the rest of its stderr ends with the pipe.
+    seen.extend(lines.iter());
     let stderr = seen.join("\n");
     assert!(output.status.success(), "{stderr}");
     assert!(

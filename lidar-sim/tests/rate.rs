@@ -11,36 +11,24 @@ const LIMIT: Duration = Duration::from_secs(60);
 
 #[test]
 fn a_rate_out_of_range_is_refused_with_the_range() {
-    for rate in ["1e-20", "-1", "2000", "NaN", "inf"] {
-        let output = Command::new(env!("CARGO_BIN_EXE_lidar-sim"))
-            .arg(format!("--rate={rate}"))
-            .args(["--frames", "1"])
-            .args([
-                "--domain",
-                &format!("sim-rate-refused-{}", std::process::id()),
-            ])
-            .output()
-            .expect("run lidar-sim");
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert_eq!(output.status.code(), Some(2), "--rate {rate}: {stderr}");
-        assert!(
-            stderr.contains(&format!("invalid value '{rate}' for '--rate <RATE>'")),
-            "--rate {rate}: {stderr}"
-        );
-        assert!(
-            stderr.contains("must be 0 (lockstep) or from 0.001 to 1000 scans per second"),
-            "--rate {rate}: {stderr}"
-        );
-        assert!(!stderr.contains("panicked"), "--rate {rate}: {stderr}");
-        assert!(output.stdout.is_empty(), "refused before announcing ready");
-    }
+    let domain = format!("sim-rate-refused-{}", std::process::id());
+    let sim = || {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_lidar-sim"));
+        command.args(["--frames", "1", "--domain", &domain]);
+        command
+    };
+    test_child::assert_rates_refused(
+        sim,
+        &["1e-20", "-1", "2000", "NaN", "inf"],
+        "must be 0 (lockstep) or from 0.001 to 1000 scans per second",
+    );
 }
 
 #[test]
 fn sigterm_ends_the_wait_for_a_slow_rates_next_scan() {
     // One scan every 100 s: the first goes out at once, the second is 100 s away.
     let domain = Domain::new(&format!("sim-slow-rate-{}", std::process::id())).unwrap();
-    let mut sim = Command::new(env!("CARGO_BIN_EXE_lidar-sim"))
+    let sim = Command::new(env!("CARGO_BIN_EXE_lidar-sim"))
         .args(["--world", "hall", "--rate", "0.01", "--subscribers", "1"])
         .args(["--domain", domain.name()])
         .stdout(Stdio::null())
@@ -60,19 +48,10 @@ fn sigterm_ends_the_wait_for_a_slow_rates_next_scan() {
     };
     assert_eq!(first, 0);
     // The simulator is now waiting for the second scan's time.
-    let pid = libc::pid_t::try_from(sim.id()).unwrap();
-    // SAFETY: kill(2) on our own child process.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+    test_child::terminate(&sim);
     let signalled = Instant::now();
-    while sim.try_wait().unwrap().is_none() {
-        if signalled.elapsed() > LIMIT {
-            let _ = sim.kill();
-            panic!("lidar-sim ignored SIGTERM for {LIMIT:?}");
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    let output = test_child::finish(sim, LIMIT);
     let stopped_in = signalled.elapsed();
-    let output = sim.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
     assert!(stderr.contains("stopped after 1 scans"), "{stderr}");

@@ -1,0 +1,141 @@
+//! # test-child
+//!
+//! What the integration tests of the process crates (lidar-sim, lidar-replay, lidar-hokuyo)
+//! do with the process under test the same way: read its console as it comes, wait for it
+//! with a deadline, stop it as a user would (SIGTERM), and check that a bad `--rate` is
+//! refused before anything starts.
+//!
+//! Test support only (a dev-dependency): it panics where a test should fail.
+
+use std::io::{BufRead, BufReader, Read};
+use std::process::{Child, Command, Output};
+use std::sync::mpsc::{self, Receiver};
+use std::time::{Duration, Instant};
+
+/// The lines of a child's pipe (its stdout or stderr) as they come, read on a thread of
+/// their own so that a test can wait for one with a deadline.
+pub fn lines_of(pipe: impl Read + Send + 'static) -> Receiver<String> {
+    let (sender, lines) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(pipe).lines().map_while(Result::ok) {
+            if sender.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    lines
+}
+
+/// Collects the lines that come into `seen` until one contains `text`. After `limit`
+/// without it (or when the pipe closed first), the error says what came instead.
+pub fn wait_for_line(
+    lines: &Receiver<String>,
+    seen: &mut Vec<String>,
+    text: &str,
+    limit: Duration,
+) -> Result<(), String> {
+    let deadline = Instant::now() + limit;
+    while !seen.iter().any(|line| line.contains(text)) {
+        let left = deadline.saturating_duration_since(Instant::now());
+        match lines.recv_timeout(left) {
+            Ok(line) => seen.push(line),
+            Err(e) => {
+                return Err(format!(
+                    "no line with {text:?} ({e}); so far:\n{}",
+                    seen.join("\n")
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Sends SIGTERM to `child`, as a user or a supervisor stops a stage.
+///
+/// Through kill(1) rather than kill(2): a test then needs no `unsafe`, and no binding
+/// crate beyond the standard library.
+pub fn terminate(child: &Child) {
+    let status = Command::new("kill")
+        .args(["-s", "TERM", &child.id().to_string()])
+        .status()
+        .expect("run kill(1)");
+    assert!(status.success(), "kill -s TERM {}: {status}", child.id());
+}
+
+/// Waits for `child` at most `limit` and returns its exit status and output; kills it and
+/// fails the test past that, with its stderr.
+pub fn finish(mut child: Child, limit: Duration) -> Output {
+    let deadline = Instant::now() + limit;
+    while child.try_wait().expect("poll the child").is_none() {
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let output = child.wait_with_output().expect("reap the child");
+            panic!(
+                "still running after {limit:?}; stderr:\n{}",
+                String::from_utf8_lossy(&output.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    child
+        .wait_with_output()
+        .expect("collect the child's output")
+}
+
+/// Runs `command` with each of `rates` as `--rate` and checks that clap refused it (exit
+/// status 2) with `range` (the unit's wording of the allowed rates) in the message, no
+/// panic, and before the process announced `ready` on stdout.
+pub fn assert_rates_refused(command: impl Fn() -> Command, rates: &[&str], range: &str) {
+    for rate in rates {
+        let output = command()
+            .arg(format!("--rate={rate}"))
+            .output()
+            .expect("run the process");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "--rate {rate}: {stderr}");
+        assert!(
+            stderr.contains(&format!("invalid value '{rate}' for '--rate <RATE>'")),
+            "--rate {rate}: {stderr}"
+        );
+        assert!(stderr.contains(range), "--rate {rate}: {stderr}");
+        assert!(!stderr.contains("panicked"), "--rate {rate}: {stderr}");
+        assert!(output.stdout.is_empty(), "refused before announcing ready");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_terminated_child_is_finished_by_the_signal() {
+        let child = Command::new("sleep").arg("60").spawn().unwrap();
+        terminate(&child);
+        let output = finish(child, Duration::from_secs(10));
+        use std::os::unix::process::ExitStatusExt;
+        assert_eq!(output.status.signal(), Some(15), "SIGTERM");
+    }
+
+    #[test]
+    fn a_line_is_waited_for_and_its_absence_named() {
+        let mut child = Command::new("sh")
+            .args(["-c", "echo one; echo two"])
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let lines = lines_of(child.stdout.take().unwrap());
+        let mut seen = Vec::new();
+        wait_for_line(&lines, &mut seen, "two", Duration::from_secs(10)).unwrap();
+        assert_eq!(seen, ["one", "two"]);
+        let error = wait_for_line(&lines, &mut seen, "three", Duration::from_secs(10));
+        assert!(error.unwrap_err().contains("no line with \"three\""));
+        child.wait().unwrap();
+    }
+
+    #[test]
+    #[should_panic(expected = "still running after")]
+    fn a_child_past_its_deadline_fails_the_test() {
+        let child = Command::new("sleep").arg("60").spawn().unwrap();
+        finish(child, Duration::from_millis(100));
+    }
+}
