@@ -92,9 +92,6 @@ pub use saved_map::{GridMap, SavedMap};
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;
-// slam-proc's timing summary takes its percentiles through this crate (it does not depend
-// on slam-eval).
-pub use slam_eval::percentile;
 pub use svg::{SvgInput, render_svg};
 pub use tum::TumWriter;
 pub use tum_stream::TumStream;

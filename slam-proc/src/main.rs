@@ -455,7 +455,7 @@ fn hold_scans(scans: &Inlet<LaserScan>, held: &mut VecDeque<HeldScan>) -> Result
 
 /// The closing summary of a localization run, with the time per scan.
 fn localize_summary(stats: &LocalizeStats, step_ms: &[f64]) -> String {
-    let at = |p: f64| map_sink::percentile(step_ms, p).unwrap_or(0.0);
+    let at = |p: f64| slam_eval::percentile(step_ms, p).unwrap_or(0.0);
     format!(
         "slam-proc: summary of the localization\n  \
          scans:           {} ({} weighted the particles, {} of them tempered; {} without beams)\n  \

@@ -240,42 +240,20 @@ pub fn square_loop(seed: u64, corner_count: usize, sensor: &SensorModel) -> Run 
     }
 }
 
-/// The rigid transform (no scale) that best maps `estimate` positions onto `truth`
-/// (Umeyama), as `evo_ape -a` aligns trajectories.
+/// The rigid transform (no scale) that best maps `estimate` positions onto `truth`, as
+/// `evo_ape -a` aligns trajectories: slam-eval's, so the tests score as the pipeline does.
 pub fn align(estimate: &[Pose2], truth: &[Pose2]) -> Pose2 {
-    let n = estimate.len().min(truth.len()) as f64;
-    let e_mean = estimate
-        .iter()
-        .fold(Vector2::zeros(), |a, p| a + Vector2::new(p.x, p.y))
-        / n;
-    let t_mean = truth
-        .iter()
-        .fold(Vector2::zeros(), |a, p| a + Vector2::new(p.x, p.y))
-        / n;
-    let (mut dot, mut cross) = (0.0, 0.0);
-    for (e, t) in estimate.iter().zip(truth) {
-        let (a, b) = (
-            Vector2::new(e.x, e.y) - e_mean,
-            Vector2::new(t.x, t.y) - t_mean,
-        );
-        dot += a.dot(&b);
-        cross += a.x * b.y - a.y * b.x;
-    }
-    let yaw = cross.atan2(dot);
-    let rotated = Pose2::new(0.0, 0.0, yaw).transform(e_mean);
-    Pose2::new(t_mean.x - rotated.x, t_mean.y - rotated.y, yaw)
+    ate(estimate, truth).alignment.to_pose()
 }
 
 /// Absolute trajectory error (RMSE of positions, metres) after SE(2) alignment.
 pub fn ate_rmse(estimate: &[Pose2], truth: &[Pose2]) -> f64 {
-    let t = align(estimate, truth);
-    let sum: f64 = estimate
-        .iter()
-        .zip(truth)
-        .map(|(e, g)| {
-            let p = t.transform(Vector2::new(e.x, e.y));
-            (p.x - g.x).powi(2) + (p.y - g.y).powi(2)
-        })
-        .sum();
-    (sum / estimate.len().min(truth.len()) as f64).sqrt()
+    ate(estimate, truth).rmse_m
+}
+
+fn ate(estimate: &[Pose2], truth: &[Pose2]) -> slam_eval::AteStats {
+    let n = estimate.len().min(truth.len());
+    let positions =
+        |poses: &[Pose2]| -> Vec<[f64; 2]> { poses[..n].iter().map(|p| [p.x, p.y]).collect() };
+    slam_eval::ate(&positions(estimate), &positions(truth)).expect("trajectories to score")
 }
