@@ -85,13 +85,14 @@ pub use occupancy_grid::{
     CellState, FREE_PROBABILITY, GridCell, GridConfig, GridError, OCCUPIED_PROBABILITY,
     OccupancyGrid, RESOLUTION_RANGE_M,
 };
-pub use path_assembly::{ChunkError, PathAssembly, PathPose};
+pub use path_assembly::{ChunkError, PathAssembly};
 pub use pgm::{Pgm, PgmError, encode_pgm};
 pub use recorder::{GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions};
 pub use saved_map::{GridMap, SavedMap};
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;
+pub use slam_geom::StampedPose;
 pub use svg::{SvgInput, render_svg};
 pub use tum::TumWriter;
 pub use tum_stream::TumStream;

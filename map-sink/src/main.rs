@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
-use map_sink::{GridConfig, PathAssembly, PathPose, Recorder, RecorderOptions};
+use map_sink::{GridConfig, PathAssembly, Recorder, RecorderOptions, StampedPose};
 use slam_eval::{FrameCounts, METRICS_FILE, RelationsFile};
 use stage_kit::{say, say_err};
 
@@ -264,13 +264,10 @@ fn drain_path(
     recorder: &mut Recorder,
 ) -> Result<()> {
     while let Some(chunk) = inlet.receive()? {
-        let poses: Vec<PathPose> = chunk
+        let poses: Vec<StampedPose> = chunk
             .poses()
             .iter()
-            .map(|p| PathPose {
-                stamp_ns: p.stamp_ns,
-                pose: p.pose.into(),
-            })
+            .map(|&p| StampedPose::from(p))
             .collect();
         if let Err(e) = assembly.add(chunk.first, chunk.total, &poses) {
             say_err(&format!("map-sink: {e}; the final path is incomplete"));

@@ -1,13 +1,6 @@
 //! Puts the filter's final path back together from the chunks it travels in.
 
-use slam_geom::Pose2;
-
-/// One pose of the final path: a scan's stamp and the pose at it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PathPose {
-    pub stamp_ns: u64,
-    pub pose: Pose2,
-}
+use slam_geom::StampedPose;
 
 /// Why a chunk did not fit the path being assembled.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -24,7 +17,7 @@ pub enum ChunkError {
 /// filter sends its whole path again when it stops early and then ends).
 #[derive(Debug, Clone, Default)]
 pub struct PathAssembly {
-    poses: Vec<PathPose>,
+    poses: Vec<StampedPose>,
     total: u64,
 }
 
@@ -34,7 +27,7 @@ impl PathAssembly {
     }
 
     /// Adds the chunk holding poses `first ..` of a path of `total`.
-    pub fn add(&mut self, first: u64, total: u64, poses: &[PathPose]) -> Result<(), ChunkError> {
+    pub fn add(&mut self, first: u64, total: u64, poses: &[StampedPose]) -> Result<(), ChunkError> {
         if first == 0 {
             self.poses.clear();
             self.total = total;
@@ -58,7 +51,7 @@ impl PathAssembly {
     }
 
     /// The whole path, once every chunk has come.
-    pub fn complete(&self) -> Option<&[PathPose]> {
+    pub fn complete(&self) -> Option<&[StampedPose]> {
         (self.poses.len() as u64 == self.total && self.total > 0).then_some(&self.poses)
     }
 }
@@ -66,10 +59,11 @@ impl PathAssembly {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use slam_geom::Pose2;
 
-    fn poses(range: std::ops::Range<u64>) -> Vec<PathPose> {
+    fn poses(range: std::ops::Range<u64>) -> Vec<StampedPose> {
         range
-            .map(|i| PathPose {
+            .map(|i| StampedPose {
                 stamp_ns: i,
                 pose: Pose2::new(i as f64, 0.0, 0.0),
             })

@@ -12,7 +12,6 @@ use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
-use crate::path_assembly::PathPose;
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
@@ -24,6 +23,7 @@ use slam_eval::{
 use slam_geom::MapCorner;
 use slam_geom::Pose2;
 use slam_geom::Se2Alignment;
+use slam_geom::StampedPose;
 use slam_geom::format_tum_line;
 
 /// The final map, written atomically by [`Recorder::finish`].
@@ -108,7 +108,7 @@ pub struct Recorder {
     truth: BTreeMap<u64, Pose2>,
     /// The truth again by stamp, to score the final path (which carries stamps only).
     truth_by_stamp: BTreeMap<u64, Pose2>,
-    final_path: Option<Vec<PathPose>>,
+    final_path: Option<Vec<StampedPose>>,
     scans: ScanKeeper,
     latencies_ns: Vec<u64>,
     map: Vec<MapCorner>,
@@ -257,7 +257,7 @@ impl Recorder {
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).
-    pub fn set_final_path(&mut self, path: &[PathPose]) {
+    pub fn set_final_path(&mut self, path: &[StampedPose]) {
         self.final_path = Some(path.to_vec());
     }
 
@@ -304,12 +304,12 @@ impl Recorder {
         for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
             self.incomplete.extend(stream.sync());
         }
-        let final_path: Vec<PathPose> = match &self.final_path {
+        let final_path: Vec<StampedPose> = match &self.final_path {
             Some(path) => path.clone(),
             None => self
                 .estimates
                 .values()
-                .map(|e| PathPose {
+                .map(|e| StampedPose {
                     stamp_ns: e.stamp_ns,
                     pose: e.pose,
                 })
@@ -382,7 +382,7 @@ impl Recorder {
 
     /// The occupancy grid of the scans kept, each traced from its pose on `path` (matched by
     /// stamp; a scan the path does not hold is left out), with the number traced.
-    fn grid(&self, path: &[PathPose]) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
+    fn grid(&self, path: &[StampedPose]) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
         let poses: HashMap<u64, Pose2> = path.iter().map(|p| (p.stamp_ns, p.pose)).collect();
         let scans: Vec<(Pose2, &CompactScan)> = self
             .scans
@@ -410,7 +410,7 @@ impl Recorder {
     }
 
     /// ATE of the final path over the poses whose stamps have truth.
-    fn score_path(&self, path: &[PathPose]) -> Option<AteStats> {
+    fn score_path(&self, path: &[StampedPose]) -> Option<AteStats> {
         let (est, truth): (Vec<[f64; 2]>, Vec<[f64; 2]>) = path
             .iter()
             .filter_map(|p| {

@@ -7,8 +7,8 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    CellState, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE, MAP_SVG_FILE, PathPose, Pose2, Recorder,
-    RecorderOptions, SavedMap, SinkError, corners_csv_header,
+    CellState, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE, MAP_SVG_FILE, Pose2, Recorder,
+    RecorderOptions, SavedMap, SinkError, StampedPose, corners_csv_header,
 };
 use slam_eval::{
     FrameCounts, GROUND_TRUTH_FILE, METRICS_FILE, Metrics, RelationsFile, TRAJECTORY_FILE,
@@ -339,7 +339,7 @@ fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
         let online = Pose2::new(pose.x, pose.y + wobble, pose.yaw);
         recorder.record_pose(seq, stamp_ns, online, None, None)?;
         truth.push(pose);
-        path.push(PathPose { stamp_ns, pose });
+        path.push(StampedPose { stamp_ns, pose });
     }
     recorder.set_final_path(&path);
     let metrics = recorder.finish()?;

@@ -19,6 +19,7 @@ mod corner;
 mod pose;
 mod scan_geometry;
 mod stamp;
+mod stamped_pose;
 mod tum;
 
 pub use align::{Se2Alignment, WeightedPair, align_se2};
@@ -27,6 +28,7 @@ pub use corner::{MapCorner, TrueCorner};
 pub use pose::Pose2;
 pub use scan_geometry::{ScanGeometry, ScanGeometryError};
 pub use stamp::{StampError, StampProblem, format_stamp, parse_stamp_ns};
+pub use stamped_pose::StampedPose;
 pub use tum::{
     TumError, TumPose, TumProblem, TumReadError, format_tum_line, parse_tum, parse_tum_line,
     read_tum, yaw_quaternion,

@@ -60,7 +60,7 @@ pub use localize::localizer::{
 };
 pub use localize::pose_arg::{PoseArgError, parse_pose};
 pub use localize_config::LocalizeConfig;
-pub use path::particle_path::PathPose;
 pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;
+pub use slam_geom::StampedPose;
 pub use stage_kit::SettingError;

@@ -210,10 +210,7 @@ fn publish_path(outlet: &Outlet<PathChunk>, slam: &FastSlam, last: Header) -> Re
     let path: Vec<StampedPose> = slam
         .best_path()
         .iter()
-        .map(|p| StampedPose {
-            stamp_ns: p.stamp_ns,
-            pose: p.pose.into(),
-        })
+        .map(|&p| StampedPose::from(p))
         .collect();
     let total = path.len() as u64;
     for (index, chunk) in path.chunks(ipc_types::MAX_PATH_CHUNK_POSES).enumerate() {

@@ -22,6 +22,24 @@ pub struct StampedPose {
     pub pose: Pose2,
 }
 
+impl From<slam_geom::StampedPose> for StampedPose {
+    fn from(p: slam_geom::StampedPose) -> Self {
+        Self {
+            stamp_ns: p.stamp_ns,
+            pose: p.pose.into(),
+        }
+    }
+}
+
+impl From<StampedPose> for slam_geom::StampedPose {
+    fn from(p: StampedPose) -> Self {
+        Self {
+            stamp_ns: p.stamp_ns,
+            pose: p.pose.into(),
+        }
+    }
+}
+
 /// A piece of a path: poses `first .. first + pose_count` of `total`, in stamp order. A path
 /// of any length travels as consecutive chunks; the receiver has it all once it holds
 /// `total` poses.

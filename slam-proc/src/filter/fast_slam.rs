@@ -22,8 +22,8 @@ use crate::filter::rng::Streams;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
 use crate::motion::predict::{self, MotionNoise};
-use crate::path::particle_path::PathPose;
 use slam_geom::Pose2;
+use slam_geom::StampedPose;
 use stage_kit::SettingError;
 
 /// FastSLAM over corner maps. Feed it every scan's corners in order with [`FastSlam::process`].
@@ -200,7 +200,7 @@ impl FastSlam {
     /// The whole path of the particle that carries the most weight now, one pose per scan
     /// from the first: the filter's answer for the trajectory, consistent with
     /// [`FastSlam::best_map`] (the map was built from these poses).
-    pub fn best_path(&self) -> Vec<PathPose> {
+    pub fn best_path(&self) -> Vec<StampedPose> {
         self.particles
             .get(self.best)
             .map(|p| p.path.smoothed(&self.config.graph_noise()))
@@ -364,7 +364,7 @@ impl FastSlam {
         if skip {
             for particle in &mut self.particles {
                 particle.path.push(
-                    PathPose {
+                    StampedPose {
                         stamp_ns,
                         pose: particle.pose,
                     },
@@ -401,7 +401,7 @@ impl FastSlam {
                 let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
                 particle.log_weight += particle.update(&context, scratch, &mut rng);
                 particle.path.push(
-                    PathPose {
+                    StampedPose {
                         stamp_ns,
                         pose: particle.pose,
                     },

@@ -12,7 +12,9 @@ use crate::filter::observation::Prepared;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::math::chi2::Gates;
 use crate::math::linalg::sample_information_form3;
-use crate::path::particle_path::{self, Closure, Path, PathPose};
+use slam_geom::StampedPose;
+
+use crate::path::particle_path::{self, Closure, Path};
 use crate::update::corner_model::{PoseTransform, WorldObservation};
 use crate::update::drift::revisit_covariance;
 use crate::update::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
@@ -262,7 +264,7 @@ impl Particle {
             return;
         }
         let mut spread = raw.clone();
-        spread.push(PathPose {
+        spread.push(StampedPose {
             stamp_ns: 0,
             pose: landed,
         });

@@ -14,16 +14,9 @@
 
 use std::sync::Arc;
 
-use slam_geom::{Pose2, wrap_angle};
+use slam_geom::{Pose2, StampedPose, wrap_angle};
 
 use crate::path::pose_graph::{self, GraphNoise};
-
-/// One pose of a path: the scan's stamp and the particle's pose after that scan's update.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PathPose {
-    pub stamp_ns: u64,
-    pub pose: Pose2,
-}
 
 /// A loop closed at a pose: the pose the particle had drifted to before the jump, and the
 /// first pose of the drift it undoes.
@@ -37,7 +30,7 @@ pub(crate) struct Closure {
 
 #[derive(Debug)]
 struct Node {
-    pose: PathPose,
+    pose: StampedPose,
     closure: Option<Closure>,
     previous: Option<Arc<Node>>,
 }
@@ -64,7 +57,7 @@ pub(crate) struct Path {
 }
 
 impl Path {
-    pub fn push(&mut self, pose: PathPose, closure: Option<Closure>) {
+    pub fn push(&mut self, pose: StampedPose, closure: Option<Closure>) {
         let previous = self.last.take();
         self.last = Some(Arc::new(Node {
             pose,
@@ -76,20 +69,20 @@ impl Path {
 
     /// The poses from the first scan to the last, as the particle moved.
     #[cfg(test)]
-    pub fn poses(&self) -> Vec<PathPose> {
+    pub fn poses(&self) -> Vec<StampedPose> {
         self.nodes().0
     }
 
     /// The poses from the first scan to the last, the loop closures' jumps spread back over
     /// the drift they undid, all closures at once (see [`crate::path::pose_graph`]).
-    pub fn smoothed(&self, noise: &GraphNoise) -> Vec<PathPose> {
+    pub fn smoothed(&self, noise: &GraphNoise) -> Vec<StampedPose> {
         let (mut poses, closures) = self.nodes();
         pose_graph::smooth(&mut poses, &closures, noise);
         poses
     }
 
     /// The poses from index `from` to the last, as the particle moved.
-    pub fn since(&self, from: usize) -> Vec<PathPose> {
+    pub fn since(&self, from: usize) -> Vec<StampedPose> {
         let mut poses = Vec::with_capacity(self.len.saturating_sub(from));
         let mut node = self.last.as_deref();
         while let Some(n) = node
@@ -114,7 +107,7 @@ impl Path {
     }
 
     /// The poses in order, and the closures with the index of their pose, in order.
-    fn nodes(&self) -> (Vec<PathPose>, Vec<(usize, Closure)>) {
+    fn nodes(&self) -> (Vec<StampedPose>, Vec<(usize, Closure)>) {
         let mut poses = Vec::with_capacity(self.len);
         let mut closures = Vec::new();
         let mut node = self.last.as_deref();
@@ -134,7 +127,7 @@ impl Path {
 /// Spreads the jump at `poses[at]` (from `closure.drifted` to where it landed) over the poses
 /// from `closure.from` on: each step turns by its share of the rotation (its share of the
 /// path length), then each pose moves by its share of the translation left at the end.
-pub(crate) fn spread(poses: &mut [PathPose], at: usize, closure: &Closure) {
+pub(crate) fn spread(poses: &mut [StampedPose], at: usize, closure: &Closure) {
     let from = closure.from;
     if from >= at || at >= poses.len() {
         return;
@@ -180,8 +173,8 @@ pub(crate) fn spread(poses: &mut [PathPose], at: usize, closure: &Closure) {
 mod tests {
     use super::*;
 
-    fn pose(seq: u64) -> PathPose {
-        PathPose {
+    fn pose(seq: u64) -> StampedPose {
+        StampedPose {
             stamp_ns: seq * 25_000_000,
             pose: Pose2::new(seq as f64, 0.0, 0.0),
         }
@@ -241,7 +234,7 @@ mod tests {
         let mut path = Path::default();
         for (i, pose) in drifted.iter().enumerate().take(40) {
             path.push(
-                PathPose {
+                StampedPose {
                     stamp_ns: i as u64,
                     pose: *pose,
                 },
@@ -250,7 +243,7 @@ mod tests {
         }
         let end = truth(40);
         path.push(
-            PathPose {
+            StampedPose {
                 stamp_ns: 40,
                 pose: end,
             },
@@ -275,7 +268,7 @@ mod tests {
             landed.translation_norm() < 1e-3 && landed.yaw.abs() < 1e-4,
             "{landed:?}"
         );
-        let error = |poses: &[PathPose]| {
+        let error = |poses: &[StampedPose]| {
             poses
                 .iter()
                 .enumerate()

@@ -19,7 +19,9 @@
 use nalgebra::{DMatrix, DVector};
 use slam_geom::{Pose2, wrap_angle};
 
-use crate::path::particle_path::{Closure, PathPose, spread};
+use slam_geom::StampedPose;
+
+use crate::path::particle_path::{Closure, spread};
 
 /// The variances of the chain's steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,7 +58,7 @@ struct Constraint {
 
 /// Smooths `poses` (as the particle moved, each closure's landed pose in place) given the
 /// `closures` with the index of the pose each landed at, in the order they closed.
-pub(crate) fn smooth(poses: &mut [PathPose], closures: &[(usize, Closure)], noise: &GraphNoise) {
+pub(crate) fn smooth(poses: &mut [StampedPose], closures: &[(usize, Closure)], noise: &GraphNoise) {
     let n = poses.len();
     let closures: Vec<(usize, Closure)> = closures
         .iter()
@@ -220,8 +222,8 @@ mod tests {
         yaw_per_radian: 1e-4,
     };
 
-    fn path_pose(i: usize, pose: Pose2) -> PathPose {
-        PathPose {
+    fn path_pose(i: usize, pose: Pose2) -> StampedPose {
+        StampedPose {
             stamp_ns: i as u64,
             pose,
         }
@@ -241,7 +243,7 @@ mod tests {
     fn one_closure_is_met_and_spread_by_the_steps_drift() {
         // Out and back along a line whose heading drifted: the closure at the end says the
         // robot is back at the start.
-        let mut poses: Vec<PathPose> = drifted_line(10, 0.0)
+        let mut poses: Vec<StampedPose> = drifted_line(10, 0.0)
             .into_iter()
             .chain((1..=10).map(|i| Pose2::new(10.0 - i as f64, 0.0, std::f64::consts::PI)))
             .enumerate()
@@ -279,7 +281,7 @@ mod tests {
         // spread had settled.
         let raw = drifted_line(30, 0.005);
         let line = |from: Pose2, metres: f64| from.compose(&Pose2::new(metres, 0.0, 0.0));
-        let mut poses: Vec<PathPose> = raw
+        let mut poses: Vec<StampedPose> = raw
             .iter()
             .enumerate()
             .map(|(i, &p)| path_pose(i, p))
@@ -310,7 +312,7 @@ mod tests {
         smooth(&mut joint, &closures, &NOISE);
 
         // How far pose `at` is from where the closure from `from` put it, metres.
-        let missed = |poses: &[PathPose], from: usize, at: usize| {
+        let missed = |poses: &[StampedPose], from: usize, at: usize| {
             let p = poses[from].pose.between(&poses[at].pose);
             (p.x - (at - from) as f64).hypot(p.y) + p.yaw.abs()
         };
@@ -333,7 +335,7 @@ mod tests {
 
     #[test]
     fn no_closures_leave_the_path_as_it_is() {
-        let raw: Vec<PathPose> = drifted_line(5, 0.1)
+        let raw: Vec<StampedPose> = drifted_line(5, 0.1)
             .into_iter()
             .enumerate()
             .map(|(i, p)| path_pose(i, p))
