@@ -109,10 +109,13 @@ fn run() -> Result<()> {
     wait_for_topic(&node, topic::SCAN)?;
     let truth = Inlet::try_open(&node, topic::GROUND_TRUTH)?;
     let world = Inlet::try_open(&node, topic::WORLD_CORNERS)?;
-    let scans = Inlet::open(&node, topic::SCAN)?;
+    // The scans last: the source starts once its readers are subscribed, and in real time
+    // slam-proc does not wait for its readers, so a pose sent before map-sink subscribed
+    // to the poses would be lost.
     let maps = Inlet::open(&node, topic::MAP)?;
     let poses = Inlet::open(&node, topic::POSE)?;
     let path = Inlet::open(&node, topic::PATH)?;
+    let scans = Inlet::open(&node, topic::SCAN)?;
     say("ready");
 
     let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps, &path];
