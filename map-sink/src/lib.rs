@@ -19,7 +19,9 @@
 //!   transform before they are scored; the summary is slam-eval's [`Metrics`].
 //! * The occupancy grid is traced at the end of the run from the final path
 //!   ([`OccupancyGrid`]), so the scans are kept until then, compactly ([`CompactScan`],
-//!   [`ScanKeeper`]).
+//!   [`ScanKeeper`]). Before that, the filter's final path is refined against the grid its
+//!   own scans trace ([`refine_path`]), so that a stretch that came back off the map it
+//!   revisits does not draw its walls twice.
 //! * Given ground-truth relations ([`RecorderOptions::relations`]), the trajectory files are
 //!   scored with the relative-pose error of Kuemmerle et al. 2009 through slam-eval
 //!   ([`slam_eval::score_run`]; why here and not in slam-launch is said there).
@@ -57,13 +59,19 @@ mod map_writer;
 mod map_yaml;
 mod occupancy_grid;
 mod path_assembly;
+mod path_refinement;
 mod pgm;
+mod pose_chain;
 mod recorder;
 mod saved_map;
+mod scan_alignment;
 mod scan_keeper;
 mod svg;
+#[cfg(test)]
+mod test_room;
 mod tum;
 mod tum_stream;
+mod wall_field;
 
 pub use atomic::{tmp_path, write_atomic};
 pub use compact_scan::{Beam, CompactScan};
@@ -86,9 +94,12 @@ pub use occupancy_grid::{
     OccupancyGrid, RESOLUTION_RANGE_M,
 };
 pub use path_assembly::{ChunkError, PathAssembly};
+pub use path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
 pub use pgm::{Pgm, PgmError, encode_pgm};
+pub use pose_chain::{PosePrior, solve_pose_chain};
 pub use recorder::{GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions};
 pub use saved_map::{GridMap, SavedMap};
+pub use scan_alignment::{ScanAlignment, ScanAlignmentConfig};
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;

@@ -223,6 +223,16 @@ fn run() -> Result<()> {
             g.build_s,
             g.grid_bytes as f64 / 1e6
         ));
+        if let Some(r) = &g.refinement {
+            let aligned: Vec<String> = r.aligned_per_pass.iter().map(|n| n.to_string()).collect();
+            say_err(&format!(
+                "map-sink: final path refined against its grid in {} passes ({} of {} scans aligned), poses moved up to {:.2} m",
+                r.aligned_per_pass.len(),
+                aligned.join(" / "),
+                r.scans,
+                r.largest_move_m
+            ));
+        }
     }
     if let Some(peak) = peak_memory_kb() {
         say_err(&format!(

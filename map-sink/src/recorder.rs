@@ -12,6 +12,7 @@ use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
+use crate::path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
@@ -42,6 +43,8 @@ pub struct RecorderOptions {
     pub relations: Option<RelationsFile>,
     /// How far a pose's stamp may be from a relation's, nanoseconds.
     pub relations_tolerance_ns: u64,
+    /// How the filter's final path is refined against its own grid before it is written.
+    pub refinement: PathRefinementConfig,
 }
 
 impl Default for RecorderOptions {
@@ -51,12 +54,13 @@ impl Default for RecorderOptions {
             grid: GridConfig::default(),
             relations: None,
             relations_tolerance_ns: slam_eval::DEFAULT_TOLERANCE_NS,
+            refinement: PathRefinementConfig::default(),
         }
     }
 }
 
 /// What the occupancy grid cost, for the run's log.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct GridReport {
     /// Cells across (x) and down (y).
     pub width: usize,
@@ -71,6 +75,8 @@ pub struct GridReport {
     pub grid_bytes: usize,
     /// Tracing and thresholding, seconds.
     pub build_s: f64,
+    /// What refining the final path did (`None` when there was no filter path to refine).
+    pub refinement: Option<RefinementReport>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -304,16 +310,22 @@ impl Recorder {
         for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
             self.incomplete.extend(stream.sync());
         }
-        let final_path: Vec<StampedPose> = match &self.final_path {
-            Some(path) => path.clone(),
-            None => self
-                .estimates
-                .values()
-                .map(|e| StampedPose {
-                    stamp_ns: e.stamp_ns,
-                    pose: e.pose,
-                })
-                .collect(),
+        let started = Instant::now();
+        let (final_path, refinement): (Vec<StampedPose>, _) = match &self.final_path {
+            Some(path) => {
+                let (path, report) = self.refine(path)?;
+                (path, Some(report))
+            }
+            None => (
+                self.estimates
+                    .values()
+                    .map(|e| StampedPose {
+                        stamp_ns: e.stamp_ns,
+                        pose: e.pose,
+                    })
+                    .collect(),
+                None,
+            ),
         };
         let text: String = final_path
             .iter()
@@ -346,7 +358,6 @@ impl Recorder {
         metrics.online_ate_rmse_m = online_stats.map(|s| s.rmse_m);
 
         self.write_result(MAP_CORNERS_FILE, corners_csv(&self.map).as_bytes());
-        let started = Instant::now();
         let grid = self.grid(&final_path)?;
         let report = grid.as_ref().map(|(grid, traced)| GridReport {
             width: grid.width(),
@@ -357,6 +368,7 @@ impl Recorder {
             scan_bytes: self.scans.bytes(),
             grid_bytes: grid.bytes(),
             build_s: started.elapsed().as_secs_f64(),
+            refinement,
         });
         let grid = grid.map(|(grid, _)| grid);
         if let Err(e) = write_map(&self.dir, grid.as_ref(), &self.map) {
@@ -378,6 +390,25 @@ impl Recorder {
                 .push(IncompleteOutput::new(METRICS_FILE, "not written", &e));
         }
         Ok((metrics, report))
+    }
+
+    /// The filter's final path refined against the grid its kept scans trace.
+    fn refine(
+        &self,
+        path: &[StampedPose],
+    ) -> Result<(Vec<StampedPose>, RefinementReport), SinkError> {
+        let scans: Vec<(u64, &CompactScan)> = self
+            .scans
+            .kept()
+            .iter()
+            .map(|(stamp, scan)| (*stamp, scan))
+            .collect();
+        Ok(refine_path(
+            path,
+            &scans,
+            &self.options.grid,
+            &self.options.refinement,
+        )?)
     }
 
     /// The occupancy grid of the scans kept, each traced from its pose on `path` (matched by
