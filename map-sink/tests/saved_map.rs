@@ -50,6 +50,14 @@ fn corner() -> MapCorner {
     }
 }
 
+/// Rewrites `file` with `from` replaced by `to`: a saved map spoiled in one place.
+fn spoil(file: &Path, from: &str, to: &str) -> TestResult {
+    let text = fs::read_to_string(file)?;
+    assert!(text.contains(from), "{from:?} not in {}", file.display());
+    fs::write(file, text.replace(from, to))?;
+    Ok(())
+}
+
 /// Writes a map of [`wall_above`] with one corner into a fresh directory.
 fn saved(name: &str) -> Result<PathBuf, Box<dyn std::error::Error>> {
     let dir = scratch(name);
@@ -165,10 +173,10 @@ fn a_foreign_file_is_named() -> TestResult {
         );
     }
     let dir = saved("newer")?;
-    let text = fs::read_to_string(dir.join(LANDMARKS_FILE))?;
-    fs::write(
-        dir.join(LANDMARKS_FILE),
-        text.replace("\"version\": 1", "\"version\": 7"),
+    spoil(
+        &dir.join(LANDMARKS_FILE),
+        "\"version\": 1",
+        "\"version\": 7",
     )?;
     let e = refusal(&dir);
     assert!(matches!(e, MapLoadError::Version { .. }), "{e}");
@@ -191,18 +199,14 @@ fn an_image_that_does_not_match_is_refused() -> TestResult {
     // A description naming another image than the one the landmarks record.
     let dir = saved("other-name")?;
     fs::copy(dir.join(MAP_PGM_FILE), dir.join("old.pgm"))?;
-    let yaml = fs::read_to_string(dir.join(MAP_YAML_FILE))?;
-    fs::write(
-        dir.join(MAP_YAML_FILE),
-        yaml.replace("image: map.pgm", "image: old.pgm"),
-    )?;
+    spoil(&dir.join(MAP_YAML_FILE), "image: map.pgm", "image: old.pgm")?;
     assert!(matches!(refusal(&dir), MapLoadError::ImageMismatch { .. }));
     // A description at another resolution than the landmarks record.
     let dir = saved("other-resolution")?;
-    let yaml = fs::read_to_string(dir.join(MAP_YAML_FILE))?;
-    fs::write(
-        dir.join(MAP_YAML_FILE),
-        yaml.replace("resolution: 0.1", "resolution: 0.05"),
+    spoil(
+        &dir.join(MAP_YAML_FILE),
+        "resolution: 0.1",
+        "resolution: 0.05",
     )?;
     assert!(matches!(refusal(&dir), MapLoadError::ImageMismatch { .. }));
     Ok(())
