@@ -50,18 +50,24 @@ fn corner() -> MapCorner {
     }
 }
 
-/// Rewrites `file` with `from` replaced by `to`: a saved map spoiled in one place.
-fn spoil(file: &Path, from: &str, to: &str) -> TestResult {
-    let text = fs::read_to_string(file)?;
-    assert!(text.contains(from), "{from:?} not in {}", file.display());
-    fs::write(file, text.replace(from, to))?;
-    Ok(())
-}
-
 /// Writes a map of [`wall_above`] with one corner into a fresh directory.
 fn saved(name: &str) -> Result<PathBuf, Box<dyn std::error::Error>> {
     let dir = scratch(name);
     write_map(&dir, Some(&wall_above()?), &[corner()])?;
+    Ok(dir)
+}
+
+/// A map [`saved`] and then spoiled in one place: `from` replaced by `to` in `file`.
+fn spoiled(
+    name: &str,
+    file: &str,
+    from: &str,
+    to: &str,
+) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    let dir = saved(name)?;
+    let text = fs::read_to_string(dir.join(file))?;
+    assert!(text.contains(from), "{from:?} not in {file}");
+    fs::write(dir.join(file), text.replace(from, to))?;
     Ok(dir)
 }
 
@@ -172,13 +178,12 @@ fn a_foreign_file_is_named() -> TestResult {
             "{file}: {e}"
         );
     }
-    let dir = saved("newer")?;
-    spoil(
-        &dir.join(LANDMARKS_FILE),
+    let e = refusal(&spoiled(
+        "newer",
+        LANDMARKS_FILE,
         "\"version\": 1",
         "\"version\": 7",
-    )?;
-    let e = refusal(&dir);
+    )?);
     assert!(matches!(e, MapLoadError::Version { .. }), "{e}");
     assert!(e.to_string().contains("version 7"), "{e}");
     Ok(())
@@ -197,14 +202,18 @@ fn an_image_that_does_not_match_is_refused() -> TestResult {
     );
     assert!(e.to_string().contains("3 x 2 pixels"), "{e}");
     // A description naming another image than the one the landmarks record.
-    let dir = saved("other-name")?;
+    let dir = spoiled(
+        "other-name",
+        MAP_YAML_FILE,
+        "image: map.pgm",
+        "image: old.pgm",
+    )?;
     fs::copy(dir.join(MAP_PGM_FILE), dir.join("old.pgm"))?;
-    spoil(&dir.join(MAP_YAML_FILE), "image: map.pgm", "image: old.pgm")?;
     assert!(matches!(refusal(&dir), MapLoadError::ImageMismatch { .. }));
     // A description at another resolution than the landmarks record.
-    let dir = saved("other-resolution")?;
-    spoil(
-        &dir.join(MAP_YAML_FILE),
+    let dir = spoiled(
+        "other-resolution",
+        MAP_YAML_FILE,
         "resolution: 0.1",
         "resolution: 0.05",
     )?;
