@@ -2,7 +2,7 @@
 
 use std::f64::consts::TAU;
 
-use slam_geom::ScanGeometry;
+use slam_geom::{ScanGeometry, ScanGeometryError};
 use stage_kit::SettingError;
 
 use crate::config::FeatureConfig;
@@ -25,17 +25,11 @@ pub enum ScanError {
     Empty,
     #[error("{count} beams exceed the limit of {max}")]
     TooManyBeams { count: usize, max: usize },
-    #[error(
-        "angle_min {angle_min} and angle_increment {angle_increment} must be finite, the increment non-zero"
-    )]
-    BadAngles {
-        angle_min: f64,
-        angle_increment: f64,
-    },
+    /// The bearings are not defined, or no range could be valid.
+    #[error(transparent)]
+    Geometry(#[from] ScanGeometryError),
     #[error("{count} beams of {angle_increment} rad span more than a full turn")]
     SpanTooWide { count: usize, angle_increment: f64 },
-    #[error("range limits [{range_min}, {range_max}] are not an interval")]
-    BadRangeLimits { range_min: f64, range_max: f64 },
     #[error("{valid} valid readings, at least {needed} needed")]
     TooFewValid { valid: usize, needed: usize },
     #[error(transparent)]
@@ -115,13 +109,8 @@ pub(crate) fn to_points(
             max: MAX_BEAMS,
         });
     }
+    scan.geometry.check()?;
     let (angle_min, increment) = (scan.geometry.angle_min, scan.geometry.angle_increment);
-    if !angle_min.is_finite() || !increment.is_finite() || increment == 0.0 {
-        return Err(ScanError::BadAngles {
-            angle_min,
-            angle_increment: increment,
-        });
-    }
     let spacing = increment.abs();
     let span = spacing * (count - 1) as f64;
     // A scan whose last beam repeats its first spans exactly a full turn; allow for rounding.
@@ -132,12 +121,6 @@ pub(crate) fn to_points(
         });
     }
     let (range_min, range_max) = (scan.geometry.range_min, scan.geometry.range_max);
-    if range_min.is_nan() || range_max.is_nan() || range_min > range_max {
-        return Err(ScanError::BadRangeLimits {
-            range_min,
-            range_max,
-        });
-    }
     let upper = range_max.min(config.max_range);
     let unit = directions.update(angle_min, increment, count);
     for (beam, (&reading, &(cos, sin))) in scan.ranges.iter().zip(unit).enumerate() {

@@ -9,7 +9,7 @@ use feature_proc::{Extractor, FeatureConfig, ScanError, ScanInput};
 use nalgebra::{Vector2, Vector4};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use slam_geom::wrap_angle;
+use slam_geom::{ScanGeometryError, wrap_angle};
 
 /// A detected corner in the world frame, for a sensor at `pose`.
 fn to_world(pose: [f64; 3], x: f64, y: f64) -> [f64; 2] {
@@ -229,7 +229,12 @@ fn malformed_scans_are_typed_errors_never_panics() {
         let mut scan = input(&geometry, &ones);
         scan.geometry.angle_min = angle_min;
         scan.geometry.angle_increment = angle_increment;
-        assert!(matches!(check(scan), Err(ScanError::BadAngles { .. })));
+        assert!(matches!(
+            check(scan),
+            Err(ScanError::Geometry(
+                ScanGeometryError::AngleMin | ScanGeometryError::AngleIncrement
+            ))
+        ));
     }
     let mut wide = input(&geometry, &ones);
     wide.geometry.angle_increment = 0.1;
@@ -239,7 +244,7 @@ fn malformed_scans_are_typed_errors_never_panics() {
     limits.geometry.range_max = 1.0;
     assert!(matches!(
         check(limits),
-        Err(ScanError::BadRangeLimits { .. })
+        Err(ScanError::Geometry(ScanGeometryError::RangeLimits))
     ));
 
     // Random bit patterns, lengths and beam patterns.

@@ -12,7 +12,10 @@
 //! * Every topic lives inside a run's [`Domain`] (an iceoryx2 prefix chosen on the command
 //!   line), so two pipelines on one machine never cross.
 //! * Each message round-trips through serde; big ones serialise as a compact record
-//!   ([`LaserScanRecord`], ...) and rebuild with `from_record`.
+//!   ([`LaserScanRecord`], ...) and rebuild with `from_record`. The serde form leaves out
+//!   the padding and names the frame as text, so it is also what a recording holds: with
+//!   the `json-schema` feature the types the recorder writes as they are derive their JSON
+//!   schema too.
 //!
 //! ```no_run
 //! use ipc_types::prelude::*;

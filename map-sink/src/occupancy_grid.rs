@@ -377,22 +377,30 @@ mod tests {
         assert_eq!(traced([1.2, 1.7], [1.9, 1.1], false), []);
     }
 
+    /// The grid, in cells of 0.1 m, of `scan` seen `times` times from `pose`, no returns
+    /// clearing up to `no_return_reach_m`.
+    fn grid_of_repeated(
+        scan: &CompactScan,
+        pose: Pose2,
+        times: usize,
+        no_return_reach_m: f64,
+    ) -> Result<OccupancyGrid, GridError> {
+        let scans: Vec<(Pose2, &CompactScan)> = (0..times).map(|_| (pose, scan)).collect();
+        let config = GridConfig {
+            resolution_m: 0.1,
+            no_return_reach_m,
+        };
+        let grid = OccupancyGrid::build(&config, &scans)?;
+        Ok(grid.expect("a grid of a few cells"))
+    }
+
     #[test]
     fn a_wall_seen_from_a_room_is_occupied_behind_free_space() -> Result<(), GridError> {
         // A sensor at the origin looking at a wall 1 m ahead, over and over.
         let ranges = vec![1.0_f32; 41];
         let scan = CompactScan::new(-0.2, 0.01, 0.1, 30.0, &ranges, 0.0, 5.0);
-        let scans: Vec<(Pose2, &CompactScan)> = (0..10)
-            .map(|_| (Pose2::new(0.02, 0.02, 0.0), &scan))
-            .collect();
-        let config = GridConfig {
-            resolution_m: 0.1,
-            ..GridConfig::default()
-        };
-        let grid = OccupancyGrid::build(&config, &scans)?.ok_or(GridError::TooLarge {
-            width: 0,
-            height: 0,
-        })?;
+        let reach = GridConfig::default().no_return_reach_m;
+        let grid = grid_of_repeated(&scan, Pose2::new(0.02, 0.02, 0.0), 10, reach)?;
         let [x0, y0] = grid.origin();
         let at = |x: f64, y: f64| {
             let col = ((x - x0) / 0.1).floor() as usize;
@@ -412,16 +420,7 @@ mod tests {
     fn no_returns_clear_up_to_their_reach_and_mark_nothing_occupied() -> Result<(), GridError> {
         let ranges = vec![f32::INFINITY; 3];
         let scan = CompactScan::new(-0.01, 0.01, 0.1, 30.0, &ranges, 0.0, 2.0);
-        let scans: Vec<(Pose2, &CompactScan)> = (0..5)
-            .map(|_| (Pose2::new(0.05, 0.05, 0.0), &scan))
-            .collect();
-        let config = GridConfig {
-            resolution_m: 0.1,
-            no_return_reach_m: 2.0,
-        };
-        let Some(grid) = OccupancyGrid::build(&config, &scans)? else {
-            panic!("a grid");
-        };
+        let grid = grid_of_repeated(&scan, Pose2::new(0.05, 0.05, 0.0), 5, 2.0)?;
         assert_eq!((grid.width(), grid.height()), (21, 1));
         let states: Vec<CellState> = (0..grid.width()).map(|c| grid.state(c, 0)).collect();
         assert!(states.iter().all(|&s| s == CellState::Free), "{states:?}");

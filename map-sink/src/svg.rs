@@ -103,14 +103,12 @@ pub fn render_svg(input: &SvgInput<'_>) -> String {
         view.x0, view.y0, view.map_w, view.map_h
     );
     draw_cells(&mut svg, &view, input);
+    let true_corner_paint = format!(
+        r#"fill="none" stroke="{TRUE_CORNER}" stroke-width="{:.2}""#,
+        1.5 * view.u
+    );
     for p in input.true_corners {
-        let [x, y] = view.px(*p);
-        let _ = writeln!(
-            svg,
-            r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="none" stroke="{TRUE_CORNER}" stroke-width="{:.2}"/>"#,
-            7.0 * view.u,
-            1.5 * view.u
-        );
+        circle(&mut svg, view.px(*p), 7.0 * view.u, &true_corner_paint);
     }
     // The truth underlays the estimate as a wide pale band, so a good estimate runs inside it.
     let truth_style = format!(
@@ -335,18 +333,25 @@ fn draw_endpoints(svg: &mut String, view: &SvgView, trajectory: &[[f64; 2]]) {
     let (Some(first), Some(last)) = (trajectory.first(), trajectory.last()) else {
         return;
     };
-    let [x, y] = view.px(*first);
-    let _ = writeln!(
-        svg,
-        r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="white" stroke="{ESTIMATE}" stroke-width="{:.2}"/>"#,
-        5.0 * view.u,
+    let hollow = format!(
+        r#"fill="white" stroke="{ESTIMATE}" stroke-width="{:.2}""#,
         2.0 * view.u
     );
-    let [x, y] = view.px(*last);
+    circle(svg, view.px(*first), 5.0 * view.u, &hollow);
+    circle(
+        svg,
+        view.px(*last),
+        4.5 * view.u,
+        &format!(r#"fill="{ESTIMATE}""#),
+    );
+}
+
+/// A circle of radius `r` around the canvas point `at` (pixels), painted by `paint` (its
+/// fill and stroke attributes).
+fn circle(svg: &mut String, [x, y]: [f64; 2], r: f64, paint: &str) {
     let _ = writeln!(
         svg,
-        r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="{ESTIMATE}"/>"#,
-        4.5 * view.u
+        r#"<circle cx="{x:.1}" cy="{y:.1}" r="{r:.1}" {paint}/>"#
     );
 }
 
@@ -366,14 +371,11 @@ fn map_corner_glyph(svg: &mut String, u: f64, at: [f64; 2], heading: f64) {
         at[1],
         2.0 * u
     );
-    let _ = writeln!(
-        svg,
-        r#"<circle cx="{:.1}" cy="{:.1}" r="{:.1}" fill="{MAP_CORNER}" stroke="white" stroke-width="{:.2}"/>"#,
-        at[0],
-        at[1],
-        3.6 * u,
+    let paint = format!(
+        r#"fill="{MAP_CORNER}" stroke="white" stroke-width="{:.2}""#,
         0.8 * u
     );
+    circle(svg, at, 3.6 * u, &paint);
 }
 
 fn draw_header(svg: &mut String, input: &SvgInput<'_>) {

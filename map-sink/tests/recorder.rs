@@ -77,15 +77,8 @@ fn no_tmp_files(dir: &Path) -> TestResult {
 
 #[test]
 fn full_run_writes_every_file() -> TestResult {
-    let dir = common::scratch_dir("full-run");
-    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
-    let run = Synthetic {
-        scans: 200,
-        beams: 361,
-        truth: true,
-        dead_reckoning: true,
-    };
-    common::drive(&mut recorder, run)?;
+    let run = Synthetic::lap(200, 361);
+    let (dir, mut recorder) = common::driven_recorder("full-run", RecorderOptions::default(), run)?;
     recorder.set_counts(FrameCounts {
         published: 205,
         processed: 200,
@@ -179,16 +172,10 @@ fn relations_from_truth(truth: &Path, step: usize) -> Result<String, Box<dyn std
 
 #[test]
 fn relations_score_every_trajectory_file() -> TestResult {
-    let run = || Synthetic {
-        scans: 200,
-        beams: 181,
-        truth: true,
-        dead_reckoning: true,
-    };
+    let run = || Synthetic::lap(200, 181);
     // A first run gives the true poses the relations are made of.
-    let truth_dir = common::scratch_dir("relations-truth");
-    let mut recorder = Recorder::create(&truth_dir, RecorderOptions::default())?;
-    common::drive(&mut recorder, run())?;
+    let (truth_dir, recorder) =
+        common::driven_recorder("relations-truth", RecorderOptions::default(), run())?;
     recorder.finish()?;
     let relations_path = truth_dir.join("truth.relations");
     fs::write(
@@ -196,13 +183,11 @@ fn relations_score_every_trajectory_file() -> TestResult {
         relations_from_truth(&truth_dir.join(GROUND_TRUTH_FILE), 5)?,
     )?;
 
-    let dir = common::scratch_dir("relations");
     let options = RecorderOptions {
         relations: Some(RelationsFile::read(&relations_path)?),
         ..RecorderOptions::default()
     };
-    let mut recorder = Recorder::create(&dir, options)?;
-    common::drive(&mut recorder, run())?;
+    let (dir, recorder) = common::driven_recorder("relations", options, run())?;
     let metrics = recorder.finish()?;
 
     let rpe = metrics.relative_pose_error.clone().ok_or("no score")?;
@@ -275,15 +260,12 @@ fn a_bad_relations_file_names_its_line() -> TestResult {
 
 #[test]
 fn run_without_truth_has_no_truth_keys() -> TestResult {
-    let dir = common::scratch_dir("no-truth");
-    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
     let run = Synthetic {
-        scans: 60,
-        beams: 181,
         truth: false,
         dead_reckoning: false,
+        ..Synthetic::lap(60, 181)
     };
-    common::drive(&mut recorder, run)?;
+    let (dir, recorder) = common::driven_recorder("no-truth", RecorderOptions::default(), run)?;
     let metrics = recorder.finish()?;
     let json = fs::read_to_string(dir.join(METRICS_FILE))?;
     assert_eq!(keys_in_order(&json)?, BASE_KEYS);
@@ -418,19 +400,12 @@ fn invalid_grid_settings_are_refused() {
 /// `MAP_SINK_EXAMPLE_SVG=/some/path.svg` to keep its picture for a look.
 #[test]
 fn example_picture_of_a_full_run() -> TestResult {
-    let dir = common::scratch_dir("example");
     let options = RecorderOptions {
         title: "map-sink example: synthetic room, one lap around the pillar".to_owned(),
         ..RecorderOptions::default()
     };
-    let mut recorder = Recorder::create(&dir, options)?;
-    let run = Synthetic {
-        scans: 1200,
-        beams: 1081,
-        truth: true,
-        dead_reckoning: true,
-    };
-    common::drive(&mut recorder, run)?;
+    let run = Synthetic::lap(1200, 1081);
+    let (dir, mut recorder) = common::driven_recorder("example", options, run)?;
     recorder.set_counts(FrameCounts {
         published: 1203,
         processed: 1200,

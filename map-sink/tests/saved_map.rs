@@ -57,6 +57,20 @@ fn saved(name: &str) -> Result<PathBuf, Box<dyn std::error::Error>> {
     Ok(dir)
 }
 
+/// A map [`saved`] and then spoiled in one place: `from` replaced by `to` in `file`.
+fn spoiled(
+    name: &str,
+    file: &str,
+    from: &str,
+    to: &str,
+) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    let dir = saved(name)?;
+    let text = fs::read_to_string(dir.join(file))?;
+    assert!(text.contains(from), "{from:?} not in {file}");
+    fs::write(dir.join(file), text.replace(from, to))?;
+    Ok(dir)
+}
+
 #[test]
 fn the_image_starts_with_the_largest_y_and_the_origin_is_the_lower_left_corner() -> TestResult {
     let grid = wall_above()?;
@@ -164,13 +178,12 @@ fn a_foreign_file_is_named() -> TestResult {
             "{file}: {e}"
         );
     }
-    let dir = saved("newer")?;
-    let text = fs::read_to_string(dir.join(LANDMARKS_FILE))?;
-    fs::write(
-        dir.join(LANDMARKS_FILE),
-        text.replace("\"version\": 1", "\"version\": 7"),
-    )?;
-    let e = refusal(&dir);
+    let e = refusal(&spoiled(
+        "newer",
+        LANDMARKS_FILE,
+        "\"version\": 1",
+        "\"version\": 7",
+    )?);
     assert!(matches!(e, MapLoadError::Version { .. }), "{e}");
     assert!(e.to_string().contains("version 7"), "{e}");
     Ok(())
@@ -189,20 +202,20 @@ fn an_image_that_does_not_match_is_refused() -> TestResult {
     );
     assert!(e.to_string().contains("3 x 2 pixels"), "{e}");
     // A description naming another image than the one the landmarks record.
-    let dir = saved("other-name")?;
-    fs::copy(dir.join(MAP_PGM_FILE), dir.join("old.pgm"))?;
-    let yaml = fs::read_to_string(dir.join(MAP_YAML_FILE))?;
-    fs::write(
-        dir.join(MAP_YAML_FILE),
-        yaml.replace("image: map.pgm", "image: old.pgm"),
+    let dir = spoiled(
+        "other-name",
+        MAP_YAML_FILE,
+        "image: map.pgm",
+        "image: old.pgm",
     )?;
+    fs::copy(dir.join(MAP_PGM_FILE), dir.join("old.pgm"))?;
     assert!(matches!(refusal(&dir), MapLoadError::ImageMismatch { .. }));
     // A description at another resolution than the landmarks record.
-    let dir = saved("other-resolution")?;
-    let yaml = fs::read_to_string(dir.join(MAP_YAML_FILE))?;
-    fs::write(
-        dir.join(MAP_YAML_FILE),
-        yaml.replace("resolution: 0.1", "resolution: 0.05"),
+    let dir = spoiled(
+        "other-resolution",
+        MAP_YAML_FILE,
+        "resolution: 0.1",
+        "resolution: 0.05",
     )?;
     assert!(matches!(refusal(&dir), MapLoadError::ImageMismatch { .. }));
     Ok(())

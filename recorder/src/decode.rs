@@ -1,7 +1,6 @@
 //! A recorded message back into the pipeline's message: the inverse of the encoders, for
 //! the topics a replay publishes again (the scans and the odometry).
 
-use crate::own::OdometryMessage;
 use crate::scan::ScanMessage;
 use crate::schema::{ChannelMessage, MESSAGE_ENCODING};
 
@@ -50,14 +49,14 @@ impl ReplayedChannel {
     pub fn topic(self) -> &'static str {
         match self {
             Self::Scan => ScanMessage::TOPIC,
-            Self::Odometry => OdometryMessage::TOPIC,
+            Self::Odometry => ipc_types::Odometry::TOPIC,
         }
     }
 
     pub fn schema(self) -> &'static str {
         match self {
             Self::Scan => ScanMessage::SCHEMA,
-            Self::Odometry => OdometryMessage::SCHEMA,
+            Self::Odometry => ipc_types::Odometry::SCHEMA,
         }
     }
 
@@ -85,9 +84,9 @@ impl ReplayedChannel {
             Self::Scan => {
                 Recorded::Scan(serde_json::from_slice::<ScanMessage>(data)?.to_laser_scan()?)
             }
-            Self::Odometry => {
-                Recorded::Odometry(serde_json::from_slice::<OdometryMessage>(data)?.to_odometry())
-            }
+            Self::Odometry => Recorded::Odometry(Box::new(serde_json::from_slice::<
+                ipc_types::Odometry,
+            >(data)?)),
         })
     }
 }

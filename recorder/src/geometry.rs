@@ -1,5 +1,6 @@
 //! Foxglove's 3D geometry (`foxglove.Vector3`, `foxglove.Quaternion`, `foxglove.Pose`) made
-//! from our planar poses.
+//! from our planar poses. Where a message carries a planar pose as it is (lossless: no trip
+//! through a quaternion), it is `ipc_types::Pose2` in its serde form.
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -69,31 +70,5 @@ impl From<Pose2> for Pose {
             },
             orientation: Quaternion::from_yaw(p.yaw),
         }
-    }
-}
-
-/// Our planar pose as it is, for the fields Foxglove does not define (lossless: no trip
-/// through a quaternion).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub struct Planar {
-    pub x: f64,
-    pub y: f64,
-    pub yaw: f64,
-}
-
-impl From<Pose2> for Planar {
-    fn from(p: Pose2) -> Self {
-        Self {
-            x: p.x,
-            y: p.y,
-            yaw: p.yaw,
-        }
-    }
-}
-
-impl From<Planar> for Pose2 {
-    /// As it was recorded: the yaw was wrapped where it was made.
-    fn from(p: Planar) -> Self {
-        Pose2::new(p.x, p.y, p.yaw)
     }
 }

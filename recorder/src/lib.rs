@@ -5,7 +5,9 @@
 //! (`foxglove.LaserScan`, `foxglove.FrameTransform`, `foxglove.PoseInFrame`,
 //! `foxglove.PosesInFrame`) and under schemas of our own (`slam.*`) where none does. A
 //! message of a Foxglove schema carries Foxglove's fields and, after them, whatever of ours
-//! they lack, so a scan or a pose can be rebuilt exactly from the file.
+//! they lack, so a scan or a pose can be rebuilt exactly from the file. Our fields are the
+//! pipeline's own types in their serde form (`ipc_types`, `slam_geom::ScanGeometry`), with
+//! the JSON schemas those types derive, so each field is defined once, where the message is.
 //!
 //! The file is written as the run goes, in zstd-compressed chunks of about 1 MB that reach
 //! the disk as each is closed (at least once a second), so a recorder that dies leaves a file
@@ -24,11 +26,11 @@ mod decode;
 mod error;
 mod geometry;
 mod ground_truth;
-mod header;
 mod mcap_file;
 mod own;
 mod path;
 mod pose;
+mod pose_in_frame;
 mod reader;
 mod recording;
 mod scan;
@@ -38,13 +40,13 @@ mod transform;
 
 pub use decode::{DecodeError, Recorded, ReplayedChannel};
 pub use error::RecordError;
-pub use geometry::{Planar, Pose, Quaternion, Vector3};
+pub use geometry::{Pose, Quaternion, Vector3};
 pub use ground_truth::{GroundTruthMessage, WORLD_FRAME};
-pub use header::HeaderJson;
 pub use mcap_file::{CHUNK_BYTES, ChannelCount, FLUSH_PERIOD, McapFile};
-pub use own::{FeaturesMessage, MapMessage, OdometryMessage, WorldCornersMessage};
+pub use own::MapMessage;
 pub use path::{PathChunks, PathMessage};
 pub use pose::{MAP_FRAME, PoseMessage};
+pub use pose_in_frame::PoseInFrame;
 pub use reader::{
     ODOMETRY_LOOKAHEAD, OpenRecordingError, RECORD_LENGTH_LIMIT, ReadError, RecordingInfo,
     RecordingReader, SNIFF_MESSAGES, open_recording,

@@ -3,9 +3,9 @@
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use ipc_types::{PathChunk, StampedPose};
+use ipc_types::{PathChunk, Pose2, StampedPose};
 
-use crate::geometry::{Planar, Pose};
+use crate::geometry::Pose;
 use crate::pose::MAP_FRAME;
 use crate::schema::ChannelMessage;
 use crate::stamp::Time;
@@ -20,7 +20,7 @@ pub struct PathMessage {
     pub frame_id: &'static str,
     pub poses: Vec<Pose>,
     pub stamps_ns: Vec<u64>,
-    pub planar: Vec<Planar>,
+    pub planar: Vec<Pose2>,
 }
 
 impl ChannelMessage for PathMessage {
@@ -35,7 +35,7 @@ impl PathMessage {
             frame_id: MAP_FRAME,
             poses: poses.iter().map(|p| p.pose.into()).collect(),
             stamps_ns: poses.iter().map(|p| p.stamp_ns).collect(),
-            planar: poses.iter().map(|p| p.pose.into()).collect(),
+            planar: poses.iter().map(|p| p.pose).collect(),
         }
     }
 }

@@ -10,7 +10,7 @@ use ipc_types::{
 use crate::error::RecordError;
 use crate::ground_truth::GroundTruthMessage;
 use crate::mcap_file::{ChannelCount, McapFile};
-use crate::own::{FeaturesMessage, MapMessage, OdometryMessage, WorldCornersMessage};
+use crate::own::MapMessage;
 use crate::path::{PathChunks, PathMessage};
 use crate::pose::{MAP_FRAME, PoseMessage};
 use crate::scan::ScanMessage;
@@ -94,11 +94,11 @@ impl Recording {
     }
 
     pub fn odometry(&mut self, odometry: &Odometry) -> Result<(), RecordError> {
-        self.data(odometry.header, || OdometryMessage::new(odometry))
+        self.data(odometry.header, || *odometry)
     }
 
     pub fn features(&mut self, features: &Features) -> Result<(), RecordError> {
-        self.data(features.header, || FeaturesMessage::new(features))
+        self.data(features.header, || features.to_record())
     }
 
     /// The estimate on `/slam/pose`, and `map → base_link` at it on `/tf`.
@@ -159,7 +159,7 @@ impl Recording {
     }
 
     pub fn world_corners(&mut self, world: &WorldCorners) -> Result<(), RecordError> {
-        self.data(world.header, || WorldCornersMessage::new(world))
+        self.data(world.header, || world.to_record())
     }
 
     /// Records the message `make` makes of a pipeline message with `header`, stamped as it

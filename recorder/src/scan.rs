@@ -7,6 +7,7 @@ use schemars::JsonSchema;
 use serde::de::{SeqAccess, Visitor};
 use serde::ser::SerializeSeq;
 use serde::{Deserialize, Serialize};
+use slam_geom::ScanGeometry;
 
 use crate::decode::DecodeError;
 use crate::geometry::Pose;
@@ -35,13 +36,10 @@ pub struct ScanMessage<'a> {
     // Ours from here on.
     pub seq: u64,
     pub sent_ns: u64,
-    /// As sent (f32), so the bearings can be rebuilt bit for bit.
-    pub angle_min: f32,
-    pub angle_increment: f32,
-    pub time_increment: f32,
-    pub scan_time: f32,
-    pub range_min: f32,
-    pub range_max: f32,
+    /// The angles, timing and range limits as sent: the message's `f32`s, exact in `f64`,
+    /// so the scan is rebuilt bit for bit.
+    #[serde(flatten)]
+    pub geometry: ScanGeometry,
     /// Indices of the beams whose range is NaN, +inf and -inf.
     pub nan: Vec<u32>,
     pub inf: Vec<u32>,
@@ -115,24 +113,19 @@ impl<'a> ScanMessage<'a> {
         } else {
             intensities
         };
+        let geometry = scan.geometry();
         let last = ranges.len().saturating_sub(1) as f64;
-        let start = f64::from(scan.angle_min);
         Self {
             timestamp: Time::from_ns(scan.header.stamp_ns),
             frame_id: Cow::Borrowed(scan.header.frame_id()),
             pose: Pose::IDENTITY,
-            start_angle: start,
-            end_angle: start + last * f64::from(scan.angle_increment),
+            start_angle: geometry.angle_min,
+            end_angle: geometry.angle_min + last * geometry.angle_increment,
             ranges: FiniteRanges(Cow::Borrowed(ranges)),
             intensities: Cow::Borrowed(intensities),
             seq: scan.header.seq,
             sent_ns: scan.header.sent_ns,
-            angle_min: scan.angle_min,
-            angle_increment: scan.angle_increment,
-            time_increment: scan.time_increment,
-            scan_time: scan.scan_time,
-            range_min: scan.range_min,
-            range_max: scan.range_max,
+            geometry,
             nan,
             inf,
             neg_inf,
@@ -161,20 +154,11 @@ impl<'a> ScanMessage<'a> {
                 *slot = value;
             }
         }
-        let mut header = ipc_types::Header::new(self.seq, stamp_ns, &self.frame_id);
-        header.sent_ns = self.sent_ns;
-        Ok(ipc_types::LaserScan::from_record(
-            &ipc_types::LaserScanRecord {
-                header,
-                angle_min: self.angle_min,
-                angle_increment: self.angle_increment,
-                time_increment: self.time_increment,
-                scan_time: self.scan_time,
-                range_min: self.range_min,
-                range_max: self.range_max,
-                ranges: Cow::Owned(ranges),
-                intensities: Cow::Borrowed(&self.intensities),
-            },
-        )?)
+        let mut scan = <ipc_types::LaserScan as ipc_types::Zeroable>::boxed_zeroed();
+        scan.header = ipc_types::Header::new(self.seq, stamp_ns, &self.frame_id);
+        scan.header.sent_ns = self.sent_ns;
+        scan.set_geometry(&self.geometry);
+        scan.set_beams(&ranges, &self.intensities)?;
+        Ok(scan)
     }
 }

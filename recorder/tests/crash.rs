@@ -33,6 +33,16 @@ fn write(file: &mut McapFile, seq: u64) {
         .unwrap();
 }
 
+/// A new file in a scratch directory of its own (`name`), with scans 0 .. `scans` in it.
+fn file_with_scans(name: &str, scans: u64) -> (PathBuf, McapFile) {
+    let path = scratch(name).join("run.mcap");
+    let mut file = McapFile::create(&path).unwrap();
+    for seq in 0..scans {
+        write(&mut file, seq);
+    }
+    (path, file)
+}
+
 /// The messages a reader gets from the file before it finds it cut off.
 fn readable(path: &std::path::Path) -> Vec<u64> {
     let bytes = std::fs::read(path).unwrap();
@@ -48,12 +58,7 @@ fn readable(path: &std::path::Path) -> Vec<u64> {
 
 #[test]
 fn a_file_never_finished_reads_up_to_its_last_full_chunk() {
-    let dir = scratch("cut");
-    let path = dir.join("run.mcap");
-    let mut file = McapFile::create(&path).unwrap();
-    for seq in 0..300 {
-        write(&mut file, seq);
-    }
+    let (path, file) = file_with_scans("cut", 300);
     // Dies here: no last chunk, no summary, no footer.
     std::mem::forget(file);
     let stamps = readable(&path);
@@ -66,21 +71,16 @@ fn a_file_never_finished_reads_up_to_its_last_full_chunk() {
     );
     let expected: Vec<u64> = (0..stamps.len() as u64).map(|s| s * 25_000_000).collect();
     assert_eq!(stamps, expected);
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
 }
 
 #[test]
 fn a_slow_run_is_on_disk_within_the_flush_period() {
-    let dir = scratch("slow");
-    let path = dir.join("run.mcap");
-    let mut file = McapFile::create(&path).unwrap();
-    for seq in 0..5 {
-        write(&mut file, seq);
-    }
+    let (path, mut file) = file_with_scans("slow", 5);
     std::thread::sleep(FLUSH_PERIOD + std::time::Duration::from_millis(100));
     // The first message after the period closes the chunk with it.
     write(&mut file, 5);
     std::mem::forget(file);
     assert_eq!(readable(&path).len(), 6);
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
 }

@@ -9,8 +9,8 @@ use ipc_types::{
     PathChunk, Pose2, PoseEstimate, ScanMotion, StampedPose, TrueCorner, WorldCorners, Zeroable,
 };
 use recorder::{
-    ChannelMessage, FeaturesMessage, GroundTruthMessage, MapMessage, OdometryMessage, PathChunks,
-    PathMessage, PoseMessage, ScanMessage, TransformMessage, WorldCornersMessage,
+    ChannelMessage, GroundTruthMessage, MapMessage, PathChunks, PathMessage, PoseMessage,
+    ScanMessage, TransformMessage,
 };
 use serde_json::Value;
 
@@ -21,11 +21,7 @@ fn check<M: ChannelMessage>(message: &M) -> Value {
     let registered = M::schema();
     assert_eq!(registered["title"], M::SCHEMA);
     assert_eq!(registered["type"], "object");
-    let validator = jsonschema::validator_for(&registered).unwrap();
-    let errors: Vec<String> = validator
-        .iter_errors(&json)
-        .map(|e| e.to_string())
-        .collect();
+    let errors = violations(&registered, &json);
     assert!(
         errors.is_empty(),
         "{} against its own schema: {errors:?}",
@@ -34,11 +30,7 @@ fn check<M: ChannelMessage>(message: &M) -> Value {
     if M::SCHEMA.starts_with("foxglove.") {
         let foxglove = foxglove_schemas::by_name(M::SCHEMA)
             .unwrap_or_else(|| panic!("no Foxglove schema written for {}", M::SCHEMA));
-        let validator = jsonschema::validator_for(&foxglove).unwrap();
-        let errors: Vec<String> = validator
-            .iter_errors(&json)
-            .map(|e| e.to_string())
-            .collect();
+        let errors = violations(&foxglove, &json);
         assert!(
             errors.is_empty(),
             "{} against Foxglove's: {errors:?}",
@@ -65,6 +57,15 @@ fn check<M: ChannelMessage>(message: &M) -> Value {
         assert!(M::SCHEMA.starts_with("slam."), "{}", M::SCHEMA);
     }
     json
+}
+
+/// What `schema` finds wrong with `json`.
+fn violations(schema: &Value, json: &Value) -> Vec<String> {
+    jsonschema::validator_for(schema)
+        .unwrap()
+        .iter_errors(json)
+        .map(|e| e.to_string())
+        .collect()
 }
 
 fn header(seq: u64, stamp_ns: u64, frame: &str) -> Header {
@@ -158,6 +159,9 @@ fn a_pose_estimate_is_a_foxglove_pose_in_frame_in_the_map() {
     assert_eq!(json["dead_reckoning"]["yaw"], 1.6);
     assert_eq!(json["effective_particles"], 42.5);
     assert_eq!(json["timing"]["total_ns"], 123_456);
+    // The estimate follows whole, in its serde form.
+    assert_eq!(json["header"]["seq"], 3);
+    assert_eq!(json["localization"], PoseEstimate::MAPPING);
 }
 
 #[test]
@@ -219,75 +223,6 @@ fn the_final_path_is_one_foxglove_poses_in_frame_from_its_chunks() {
 }
 
 #[test]
-fn odometry_features_maps_and_world_corners_have_schemas_of_our_own() {
-    let mut odometry = Odometry::boxed_zeroed();
-    odometry.header = header(2, 50_000_000, "odom");
-    odometry.pose = Pose2::new(0.5, 0.25, 0.125);
-    odometry.covariance[8] = 1e-3;
-    odometry.linear_velocity = 1.5;
-    let json = check(&OdometryMessage::new(&odometry));
-    assert_eq!(json["header"]["frame_id"], "odom");
-    assert_eq!(json["pose"]["yaw"], 0.125);
-    assert_eq!(json["linear_velocity"], 1.5);
-
-    let mut features = Features::boxed_zeroed();
-    features.header = header(9, 225_000_000, "laser");
-    let line = Line {
-        rho: 2.0,
-        theta: 0.5,
-        covariance: [1e-4, 0.0, 0.0, 1e-5],
-        start: [1.0, 1.0],
-        end: [2.0, 0.5],
-        point_count: 40,
-        reserved: 0,
-    };
-    features.set(&[line], &[corner(1.0), corner(2.0)]).unwrap();
-    let json = check(&FeaturesMessage::new(&features));
-    assert!(json["odometry"].is_null() && json["motion"].is_null());
-    assert_eq!(json["lines"][0]["point_count"], 40);
-    assert_eq!(json["corners"][1]["x"], 2.0);
-    assert_eq!(json["corners"][1]["covariance"][5], 2e-4);
-    features.set_odometry(Some(ipc_types::OdometryAtScan {
-        pose: Pose2::new(1.0, 0.0, 0.0),
-        covariance: [0.0; 9],
-    }));
-    features.set_motion(Some(ScanMotion {
-        match_status: ScanMotion::MATCH_OK,
-        points: 500,
-        inliers: 480,
-        ..ScanMotion::default()
-    }));
-    let json = check(&FeaturesMessage::new(&features));
-    assert_eq!(json["odometry"]["pose"]["x"], 1.0);
-    assert_eq!(json["motion"]["match_status"], 2);
-
-    let mut map = MapSnapshot::boxed_zeroed();
-    map.header = header(20, 500_000_000, "map");
-    map.set(&[MapCorner {
-        corner: corner(3.0),
-        observations: 17,
-        reserved: 0,
-    }])
-    .unwrap();
-    let json = check(&MapMessage::new(&map));
-    assert_eq!(json["corners"][0]["observations"], 17);
-
-    let mut world = WorldCorners::boxed_zeroed();
-    world.header = header(0, 0, "map");
-    world
-        .set(&[TrueCorner {
-            x: 1.0,
-            y: 2.0,
-            heading: 0.0,
-            angle: 1.0,
-        }])
-        .unwrap();
-    let json = check(&WorldCornersMessage::new(&world));
-    assert_eq!(json["corners"][0]["y"], 2.0);
-    assert!(json["corners"][0].get("covariance").is_none());
-}
-
-#[test]
 fn the_validators_refuse_what_foxglove_would_not_read() {
     // The checks above mean something only if a bad message fails them: a null range (what
     // serde_json makes of a NaN), a negative stamp, a missing field.
@@ -312,4 +247,114 @@ fn the_validators_refuse_what_foxglove_would_not_read() {
     message.as_object_mut().unwrap().remove("start_angle");
     assert!(!foxglove.is_valid(&message));
     assert!(!registered.is_valid(&message));
+}
+
+#[test]
+fn odometry_features_maps_and_world_corners_are_their_messages_in_serde_form() {
+    // The text a recording holds on our own channels, to the byte: the fields in the
+    // message's order, the frame as text, no padding, a map corner's observations beside its
+    // fields. Tools that read recordings rely on it.
+    let zeros = |n: usize| vec!["0.0"; n].join(",");
+    let head = |seq: u64, frame: &str| header(seq, 5, frame);
+    let head_json = |seq: u64, frame: &str| {
+        format!(
+            r#"{{"seq":{seq},"stamp_ns":5,"sent_ns":1700000000123456789,"frame_id":"{frame}","flags":0}}"#
+        )
+    };
+    // The text as the file gets it, after the schema checks.
+    fn text<M: ChannelMessage>(message: &M) -> String {
+        check(message);
+        serde_json::to_string(message).unwrap()
+    }
+
+    let mut odometry = Odometry::boxed_zeroed();
+    odometry.header = head(2, "odom");
+    odometry.pose = Pose2::new(0.5, 0.25, 0.125);
+    odometry.covariance[8] = 2.0;
+    odometry.linear_velocity = 1.5;
+    odometry.angular_velocity = -0.5;
+    assert_eq!(
+        text(&*odometry),
+        format!(
+            r#"{{"header":{},"pose":{{"x":0.5,"y":0.25,"yaw":0.125}},"covariance":[{},2.0],"linear_velocity":1.5,"angular_velocity":-0.5}}"#,
+            head_json(2, "odom"),
+            zeros(8)
+        )
+    );
+
+    let mut features = Features::boxed_zeroed();
+    features.header = head(9, "laser");
+    features.scan_sent_ns = 3;
+    features.processing_ns = 4;
+    let line = Line {
+        rho: 2.0,
+        theta: 0.5,
+        covariance: [1.0, 0.0, 0.0, 0.5],
+        start: [1.0, 1.0],
+        end: [2.0, 0.5],
+        point_count: 40,
+        reserved: 0,
+    };
+    let mut corner = corner(1.0);
+    corner.covariance = [0.0; 16];
+    features.set(&[line], &[corner]).unwrap();
+    assert!(text(&features.to_record()).contains(r#""odometry":null,"motion":null,"#));
+    features.set_odometry(Some(ipc_types::OdometryAtScan {
+        pose: Pose2::new(1.0, 0.0, 0.0),
+        covariance: [0.0; 9],
+    }));
+    features.set_motion(Some(ScanMotion {
+        match_status: ScanMotion::MATCH_OK,
+        points: 500,
+        inliers: 480,
+        ..ScanMotion::default()
+    }));
+    let origin = r#"{"x":0.0,"y":0.0,"yaw":0.0}"#;
+    let corner_json = format!(
+        r#""x":1.0,"y":-1.0,"heading":0.5,"angle":1.5,"covariance":[{}]"#,
+        zeros(16)
+    );
+    assert_eq!(
+        text(&features.to_record()),
+        format!(
+            r#"{{"header":{},"scan_sent_ns":3,"processing_ns":4,"odometry":{{"pose":{{"x":1.0,"y":0.0,"yaw":0.0}},"covariance":[{}]}},"motion":{{"pose":{origin},"increment":{origin},"increment_covariance":[{}],"match_status":2,"odometry_status":0,"points":500,"inliers":480}},"lines":[{{"rho":2.0,"theta":0.5,"covariance":[1.0,0.0,0.0,0.5],"start":[1.0,1.0],"end":[2.0,0.5],"point_count":40}}],"corners":[{{{corner_json}}}]}}"#,
+            head_json(9, "laser"),
+            zeros(9),
+            zeros(9)
+        )
+    );
+
+    let mut map = MapSnapshot::boxed_zeroed();
+    map.header = head(20, "map");
+    map.set(&[MapCorner {
+        corner,
+        observations: 17,
+        reserved: 0,
+    }])
+    .unwrap();
+    assert_eq!(
+        text(&MapMessage::new(&map)),
+        format!(
+            r#"{{"header":{},"corners":[{{{corner_json},"observations":17}}]}}"#,
+            head_json(20, "map")
+        )
+    );
+
+    let mut world = WorldCorners::boxed_zeroed();
+    world.header = head(0, "map");
+    world
+        .set(&[TrueCorner {
+            x: 1.0,
+            y: 2.0,
+            heading: 0.0,
+            angle: 1.0,
+        }])
+        .unwrap();
+    assert_eq!(
+        text(&world.to_record()),
+        format!(
+            r#"{{"header":{},"corners":[{{"x":1.0,"y":2.0,"heading":0.0,"angle":1.0}}]}}"#,
+            head_json(0, "map")
+        )
+    );
 }

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use ipc_types::{Header, LaserScan, Odometry, Pose2, Zeroable};
 use recorder::{
-    McapFile, OdometryMessage, OpenRecordingError, PoseMessage, ReadError, Recorded,
-    RecordingReader, ScanMessage, open_recording,
+    McapFile, OpenRecordingError, PoseMessage, ReadError, Recorded, RecordingReader, ScanMessage,
+    open_recording,
 };
 
 fn scratch(name: &str) -> PathBuf {
@@ -120,8 +120,7 @@ fn write_scan(file: &mut McapFile, scan: &LaserScan) {
 
 fn write_odometry(file: &mut McapFile, odometry: &Odometry) {
     let h = odometry.header;
-    file.write(&OdometryMessage::new(odometry), h.stamp_ns, h.sent_ns)
-        .unwrap();
+    file.write(odometry, h.stamp_ns, h.sent_ns).unwrap();
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! `slam-score` as a program: files in, the score out, bad lines named.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Command;
 
 fn fixture(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("slam-score-test-{}", std::process::id()));
@@ -11,15 +11,34 @@ fn fixture(name: &str, text: &str) -> PathBuf {
     path
 }
 
-fn slam_score(trajectory: &PathBuf, relations: &PathBuf, extra: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_slam-score"))
+/// What a run of `slam-score` said.
+struct Run {
+    success: bool,
+    stdout: String,
+    stderr: String,
+}
+
+fn slam_score(trajectory: &PathBuf, relations: &PathBuf, extra: &[&str]) -> Run {
+    let output = Command::new(env!("CARGO_BIN_EXE_slam-score"))
         .arg("--trajectory")
         .arg(trajectory)
         .arg("--relations")
         .arg(relations)
         .args(extra)
         .output()
-        .unwrap()
+        .unwrap();
+    Run {
+        success: output.status.success(),
+        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+    }
+}
+
+/// `slam-score` on a [`stretched_trajectory`] against the relations `text`, both files
+/// named after `tag` (`TAG.relations`).
+fn score_stretched(tag: &str, text: &str, extra: &[&str]) -> Run {
+    let relations = fixture(&format!("{tag}.relations"), text);
+    slam_score(&stretched_trajectory(tag), &relations, extra)
 }
 
 /// A TUM line of a planar pose.
@@ -42,16 +61,16 @@ fn stretched_trajectory(tag: &str) -> PathBuf {
 
 #[test]
 fn the_score_is_printed_as_json() {
-    let relations = fixture(
-        "truth.relations",
+    let run = score_stretched(
+        "truth",
         "1134864629.895182 1134864629.995182 1 0 0 0 0 0\n\
          1134864629.995182 1134864630.195182 2 0 0 0 0 0\n\
          1134864629.995182 1134864640.0 2 0 0 0 0 0\n",
+        &["--json"],
     );
-    let output = slam_score(&stretched_trajectory("json"), &relations, &["--json"]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{stderr}");
-    let score: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let stderr = &run.stderr;
+    assert!(run.success, "{stderr}");
+    let score: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
     assert_eq!(score["relations"], 3);
     assert_eq!(score["used"], 2);
     // Errors 0.1 m and 0.2 m: mean 0.15, std 0.05, squared mean 0.025.
@@ -72,13 +91,13 @@ fn the_score_is_printed_as_json() {
 
 #[test]
 fn the_text_report_names_both_errors() {
-    let relations = fixture(
-        "one.relations",
+    let run = score_stretched(
+        "one",
         "1134864629.895182 1134864629.995182 1 0 0 0 0 0\n",
+        &[],
     );
-    let output = slam_score(&stretched_trajectory("text"), &relations, &[]);
-    assert!(output.status.success());
-    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(run.success);
+    let stdout = &run.stdout;
     assert!(stdout.contains("relations: 1 used of 1"), "{stdout}");
     assert!(stdout.contains("translation  mean 0.1000"), "{stdout}");
     assert!(stdout.contains("rotation     mean 0.0000"), "{stdout}");
@@ -90,9 +109,9 @@ fn malformed_lines_are_named() {
         "bad.relations",
         "# t1 t2 x y z roll pitch yaw\n\n1.0 2.0 1 0 0 0 0 0\n1.0 2.0 1 0 0 0 0\n",
     );
-    let output = slam_score(&stretched_trajectory("malformed"), &relations, &[]);
-    assert!(!output.status.success());
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let run = slam_score(&stretched_trajectory("malformed"), &relations, &[]);
+    assert!(!run.success);
+    let stderr = &run.stderr;
     assert!(
         stderr.contains("bad.relations, line 4: 7 fields, expected 8 (t1 t2 x y z roll pitch yaw)"),
         "{stderr}"
@@ -102,16 +121,14 @@ fn malformed_lines_are_named() {
         "bad.tum",
         &(tum("1.0", 0.0, 0.0, 0.0) + "2.0 1 0 0 0 0 x 1\n"),
     );
-    let output = slam_score(&trajectory, &relations, &[]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = slam_score(&trajectory, &relations, &[]).stderr;
     assert!(
         stderr.contains("bad.tum, line 2: qz: \"x\" is not a finite number"),
         "{stderr}"
     );
 
     let repeated = fixture("repeated.tum", &(tum("1.0", 0.0, 0.0, 0.0).repeat(2)));
-    let output = slam_score(&repeated, &relations, &[]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = slam_score(&repeated, &relations, &[]).stderr;
     assert!(
         stderr.contains("repeated.tum, line 2: stamp repeats line 1"),
         "{stderr}"
@@ -120,10 +137,9 @@ fn malformed_lines_are_named() {
 
 #[test]
 fn nothing_to_score_is_an_error() {
-    let relations = fixture("far.relations", "7.0 8.0 1 0 0 0 0 0\n");
-    let output = slam_score(&stretched_trajectory("nothing"), &relations, &[]);
-    assert!(!output.status.success());
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let run = score_stretched("far", "7.0 8.0 1 0 0 0 0 0\n", &[]);
+    assert!(!run.success);
+    let stderr = &run.stderr;
     assert!(
         stderr.contains("none of the 1 relations has both poses"),
         "{stderr}"

@@ -60,6 +60,19 @@ pub struct MapCorner {
 }
 
 impl MapCorner {
+    /// `corner` as a map holds it: with the covariance of its estimate and the number of
+    /// scans that saw it.
+    pub fn observed(corner: TrueCorner, covariance: Matrix4<f64>, observations: u32) -> Self {
+        Self {
+            x: corner.x,
+            y: corner.y,
+            heading: corner.heading,
+            angle: corner.angle,
+            covariance,
+            observations,
+        }
+    }
+
     pub fn position(&self) -> Point2 {
         Point2::new(self.x, self.y)
     }

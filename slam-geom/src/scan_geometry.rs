@@ -5,6 +5,10 @@
 /// `angle_min + i * angle_increment` in the sensor frame (x forward, y left). Metres,
 /// radians, seconds.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "json-schema",
+    derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)
+)]
 pub struct ScanGeometry {
     /// Bearing of the first beam, radians.
     pub angle_min: f64,

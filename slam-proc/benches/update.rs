@@ -42,16 +42,10 @@ fn scenario(corners: usize) -> Scenario {
             angle: (50.0 + 80.0 * rng.random::<f64>()).to_radians(),
         })
         .collect();
+    let covariance = Matrix4::from_diagonal(&Vector4::new(1e-4, 1e-4, 1e-4, 1e-4));
     let map = truth
         .iter()
-        .map(|c| MapCorner {
-            x: c.x,
-            y: c.y,
-            heading: c.heading,
-            angle: c.angle,
-            covariance: Matrix4::from_diagonal(&Vector4::new(1e-4, 1e-4, 1e-4, 1e-4)),
-            observations: 10,
-        })
+        .map(|c| MapCorner::observed(*c, covariance, 10))
         .collect();
     // The filter starts at the origin of its map: the circle starts there, facing +x.
     let radius = 20.0;

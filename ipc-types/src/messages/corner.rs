@@ -9,6 +9,7 @@ use zerocopy::FromZeros;
 /// `(x, y, heading, angle)`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::Corner::v1")]
 pub struct Corner {
     pub x: f64,
@@ -21,6 +22,7 @@ pub struct Corner {
 /// A corner of the simulated world, for scoring a map. No covariance: it is the truth.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::TrueCorner::v1")]
 pub struct TrueCorner {
     pub x: f64,
@@ -37,6 +39,7 @@ pub struct MapCorner {
     pub corner: Corner,
     pub observations: u32,
     /// Keeps the layout free of implicit padding; always 0.
+    #[serde(skip)]
     pub reserved: u32,
 }
 

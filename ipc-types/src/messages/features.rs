@@ -113,6 +113,7 @@ impl Features {
 
 /// The odometry pose paired with a scan (`odom_from_robot`) and its row-major covariance.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 pub struct OdometryAtScan {
     pub pose: Pose2,
     pub covariance: [f64; 9],
@@ -120,6 +121,7 @@ pub struct OdometryAtScan {
 
 /// [`Features`] without their unused capacity: what gets written to disk.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 pub struct FeaturesRecord<'a> {
     pub header: Header,
     pub scan_sent_ns: u64,

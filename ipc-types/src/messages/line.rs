@@ -8,6 +8,7 @@ use zerocopy::FromZeros;
 /// row-major 2x2 covariance of `(rho, theta)` and the end points of the fitted points.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::Line::v1")]
 pub struct Line {
     pub rho: f64,
@@ -17,5 +18,6 @@ pub struct Line {
     pub end: [f64; 2],
     pub point_count: u32,
     /// Keeps the layout free of implicit padding; always 0.
+    #[serde(skip)]
     pub reserved: u32,
 }

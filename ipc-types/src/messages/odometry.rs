@@ -12,6 +12,7 @@ use crate::header::Header;
 /// Only increments between two messages are meaningful; the odometry frame drifts.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::Odometry::v1")]
 pub struct Odometry {
     pub header: Header,

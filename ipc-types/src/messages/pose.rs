@@ -9,6 +9,7 @@ use zerocopy::FromZeros;
 #[derive(
     Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, FromZeros, Serialize, Deserialize,
 )]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::Pose2::v1")]
 pub struct Pose2 {
     pub x: f64,

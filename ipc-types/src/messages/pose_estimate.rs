@@ -12,6 +12,7 @@ use crate::header::Header;
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend, FromZeros, Serialize, Deserialize,
 )]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::StageTiming::v1")]
 pub struct StageTiming {
     pub motion_ns: u64,
@@ -24,6 +25,7 @@ pub struct StageTiming {
 /// The pose estimate after one scan, in the map frame (the first pose is the origin).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::PoseEstimate::v2")]
 pub struct PoseEstimate {
     /// The source scan's header; `sent_ns` is this message's.
@@ -48,6 +50,8 @@ pub struct PoseEstimate {
     /// [`PoseEstimate::SEARCHING`] until the particles have converged and
     /// [`PoseEstimate::CONVERGED`] while they are.
     pub localization: u32,
+    /// Keeps the layout free of implicit padding; always 0.
+    #[serde(skip)]
     pub reserved: u32,
 }
 

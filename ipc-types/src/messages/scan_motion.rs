@@ -12,6 +12,7 @@ use super::pose::Pose2;
 #[derive(
     Debug, Clone, Copy, PartialEq, Default, ZeroCopySend, FromZeros, Serialize, Deserialize,
 )]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::ScanMotion::v1")]
 pub struct ScanMotion {
     /// The robot's pose in the front end's own frame (the identity at its first scan).

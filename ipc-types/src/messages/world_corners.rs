@@ -47,6 +47,7 @@ impl WorldCorners {
 
 /// [`WorldCorners`] without the unused capacity.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 pub struct WorldCornersRecord<'a> {
     pub header: Header,
     pub corners: Cow<'a, [TrueCorner]>,

@@ -142,6 +142,31 @@ pub struct Synthetic {
     pub dead_reckoning: bool,
 }
 
+impl Synthetic {
+    /// One lap in `scans` scans of `beams` beams, with ground truth and dead reckoning.
+    pub fn lap(scans: usize, beams: usize) -> Self {
+        Self {
+            scans,
+            beams,
+            truth: true,
+            dead_reckoning: true,
+        }
+    }
+}
+
+/// A recorder in the fresh directory `name` (see [`scratch_dir`]), driven through `run`
+/// and left open for the test to finish.
+pub fn driven_recorder(
+    name: &str,
+    options: map_sink::RecorderOptions,
+    run: Synthetic,
+) -> Result<(PathBuf, map_sink::Recorder), map_sink::SinkError> {
+    let dir = scratch_dir(name);
+    let mut recorder = map_sink::Recorder::create(&dir, options)?;
+    drive(&mut recorder, run)?;
+    Ok((dir, recorder))
+}
+
 /// Drives a recorder through one lap of the synthetic room as the pipeline would: scans
 /// ray-cast from the true poses, an estimate in the SLAM frame (the first pose is the
 /// origin) with small errors, a drifting dead reckoning, and a map of perturbed corners.
