@@ -248,8 +248,8 @@ fn plan(
                 );
             }
             let mut args = vec!["--domain".to_owned(), domain.name().to_owned()];
-            if let Some(subscribers) = topology::waits_for_subscribers(stage, &run) {
-                args.extend(["--subscribers".to_owned(), subscribers.to_string()]);
+            for (option, subscribers) in topology::waits_for_subscribers(stage, &run) {
+                args.extend([option.to_owned(), subscribers.to_string()]);
             }
             args.extend(settings_args(stage.role, config, out, config_dir)?);
             Ok(StagePlan {

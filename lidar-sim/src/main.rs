@@ -101,11 +101,13 @@ fn run() -> Result<()> {
     let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
     say("ready");
 
-    let wait = match delivery {
-        Delivery::Lossless => None,
-        Delivery::Latest => Some(SourceArgs::REAL_TIME_WAIT),
-    };
+    let wait = SourceArgs::subscriber_wait(delivery == Delivery::Lossless);
     scans.wait_for_subscribers(args.source.subscribers, wait)?;
+    // Its readers look for the odometry once they have found the scans: in lockstep none
+    // may miss the first readings.
+    if let Some(odometry) = &odometry {
+        odometry.wait_for_subscribers(args.source.odometry_subscribers, wait)?;
+    }
 
     let mut pacer = Pacer::new(args.rate);
     let mut published = 0u64;
