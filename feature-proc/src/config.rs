@@ -2,7 +2,7 @@
 //! on simulated scans alike.
 
 use serde::{Deserialize, Serialize};
-use stage_kit::settings::{SettingError, check, check_non_negative, check_positive};
+use stage_kit::settings::{SettingError, check, check_counts, check_non_negative, check_positive};
 
 /// Extraction thresholds. Metres and radians throughout (docs/CONVENTIONS.md).
 ///
@@ -108,16 +108,9 @@ impl FeatureConfig {
             "must be in (0, corner_max_angle)",
         )?;
         check("corner_max_angle", hi, hi < pi, "must be below pi")?;
-        let n = self.min_line_points;
         // Three points are the fewest whose fit has a residual to judge it by.
-        check(
-            "min_line_points",
-            n as f64,
-            (3..=1000).contains(&n),
-            "must be in 3..=1000",
-        )?;
-        let gap = self.max_invalid_gap;
-        check("max_invalid_gap", gap as f64, gap <= 100, "must be <= 100")?;
+        check_counts(&stage_kit::named_fields!(self; min_line_points), 3..=1000)?;
+        check_counts(&stage_kit::named_fields!(self; max_invalid_gap), ..=100)?;
         Ok(())
     }
 }

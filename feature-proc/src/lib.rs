@@ -15,8 +15,9 @@
 //!    `(x, y, heading, angle)` with a covariance propagated from both lines.
 //!
 //! Conventions (frames, corner heading and angle) are those of docs/CONVENTIONS.md; every
-//! threshold is in [`FeatureConfig`]. [`OdometryTrack`] pairs each scan with the odometry at its
-//! stamp, so the features carry it downstream. [`seed_hall`] loads the shared real recording.
+//! threshold is in [`FeatureConfig`]. The process pairs each scan with the odometry at its
+//! stamp (`stage_kit::odometry_buffer`), so the features carry it downstream. [`seed_hall`]
+//! loads the shared real recording.
 
 #![forbid(unsafe_code)]
 
@@ -25,7 +26,6 @@ mod corner;
 mod extractor;
 mod features;
 mod line_fit;
-pub mod odometry_join;
 mod scan;
 pub mod seed_hall;
 mod segment;
@@ -34,6 +34,5 @@ mod split_merge;
 pub use config::FeatureConfig;
 pub use extractor::Extractor;
 pub use features::{Corner, FeatureSet, Line};
-pub use odometry_join::{OdometryReading, OdometryTrack, RefusedReading};
 pub use scan::{MAX_BEAMS, ScanError, ScanInput};
 pub use stage_kit::SettingError;

@@ -8,14 +8,13 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use feature_proc::{
-    Extractor, FeatureConfig, OdometryReading, OdometryTrack, RefusedReading, ScanInput,
-};
+use feature_proc::{Extractor, FeatureConfig, ScanInput};
 use ipc_types::prelude::*;
 use scan_match::{
     FrontEnd, FrontEndConfig, FrontEndOutput, FrontEndStats, MatchStatus, OdometryStatus,
 };
 use slam_geom::ScanGeometry;
+use stage_kit::odometry_buffer::{OdometryBuffer, OdometryReading, RefusedReading};
 use stage_kit::{say, say_err};
 
 /// Subscribes to scans (and odometry, when the source publishes it) and publishes their lines
@@ -76,7 +75,7 @@ fn run() -> Result<()> {
     }
     let odometry_wait = Duration::from_millis(args.odometry_wait_ms);
 
-    let mut track = OdometryTrack::new();
+    let mut track = OdometryBuffer::new();
     let mut pending: VecDeque<PendingScan> = VecDeque::new();
     // The held scans' range buffers, kept for the next scans: no allocation per scan.
     let mut spare_ranges: Vec<Vec<f32>> = Vec::new();
@@ -125,8 +124,9 @@ fn run() -> Result<()> {
             track.end();
         }
         while let Some(scan) = pending.front() {
+            let at = track.at(scan.header.stamp_ns);
             let ready = odometry.is_none()
-                || track.resolves(scan.header.stamp_ns)
+                || at.is_final()
                 || (!lockstep && scan.arrived.elapsed() >= odometry_wait);
             if !ready {
                 break;
@@ -134,9 +134,7 @@ fn run() -> Result<()> {
             let Some(scan) = pending.pop_front() else {
                 break;
             };
-            let reading = odometry
-                .as_ref()
-                .and_then(|_| track.at(scan.header.stamp_ns));
+            let reading = odometry.as_ref().and_then(|_| at.reading());
             track.forget_before(scan.header.stamp_ns);
             if odometry.is_some() && reading.is_none() {
                 counts.without_odometry += 1;
@@ -243,7 +241,7 @@ impl PendingScan {
 
 fn drain_odometry(
     inlet: &Inlet<Odometry>,
-    track: &mut OdometryTrack,
+    track: &mut OdometryBuffer,
     counts: &mut Counts,
 ) -> Result<()> {
     while let Some(sample) = inlet.receive()? {

@@ -18,8 +18,8 @@ use crate::config::{ConfigError, RunConfig, SourceKind};
 /// Every setting can also come from a TOML file (--config) with the keys `source`,
 /// `relations`, `stall_warning`, `stall_limit`, `map`, `localize` and `initial_pose` and the
 /// sections [sim], [replay], [hokuyo], [features], [front_end], [slam], [grid] and [record];
-/// options given here override the file. Keys a section does not know are refused by the
-/// process that reads it.
+/// options given here override the file. A key a section does not know, or a value out of
+/// its range, is refused before anything starts.
 #[derive(Debug, Parser)]
 #[command(name = "slam-launch", version)]
 pub struct Args {

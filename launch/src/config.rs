@@ -16,9 +16,9 @@ pub enum ConfigError {
 
 /// Where the scans come from.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-// No deny_unknown_fields: serde cannot combine it with `flatten`; the keys left over go to
-// the process, which refuses what it does not know.
-#[serde(default)]
+// With `flatten`, serde refuses the keys neither this struct nor the flattened one takes
+// (the flattened one alone cannot: it sees only its own).
+#[serde(default, deny_unknown_fields)]
 pub struct SimSection {
     /// `hall`, `office`, `corridor` or a world file (JSON).
     pub world: String,
@@ -30,9 +30,9 @@ pub struct SimSection {
     pub seed: u64,
     /// Publish noisy wheel odometry too.
     pub odometry: bool,
-    /// Anything else `lidar-sim --config` takes (sensor and vehicle settings).
+    /// The sensor and the vehicle (`[sim.sensor]`, `[sim.vehicle]`): `lidar-sim --config`.
     #[serde(flatten)]
-    pub extra: toml::Table,
+    pub settings: lidar_sim::SimSettings,
 }
 
 impl Default for SimSection {
@@ -43,7 +43,7 @@ impl Default for SimSection {
             rate: 0.0,
             seed: 1,
             odometry: false,
-            extra: toml::Table::new(),
+            settings: lidar_sim::SimSettings::default(),
         }
     }
 }
@@ -96,49 +96,95 @@ impl Default for ReplaySection {
     }
 }
 
-/// A live Hokuyo scanner.
+/// A live Hokuyo scanner: what lidar-hokuyo is asked for, passed on as its options.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-// No deny_unknown_fields: serde cannot combine it with `flatten`; the keys left over go to
-// the process, which refuses what it does not know.
-#[serde(default)]
+// With `flatten`, serde refuses the keys neither this struct nor the flattened one takes
+// (the flattened one alone cannot: it sees only its own).
+#[serde(default, deny_unknown_fields)]
 pub struct HokuyoSection {
     /// `HOST:PORT` of the scanner.
     pub addr: String,
-    /// Anything else `lidar-hokuyo` takes, as `--key value` (e.g. `cluster = 2`).
+    /// Scans to publish before stopping; 0 = until stopped.
+    pub frames: u64,
+    /// frame_id of the scans.
+    pub frame_id: String,
+    /// The bearings, the clustering and the intensities wanted.
     #[serde(flatten)]
-    pub extra: toml::Table,
+    pub request: lidar_hokuyo::ScanRequest,
 }
 
 impl Default for HokuyoSection {
     fn default() -> Self {
         Self {
             addr: "192.168.0.10:10940".into(),
-            extra: toml::Table::new(),
+            frames: 0,
+            frame_id: "laser".into(),
+            request: lidar_hokuyo::ScanRequest::default(),
         }
     }
 }
 
-/// SLAM settings; `extra` goes to `slam-proc --config` as is.
+impl HokuyoSection {
+    /// lidar-hokuyo's options: `--addr`, and each setting that is not its default.
+    pub fn args(&self) -> Vec<String> {
+        let defaults = Self::default();
+        let given = |differs: bool, option: &str, value: String| {
+            differs.then(|| [option.to_owned(), value])
+        };
+        let request = &self.request;
+        let options = [
+            Some(["--addr".to_owned(), self.addr.clone()]),
+            request
+                .min_angle
+                .map(|a| ["--min-angle".to_owned(), a.to_string()]),
+            request
+                .max_angle
+                .map(|a| ["--max-angle".to_owned(), a.to_string()]),
+            given(
+                request.cluster != defaults.request.cluster,
+                "--cluster",
+                request.cluster.to_string(),
+            ),
+            given(
+                request.intensities != defaults.request.intensities,
+                "--intensities",
+                request.intensities.to_string(),
+            ),
+            given(
+                self.frames != defaults.frames,
+                "--frames",
+                self.frames.to_string(),
+            ),
+            given(
+                self.frame_id != defaults.frame_id,
+                "--frame-id",
+                self.frame_id.clone(),
+            ),
+        ];
+        options.into_iter().flatten().flatten().collect()
+    }
+}
+
+/// The filter: `particles` and every other setting of slam-proc's [`slam_proc::SlamConfig`]
+/// (handed to `slam-proc --config`), with the run's seed and map rate.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-// No deny_unknown_fields: serde cannot combine it with `flatten`; the keys left over go to
-// the process, which refuses what it does not know.
-#[serde(default)]
+// With `flatten`, serde refuses the keys neither this struct nor the flattened one takes
+// (the flattened one alone cannot: it sees only its own).
+#[serde(default, deny_unknown_fields)]
 pub struct SlamSection {
-    pub particles: usize,
     pub seed: u64,
     /// Publish the map every this many scans (and at the end).
     pub map_every: u64,
     #[serde(flatten)]
-    pub extra: toml::Table,
+    pub filter: slam_proc::SlamConfig,
 }
 
 impl Default for SlamSection {
     fn default() -> Self {
         Self {
-            particles: 100,
             seed: 1,
             map_every: 20,
-            extra: toml::Table::new(),
+            filter: slam_proc::SlamConfig::default(),
         }
     }
 }
@@ -167,9 +213,8 @@ impl Default for GridSection {
     }
 }
 
-/// The whole run. Sections the launcher does not interpret (`features`, `front_end`) are
-/// handed to the process that reads them (feature-proc), which validates them and names any
-/// mistake.
+/// The whole run. Every section is the settings of the process that reads it, so a typo or
+/// a value out of range is refused here, before anything starts, naming the key.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
@@ -193,9 +238,10 @@ pub struct RunConfig {
     pub sim: SimSection,
     pub replay: ReplaySection,
     pub hokuyo: HokuyoSection,
-    pub features: toml::Table,
-    /// The scan-matching front end's settings (scan_match::FrontEndConfig).
-    pub front_end: toml::Table,
+    /// feature-proc's extractor.
+    pub features: feature_proc::FeatureConfig,
+    /// The scan-matching front end, run by feature-proc.
+    pub front_end: scan_match::FrontEndConfig,
     pub slam: SlamSection,
     pub grid: GridSection,
     pub record: crate::record::RecordSection,
@@ -214,8 +260,8 @@ impl Default for RunConfig {
             sim: SimSection::default(),
             replay: ReplaySection::default(),
             hokuyo: HokuyoSection::default(),
-            features: toml::Table::new(),
-            front_end: toml::Table::new(),
+            features: feature_proc::FeatureConfig::default(),
+            front_end: scan_match::FrontEndConfig::default(),
             slam: SlamSection::default(),
             grid: GridSection::default(),
             record: crate::record::RecordSection::default(),
@@ -266,7 +312,7 @@ impl RunConfig {
         {
             return Err(ConfigError::Invalid(format!("--initial-pose: {e}")));
         }
-        if self.slam.particles == 0 {
+        if self.slam.filter.particles == 0 {
             return Err(ConfigError::Invalid("particles must be at least 1".into()));
         }
         if self.slam.map_every == 0 {
@@ -291,6 +337,7 @@ impl RunConfig {
                 self.stall_limit, self.stall_warning
             )));
         }
+        self.validate_sections()?;
         let grid = map_sink::GridConfig {
             resolution_m: self.grid.resolution,
             ..map_sink::GridConfig::default()
@@ -298,6 +345,28 @@ impl RunConfig {
         if let Err(e) = grid.validate() {
             return Err(ConfigError::Invalid(format!(
                 "[grid] resolution (--resolution): {e}"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The processes' own checks of their sections, each error prefixed with its section.
+    fn validate_sections(&self) -> Result<(), ConfigError> {
+        let checks: [(&str, Result<(), stage_kit::SettingError>); 5] = [
+            ("[sim.sensor]", self.sim.settings.sensor.validate()),
+            ("[sim.vehicle]", self.sim.settings.vehicle.validate()),
+            ("[features]", self.features.validate()),
+            ("[front_end]", self.front_end.validate()),
+            ("[slam]", self.slam.filter.validate()),
+        ];
+        for (section, check) in checks {
+            check.map_err(|e| ConfigError::Invalid(format!("{section} {e}")))?;
+        }
+        let cluster = self.hokuyo.request.cluster;
+        if !(1..=lidar_hokuyo::scip::MAX_CLUSTER).contains(&cluster) {
+            return Err(ConfigError::Invalid(format!(
+                "[hokuyo] cluster must be from 1 to {}, not {cluster}",
+                lidar_hokuyo::scip::MAX_CLUSTER
             )));
         }
         Ok(())
@@ -320,9 +389,15 @@ impl RunConfig {
         (duration(self.stall_warning), duration(self.stall_limit))
     }
 
-    /// A section as the TOML text its process reads with `--config`.
-    pub fn section_text(table: &toml::Table) -> String {
-        toml::to_string(table).unwrap_or_default()
+    /// A section as the TOML text its process reads with `--config`; `None` when it holds
+    /// the defaults, which the process has without a file.
+    pub fn section_text<T: Serialize + Default + PartialEq>(
+        settings: &T,
+    ) -> Result<Option<String>, toml::ser::Error> {
+        if *settings == T::default() {
+            return Ok(None);
+        }
+        toml::to_string(settings).map(Some)
     }
 }
 
@@ -332,28 +407,135 @@ mod tests {
     use std::time::Duration;
 
     #[test]
-    fn a_full_file_parses_and_extra_keys_reach_the_process() {
+    fn a_full_file_parses_into_the_processes_settings() {
         let config: RunConfig = toml::from_str(
             r#"
             [sim]
             world = "hall"
             frames = 300
-            range_noise = 0.02
+            [sim.sensor]
+            noise_sigma = 0.02
+            [sim.vehicle]
+            max_accel = 2
             [features]
             split_threshold = 0.05
+            [front_end]
+            voxel_size = 0.1
             [slam]
             particles = 50
             resample_threshold = 0.4
+            [slam.localize]
+            max_particles = 5000
+            [hokuyo]
+            cluster = 2
+            min_angle = -1.5
             "#,
         )
         .unwrap();
         assert_eq!(config.sim.world, "hall");
         assert_eq!(config.sim.frames, 300);
-        assert_eq!(config.sim.extra["range_noise"].as_float(), Some(0.02));
-        assert_eq!(config.features["split_threshold"].as_float(), Some(0.05));
-        assert_eq!(config.slam.particles, 50);
-        assert!(config.slam.extra.contains_key("resample_threshold"));
+        assert_eq!(config.sim.settings.sensor.noise_sigma, 0.02);
+        assert_eq!(config.sim.settings.vehicle.max_accel, 2.0);
+        assert_eq!(config.features.split_threshold, 0.05);
+        assert_eq!(config.front_end.voxel_size, 0.1);
+        assert_eq!(config.slam.filter.particles, 50);
+        assert_eq!(config.slam.filter.resample_threshold, 0.4);
+        assert_eq!(config.slam.filter.localize.max_particles, 5000);
+        assert_eq!(
+            config.hokuyo.args(),
+            [
+                "--addr",
+                "192.168.0.10:10940",
+                "--min-angle",
+                "-1.5",
+                "--cluster",
+                "2"
+            ]
+        );
         config.validate().unwrap();
+    }
+
+    #[test]
+    fn a_typo_in_any_section_is_refused_with_its_key() {
+        for (text, key) in [
+            ("[slam]\npartcles = 10", "partcles"),
+            ("[slam.localize]\nmax_partcles = 10", "max_partcles"),
+            ("[sim]\nrange_noise = 0.02", "range_noise"),
+            ("[sim.sensor]\nrange_noise = 0.02", "range_noise"),
+            ("[features]\nsplit = 0.05", "split"),
+            ("[front_end]\nvoxel = 0.1", "voxel"),
+            ("[hokuyo]\nclustr = 2", "clustr"),
+        ] {
+            let error = RunConfig::parse(text, Path::new("run.toml")).unwrap_err();
+            let shown = format!("{:#}", anyhow::Error::new(error));
+            assert!(
+                shown.starts_with("config file run.toml: ")
+                    && shown.contains(&format!("unknown field `{key}`")),
+                "{text}: {shown}"
+            );
+        }
+    }
+
+    #[test]
+    fn values_out_of_range_are_refused_with_their_section() {
+        for (text, start) in [
+            (
+                "[slam]\nresample_threshold = 2",
+                "[slam] resample_threshold = 2",
+            ),
+            (
+                "[features]\nsplit_threshold = -1",
+                "[features] split_threshold = -1",
+            ),
+            ("[front_end]\nvoxel_size = 0", "[front_end] voxel_size = 0"),
+            ("[sim.sensor]\nbeams = 0", "[sim.sensor] beams = 0"),
+            (
+                "[sim.vehicle]\nmax_accel = 0",
+                "[sim.vehicle] max_accel = 0",
+            ),
+            (
+                "[hokuyo]\ncluster = 100",
+                "[hokuyo] cluster must be from 1 to 99",
+            ),
+        ] {
+            let config: RunConfig = toml::from_str(text).unwrap();
+            let message = config.validate().unwrap_err().to_string();
+            assert!(message.starts_with(start), "{text}: {message}");
+        }
+    }
+
+    #[test]
+    fn a_section_goes_to_its_process_as_it_was_read() {
+        let config: RunConfig = toml::from_str(
+            "[slam]\nparticles = 7\nview_range = 9.5\n[slam.localize]\nmax_particles = 500\n\
+             [sim.vehicle]\nmax_accel = 2\n[front_end]\nrecovery_yaw = 0.1",
+        )
+        .unwrap();
+        let slam = RunConfig::section_text(&config.slam.filter)
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            stage_kit::settings::parse::<slam_proc::SlamConfig>(&slam, Path::new("slam.toml"))
+                .unwrap(),
+            config.slam.filter
+        );
+        let sim = RunConfig::section_text(&config.sim.settings)
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            toml::from_str::<lidar_sim::SimSettings>(&sim).unwrap(),
+            config.sim.settings
+        );
+        let front_end = RunConfig::section_text(&config.front_end).unwrap().unwrap();
+        assert_eq!(
+            toml::from_str::<scan_match::FrontEndConfig>(&front_end).unwrap(),
+            config.front_end
+        );
+        // The defaults need no file: the process has them.
+        assert_eq!(RunConfig::section_text(&config.features).unwrap(), None);
+        // The effective configuration, written beside the run, reads back as itself.
+        let effective = toml::to_string(&config).unwrap();
+        assert_eq!(toml::from_str::<RunConfig>(&effective).unwrap(), config);
     }
 
     #[test]
@@ -365,7 +547,7 @@ mod tests {
         .unwrap();
         config.validate().unwrap();
         assert_eq!(config.replay.start, 300);
-        assert!(config.slam.extra.contains_key("localize"));
+        assert_eq!(config.slam.filter.localize.max_particles, 5000);
         let mut bad = config.clone();
         bad.map = None;
         assert!(
@@ -431,7 +613,7 @@ mod tests {
         );
         config.replay.rate = 0.001;
         config.validate().unwrap();
-        config.slam.particles = 0;
+        config.slam.filter.particles = 0;
         assert!(
             config
                 .validate()

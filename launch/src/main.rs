@@ -33,7 +33,7 @@ fn run() -> Result<ExitCode> {
     let mut config = args.run_config()?;
     config.validate()?;
     // slam-proc refuses it too, but as a stage that dies once map-sink is up.
-    slam_proc::memory::check(config.slam.particles).context("refusing to start")?;
+    slam_proc::memory::check(config.slam.filter.particles).context("refusing to start")?;
     // A map that cannot be used would only fail once the stages are up.
     if let Some(dir) = &config.map {
         let saved = map_sink::SavedMap::load(dir).with_context(|| {
@@ -248,8 +248,8 @@ fn plan(
                 );
             }
             let mut args = vec!["--domain".to_owned(), domain.name().to_owned()];
-            if let Some(subscribers) = topology::waits_for_subscribers(stage, &run) {
-                args.extend(["--subscribers".to_owned(), subscribers.to_string()]);
+            for (option, subscribers) in topology::waits_for_subscribers(stage, &run) {
+                args.extend([option.to_owned(), subscribers.to_string()]);
             }
             args.extend(settings_args(stage.role, config, out, config_dir)?);
             Ok(StagePlan {
@@ -264,22 +264,25 @@ fn plan(
 }
 
 /// A stage's arguments besides its topics: the settings of its config section, those the
-/// launcher interprets as options and the rest as a file of their own.
+/// launcher interprets as options and the process's own settings as a file of their own
+/// (none when they are the defaults).
 fn settings_args(
     role: Role,
     config: &RunConfig,
     out: &Path,
     config_dir: &Path,
 ) -> Result<Vec<String>> {
-    let section_as = |name: &str, table: &toml::Table, flag: &str| -> Result<Vec<String>> {
-        if table.is_empty() {
+    let section_file = |name: &str, text: Option<String>, flag: &str| -> Result<Vec<String>> {
+        let Some(text) = text else {
             return Ok(Vec::new());
-        }
+        };
         let path = config_dir.join(format!("{name}.toml"));
-        write_atomic(&path, RunConfig::section_text(table).as_bytes())?;
+        write_atomic(&path, text.as_bytes())?;
         Ok(vec![flag.into(), path.display().to_string()])
     };
-    let section = |name: &str, table: &toml::Table| section_as(name, table, "--config");
+    let text = |name: &str, text: Result<Option<String>, toml::ser::Error>| {
+        text.with_context(|| format!("cannot write the [{name}] section"))
+    };
     let out = out.display().to_string();
     let path = |p: &Path| p.display().to_string();
     Ok(match role {
@@ -288,7 +291,7 @@ fn settings_args(
             let title = format!(
                 "{}: {} particles, seed {}",
                 source_label(config),
-                config.slam.particles,
+                config.slam.filter.particles,
                 config.slam.seed
             );
             let mut args = flag_values([
@@ -304,7 +307,10 @@ fn settings_args(
         }
         Role::Filter => {
             let mut args = flag_values([
-                ("--particles", Some(config.slam.particles.to_string())),
+                (
+                    "--particles",
+                    Some(config.slam.filter.particles.to_string()),
+                ),
                 ("--seed", Some(config.slam.seed.to_string())),
                 ("--map-every", Some(config.slam.map_every.to_string())),
                 ("--map", config.map.as_deref().map(path)),
@@ -315,16 +321,15 @@ fn settings_args(
             if let Some(pose) = &config.initial_pose {
                 args.push(format!("--initial-pose={pose}"));
             }
-            args.extend(section("slam", &config.slam.extra)?);
+            let slam = text("slam", RunConfig::section_text(&config.slam.filter))?;
+            args.extend(section_file("slam", slam, "--config")?);
             args
         }
         Role::Perception => {
-            let mut args = section("features", &config.features)?;
-            args.extend(section_as(
-                "front_end",
-                &config.front_end,
-                "--front-end-config",
-            )?);
+            let features = text("features", RunConfig::section_text(&config.features))?;
+            let front_end = text("front_end", RunConfig::section_text(&config.front_end))?;
+            let mut args = section_file("features", features, "--config")?;
+            args.extend(section_file("front_end", front_end, "--front-end-config")?);
             args
         }
         Role::Source => match config.source {
@@ -338,7 +343,8 @@ fn settings_args(
                 if config.sim.odometry {
                     args.push("--odometry".into());
                 }
-                args.extend(section("sim", &config.sim.extra)?);
+                let sim = text("sim", RunConfig::section_text(&config.sim.settings))?;
+                args.extend(section_file("sim", sim, "--config")?);
                 args
             }
             SourceKind::Replay => {
@@ -362,17 +368,7 @@ fn settings_args(
                 }
                 args
             }
-            SourceKind::Hokuyo => {
-                let mut args = vec!["--addr".into(), config.hokuyo.addr.clone()];
-                for (key, value) in &config.hokuyo.extra {
-                    args.push(format!("--{}", key.replace('_', "-")));
-                    args.push(match value {
-                        toml::Value::String(s) => s.clone(),
-                        other => other.to_string(),
-                    });
-                }
-                args
-            }
+            SourceKind::Hokuyo => config.hokuyo.args(),
         },
     })
 }

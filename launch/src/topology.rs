@@ -1,6 +1,6 @@
 //! The pipeline's topology as data: every stage, the topics it publishes and the topics it
 //! reads. slam-launch takes from this table which stages a run starts, how many subscribers
-//! each publisher waits for (`--subscribers`) and how many readers each service is sized for
+//! each publisher waits for (`--subscribers`, a source's `--odometry-subscribers`) and how many readers each service is sized for
 //! in /dev/shm ([`crate::shm_room`]); docs/ARCHITECTURE.md's topic table is checked against
 //! it. A stage's own main opens the same topics; the table is what the launcher knows of it.
 
@@ -105,10 +105,36 @@ pub struct Stage {
     pub runs: When,
     pub publishes: &'static [Publication],
     pub reads: &'static [Reading],
-    /// The topic whose subscribers the stage waits for before it publishes, counted into its
-    /// `--subscribers`.
-    pub waits_for: Option<&'static str>,
+    /// The topics whose subscribers the stage waits for before it publishes on them, each
+    /// with the option that gives it their count.
+    pub waits_for: &'static [Wait],
 }
+
+/// A topic whose readers a stage waits for before it publishes on it, so that none of them
+/// misses the first messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Wait {
+    pub topic: &'static str,
+    /// The stage's option that takes the number of readers.
+    pub option: &'static str,
+}
+
+const fn waits(topic: &'static str) -> Wait {
+    Wait {
+        topic,
+        option: "--subscribers",
+    }
+}
+
+/// A source waits for its odometry's readers too (`stage_kit::SourceArgs`): they look for
+/// the odometry once they have found the scans.
+const SOURCE_WAITS: &[Wait] = &[
+    waits(SCAN),
+    Wait {
+        topic: ODOMETRY,
+        option: "--odometry-subscribers",
+    },
+];
 
 const fn publishes(topic: &'static str) -> Publication {
     Publication {
@@ -166,7 +192,7 @@ pub const STAGES: &[Stage] = &[
             reads(MAP),
             reads(PATH),
         ],
-        waits_for: None,
+        waits_for: &[],
     },
     Stage {
         binary: "map-sink",
@@ -181,7 +207,7 @@ pub const STAGES: &[Stage] = &[
             reads(POSE),
             reads(PATH),
         ],
-        waits_for: None,
+        waits_for: &[],
     },
     Stage {
         binary: "slam-proc",
@@ -197,7 +223,7 @@ pub const STAGES: &[Stage] = &[
                 if_published: false,
             },
         ],
-        waits_for: Some(POSE),
+        waits_for: &[waits(POSE)],
     },
     Stage {
         binary: "feature-proc",
@@ -205,7 +231,7 @@ pub const STAGES: &[Stage] = &[
         runs: When::Always,
         publishes: &[publishes(FEATURES)],
         reads: &[reads(SCAN), reads_if_published(ODOMETRY)],
-        waits_for: Some(FEATURES),
+        waits_for: &[waits(FEATURES)],
     },
     Stage {
         binary: "lidar-sim",
@@ -218,7 +244,7 @@ pub const STAGES: &[Stage] = &[
             SOURCE_ODOMETRY,
         ],
         reads: &[],
-        waits_for: Some(SCAN),
+        waits_for: SOURCE_WAITS,
     },
     Stage {
         binary: "lidar-replay",
@@ -226,7 +252,7 @@ pub const STAGES: &[Stage] = &[
         runs: When::Source(SourceKind::Replay),
         publishes: &[publishes(SCAN), SOURCE_ODOMETRY],
         reads: &[],
-        waits_for: Some(SCAN),
+        waits_for: SOURCE_WAITS,
     },
     Stage {
         binary: "lidar-hokuyo",
@@ -234,7 +260,7 @@ pub const STAGES: &[Stage] = &[
         runs: When::Source(SourceKind::Hokuyo),
         publishes: &[publishes(SCAN)],
         reads: &[],
-        waits_for: Some(SCAN),
+        waits_for: &[waits(SCAN)],
     },
 ];
 
@@ -286,9 +312,20 @@ pub fn services(run: &RunKind) -> Vec<(&'static str, usize)> {
         .collect()
 }
 
-/// The stage's `--subscribers` in a run of `run`: the readers of the topic it waits for.
-pub fn waits_for_subscribers(stage: &Stage, run: &RunKind) -> Option<usize> {
-    stage.waits_for.map(|topic| subscribers(run, topic))
+/// The stage's options that say how many subscribers it waits for in a run of `run`, each
+/// with the readers of its topic, for the topics the stage publishes in that run.
+pub fn waits_for_subscribers(stage: &Stage, run: &RunKind) -> Vec<(&'static str, usize)> {
+    stage
+        .waits_for
+        .iter()
+        .filter(|wait| {
+            stage
+                .publishes
+                .iter()
+                .any(|p| p.topic == wait.topic && p.when.holds(run))
+        })
+        .map(|wait| (wait.option, subscribers(run, wait.topic)))
+        .collect()
 }
 
 /// The stages of every kind of run that read `topic`, as `binary` or `binary (condition)`,
@@ -451,9 +488,15 @@ mod tests {
 
     #[test]
     fn subscriber_counts_per_configuration() {
+        // The scans' readers (and the features' and the poses'), as `--subscribers`.
         let counts = |run: &RunKind| -> Vec<(&str, usize)> {
             stages(run)
-                .filter_map(|s| waits_for_subscribers(s, run).map(|n| (s.binary, n)))
+                .flat_map(|s| {
+                    waits_for_subscribers(s, run)
+                        .into_iter()
+                        .filter(|(option, _)| *option == "--subscribers")
+                        .map(|(_, n)| (s.binary, n))
+                })
                 .collect()
         };
         assert_eq!(
@@ -513,6 +556,56 @@ mod tests {
             ..odometry
         };
         assert!(services(&recorded_odometry).contains(&(ODOMETRY, 2)));
+    }
+
+    #[test]
+    fn a_source_waits_for_every_reader_of_its_odometry() {
+        let source_waits = |run: &RunKind| {
+            let source = stages(run)
+                .find(|s| s.role == Role::Source)
+                .expect("one source");
+            waits_for_subscribers(source, run)
+        };
+        // Without odometry there is none to wait for; with it, feature-proc reads it, and
+        // slam-record too when the run is recorded.
+        type Waits = &'static [(&'static str, usize)];
+        let expected: [(bool, bool, Waits); 4] = [
+            (false, false, &[("--subscribers", 2)]),
+            (false, true, &[("--subscribers", 3)]),
+            (
+                true,
+                false,
+                &[("--subscribers", 2), ("--odometry-subscribers", 1)],
+            ),
+            (
+                true,
+                true,
+                &[("--subscribers", 3), ("--odometry-subscribers", 2)],
+            ),
+        ];
+        for source in [SourceKind::Sim, SourceKind::Replay] {
+            for (odometry, recorded, waits) in expected {
+                let run = RunKind {
+                    source,
+                    odometry,
+                    recorded,
+                    ..PLAIN
+                };
+                assert_eq!(source_waits(&run), waits, "{run:?}");
+            }
+        }
+        let hokuyo = RunKind {
+            source: SourceKind::Hokuyo,
+            ..PLAIN
+        };
+        assert_eq!(source_waits(&hokuyo), [("--subscribers", 2)]);
+        for run in every_run() {
+            for stage in stages(&run) {
+                for (option, readers) in waits_for_subscribers(stage, &run) {
+                    assert!(readers > 0, "{} {option} 0 in {run:?}", stage.binary);
+                }
+            }
+        }
     }
 
     #[test]

@@ -42,8 +42,8 @@ impl Drop for ConfigFile {
 fn an_option_overrides_the_file_and_the_file_overrides_the_default() {
     let file = ConfigFile::new(
         "layers",
-        "stall_warning = 20\n[sim]\nworld = 'hall'\nframes = 300\nseed = 4\nrange_noise = 0.02\n\
-         [slam]\nparticles = 50\nresample_threshold = 0.4\n",
+        "stall_warning = 20\n[sim]\nworld = 'hall'\nframes = 300\nseed = 4\n\
+         [sim.sensor]\nnoise_sigma = 0.02\n[slam]\nparticles = 50\nresample_threshold = 0.4\n",
     );
     let config = file.config(&["--world", "corridor", "--seed", "7", "--odometry"]);
     // Given as options: over the file.
@@ -53,15 +53,16 @@ fn an_option_overrides_the_file_and_the_file_overrides_the_default() {
     assert!(config.sim.odometry);
     // Only in the file: over the defaults, the keys the launcher passes on included.
     assert_eq!(config.sim.frames, 300);
-    assert_eq!(config.slam.particles, 50);
+    assert_eq!(config.slam.filter.particles, 50);
     assert_eq!(config.stall_warning, 20.0);
-    assert_eq!(config.sim.extra["range_noise"].as_float(), Some(0.02));
-    assert!(config.slam.extra.contains_key("resample_threshold"));
+    assert_eq!(config.sim.settings.sensor.noise_sigma, 0.02);
+    assert_eq!(config.slam.filter.resample_threshold, 0.4);
     // In neither: the defaults.
     let defaults = RunConfig::default();
     assert_eq!(config.stall_limit, defaults.stall_limit);
     assert_eq!(config.slam.map_every, defaults.slam.map_every);
     assert_eq!(config.grid, defaults.grid);
+    assert_eq!(config.front_end, defaults.front_end);
     assert_eq!(config.source, SourceKind::Sim);
 
     // Without options the file is the configuration as it was read.
@@ -114,4 +115,25 @@ fn the_file_s_errors_are_still_the_file_s() {
         error.contains(&path) && error.contains("simulation"),
         "{error}"
     );
+}
+
+#[test]
+fn a_typo_in_a_process_s_section_is_the_file_s_error() {
+    let file = ConfigFile::new("nested-typo", "[slam]\nparticles = 20\npartcles = 10\n");
+    let path = file.0.display().to_string();
+    let refusal = Args::try_parse_from(["slam-launch", "--config", path.as_str()])
+        .expect("options parse")
+        .run_config()
+        .expect_err("unknown key refused");
+    let shown = format!("{:#}", anyhow::Error::new(refusal));
+    assert!(
+        shown.starts_with(&format!("config file {path}: "))
+            && shown.contains("unknown field `partcles`"),
+        "{shown}"
+    );
+    // An option over a section the launcher hands on lands in the process's settings.
+    let file = ConfigFile::new("nested", "[slam]\nparticles = 20\nview_range = 9.5\n");
+    let config = file.config(&["--particles", "30"]);
+    assert_eq!(config.slam.filter.particles, 30);
+    assert_eq!(config.slam.filter.view_range, 9.5);
 }

@@ -12,8 +12,10 @@ use std::f64::consts::TAU;
 
 use crate::scip::{DataKind, MAX_CLUSTER, Ranging, SensorParams};
 
-/// What the user asks the sensor for.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// What the user asks the sensor for (the options of `lidar-hokuyo`, and the keys of
+/// slam-launch's `[hokuyo]` section).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ScanRequest {
     /// First bearing wanted, radians; `None` = the sensor's first step.
     pub min_angle: Option<f64>,

@@ -3,7 +3,6 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -67,10 +66,6 @@ struct Args {
     reorder_cap: usize,
 }
 
-/// How long the first odometry waits for a subscriber. feature-proc looks for the odometry
-/// topic once it has found the scans, which may be after the first odometry is due; without
-/// this wait the first readings would be lost, and which ones would depend on timing.
-const ODOMETRY_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
 /// Malformed lines reported one by one; the rest are only counted.
 const REPORTED_LINES: u64 = 100;
 
@@ -91,6 +86,10 @@ fn run() -> Result<()> {
 struct Streams {
     scans: Outlet<LaserScan>,
     odometry: Option<Outlet<Odometry>>,
+    /// The odometry's readers, waited for before the first reading goes out: they look for
+    /// the odometry once they have found the scans, which may be after the first reading is
+    /// due, and without the wait they would miss it (which ones, would depend on timing).
+    odometry_subscribers: usize,
     odometry_waited: bool,
     pacer: Pacer,
     /// Scans published.
@@ -120,11 +119,12 @@ impl Streams {
         let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
         say("ready");
 
-        let wait = (!pacer.is_lockstep()).then_some(SourceArgs::REAL_TIME_WAIT);
+        let wait = SourceArgs::subscriber_wait(pacer.is_lockstep());
         scans.wait_for_subscribers(args.source.subscribers, wait)?;
         Ok(Self {
             scans,
             odometry,
+            odometry_subscribers: args.source.odometry_subscribers,
             odometry_waited: false,
             pacer,
             published: 0,
@@ -143,11 +143,13 @@ impl Streams {
         };
         if !self.odometry_waited {
             self.odometry_waited = true;
-            if !outlet.wait_for_subscribers(1, Some(ODOMETRY_SUBSCRIBER_WAIT))? {
+            let wait = SourceArgs::subscriber_wait(self.pacer.is_lockstep());
+            if !outlet.wait_for_subscribers(self.odometry_subscribers, wait)? {
                 say_err(&format!(
-                    "lidar-replay: nobody subscribed to the odometry within {} s; \
+                    "lidar-replay: fewer than {} odometry subscribers within {} s; \
                      publishing it anyway",
-                    ODOMETRY_SUBSCRIBER_WAIT.as_secs()
+                    self.odometry_subscribers,
+                    SourceArgs::REAL_TIME_WAIT.as_secs()
                 ));
             }
         }

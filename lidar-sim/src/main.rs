@@ -7,19 +7,10 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
-use lidar_sim::{SensorConfig, Simulation, VehicleConfig, World};
-use serde::Deserialize;
+use lidar_sim::{SimSettings, Simulation, World};
 use stage_kit::odometry_covariance::OdometryCovariance;
 use stage_kit::pacing::Pacer;
 use stage_kit::{SourceArgs, say, say_err};
-
-/// What `--config` may set: the sensor and the vehicle (every field optional).
-#[derive(Debug, Default, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-struct SimFileConfig {
-    sensor: SensorConfig,
-    vehicle: VehicleConfig,
-}
 
 /// Simulated 2D lidar with ground truth, on the shared-memory scan topic of a domain.
 #[derive(Debug, Parser)]
@@ -57,7 +48,7 @@ fn main() -> ExitCode {
 fn run() -> Result<()> {
     let args = Args::parse();
     shutdown::install().context("cannot install the Ctrl-C handler")?;
-    let settings: SimFileConfig = stage_kit::settings::load(args.config.as_deref())?;
+    let settings: SimSettings = stage_kit::settings::load(args.config.as_deref())?;
     let world = World::resolve(&args.world).with_context(|| format!("world '{}'", args.world))?;
     let true_corners: Vec<TrueCorner> = world
         .true_corners()
@@ -101,11 +92,13 @@ fn run() -> Result<()> {
     let scans = Outlet::create(&domain, &node, topic::SCAN, delivery, 0)?;
     say("ready");
 
-    let wait = match delivery {
-        Delivery::Lossless => None,
-        Delivery::Latest => Some(SourceArgs::REAL_TIME_WAIT),
-    };
+    let wait = SourceArgs::subscriber_wait(delivery == Delivery::Lossless);
     scans.wait_for_subscribers(args.source.subscribers, wait)?;
+    // Its readers look for the odometry once they have found the scans: in lockstep none
+    // may miss the first readings.
+    if let Some(odometry) = &odometry {
+        odometry.wait_for_subscribers(args.source.odometry_subscribers, wait)?;
+    }
 
     let mut pacer = Pacer::new(args.rate);
     let mut published = 0u64;

@@ -2,13 +2,13 @@
 //! Hokuyo family, derived from the sensor's noise and the motion of an indoor robot rather
 //! than fitted to one recording.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
-use stage_kit::settings::{SettingError, check, check_positive};
+use stage_kit::settings::{SettingError, check, check_counts, check_positive};
 
 /// Every setting of [`crate::FrontEnd`]. Deserialises from a TOML/JSON table where any field
 /// may be left out (its default is used) and an unknown field is an error.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FrontEndConfig {
     /// Standard deviation of one range reading, metres. SICK LMS and Hokuyo UTM datasheets
@@ -147,15 +147,10 @@ impl FrontEndConfig {
             self.max_correspondence >= self.voxel_size,
             "must be at least voxel_size",
         )?;
-        let counts = [
-            ("min_points", self.min_points),
-            ("max_iterations", self.max_iterations),
-            ("max_keyframes", self.max_keyframes),
-        ];
-        for (name, value) in counts {
-            check(name, value as f64, value > 0, "must be at least 1")?;
-        }
-        Ok(())
+        check_counts(
+            &stage_kit::named_fields!(self; min_points, max_iterations, max_keyframes),
+            1..,
+        )
     }
 }
 
@@ -174,32 +169,18 @@ mod tests {
 
     #[test]
     fn bad_values_are_named() {
-        let config = FrontEndConfig {
-            range_sigma: -1.0,
-            ..FrontEndConfig::default()
+        let refused = |spoil: fn(&mut FrontEndConfig)| {
+            stage_kit::settings::refused_field(spoil, FrontEndConfig::validate)
         };
-        assert!(
-            config
-                .validate()
-                .unwrap_err()
-                .to_string()
-                .contains("range_sigma")
+        assert_eq!(refused(|c| c.range_sigma = -1.0), Some("range_sigma"));
+        assert_eq!(refused(|c| c.max_keyframes = 0), Some("max_keyframes"));
+        assert_eq!(
+            refused(|c| c.degeneracy_ratio = f64::NAN),
+            Some("degeneracy_ratio")
         );
-        let config = FrontEndConfig {
-            max_keyframes: 0,
-            ..FrontEndConfig::default()
-        };
-        assert!(
-            config
-                .validate()
-                .unwrap_err()
-                .to_string()
-                .contains("max_keyframes")
+        assert_eq!(
+            refused(|c| c.max_correspondence = 0.01),
+            Some("max_correspondence")
         );
-        let config = FrontEndConfig {
-            degeneracy_ratio: f64::NAN,
-            ..FrontEndConfig::default()
-        };
-        assert!(config.validate().is_err());
     }
 }

@@ -2,7 +2,7 @@
 //! robot or a UAV (steps up to ~0.2 m and ~0.2 rad between scans).
 
 use serde::{Deserialize, Serialize};
-use stage_kit::settings::{SettingError, check, check_non_negative, check_positive};
+use stage_kit::settings::{SettingError, check, check_counts, check_non_negative, check_positive};
 
 use crate::localize_config::LocalizeConfig;
 use crate::pose_graph::GraphNoise;
@@ -284,27 +284,13 @@ impl SlamConfig {
             l.is_finite(),
             "must be finite",
         )?;
-        let n = self.particles;
-        check(
-            "particles",
-            n as f64,
-            (1..=1_000_000).contains(&n),
-            "must be in 1..=1000000",
-        )?;
-        let k = self.motion_candidates;
-        check(
-            "motion_candidates",
-            k as f64,
-            (1..=64).contains(&k),
-            "must be in 1..=64",
-        )?;
-        let j = self.jcbb_max_nodes;
-        check("jcbb_max_nodes", j as f64, j >= 1, "must be >= 1")?;
-        let c = self.confirm_observations;
-        check("confirm_observations", f64::from(c), c >= 1, "must be >= 1")?;
+        check_counts(&stage_kit::named_fields!(self; particles), 1..=1_000_000)?;
+        check_counts(&stage_kit::named_fields!(self; motion_candidates), 1..=64)?;
+        check_counts(&stage_kit::named_fields!(self; jcbb_max_nodes), 1..)?;
+        let confirm = usize::try_from(self.confirm_observations).unwrap_or(usize::MAX);
+        check_counts(&[("confirm_observations", confirm)], 1..)?;
         // One corner alone fits a wrong offset too easily to close a loop on.
-        let r = self.revisit_min_corners;
-        check("revisit_min_corners", r as f64, r >= 2, "must be >= 2")?;
+        check_counts(&stage_kit::named_fields!(self; revisit_min_corners), 2..)?;
         let fov = self.view_fov;
         check(
             "view_fov",
@@ -319,6 +305,7 @@ impl SlamConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use stage_kit::settings::refused_field;
 
     #[test]
     fn defaults_are_valid() {
@@ -327,43 +314,51 @@ mod tests {
 
     #[test]
     fn toml_sets_fields_and_refuses_unknown_keys() {
-        let config: SlamConfig = toml::from_str("particles = 7\nview_range = 9.5").unwrap();
-        assert_eq!(config.particles, 7);
-        assert_eq!(config.view_range, 9.5);
-        assert_eq!(config.search_radius, SlamConfig::default().search_radius);
-        assert!(toml::from_str::<SlamConfig>("particle = 7").is_err());
+        let config: SlamConfig =
+            toml::from_str("particles = 7\n[localize]\nmax_particles = 500").unwrap();
+        let defaults = SlamConfig::default();
+        assert_eq!((config.particles, config.localize.max_particles), (7, 500));
+        assert_eq!(config.search_radius, defaults.search_radius);
+        assert_eq!(
+            config.localize.min_particles,
+            defaults.localize.min_particles
+        );
+        for (text, key) in [
+            ("particle = 7", "particle"),
+            ("[localize]\nmax_partcles = 5", "max_partcles"),
+        ] {
+            let refusal = toml::from_str::<SlamConfig>(text).unwrap_err().to_string();
+            assert!(
+                refusal.contains(&format!("unknown field `{key}`")),
+                "{refusal}"
+            );
+        }
     }
 
     #[test]
     fn invalid_values_name_their_field() {
-        let config = SlamConfig {
-            association_probability: 1.0,
-            ..SlamConfig::default()
-        };
+        let refused = |spoil: fn(&mut SlamConfig)| refused_field(spoil, SlamConfig::validate);
+        assert_eq!(refused(|_| {}), None);
         assert_eq!(
-            config.validate().map_err(|e| e.field),
-            Err("association_probability")
+            refused(|c| c.association_probability = 1.0),
+            Some("association_probability")
         );
-        let config = SlamConfig {
-            particles: 0,
-            ..SlamConfig::default()
-        };
-        assert_eq!(config.validate().map_err(|e| e.field), Err("particles"));
-        let config = SlamConfig {
-            revisit_min_corners: 1,
-            ..SlamConfig::default()
-        };
+        assert_eq!(refused(|c| c.particles = 0), Some("particles"));
         assert_eq!(
-            config.validate().map_err(|e| e.field),
-            Err("revisit_min_corners")
+            refused(|c| c.motion_candidates = 65),
+            Some("motion_candidates")
         );
-        let config = SlamConfig {
-            update_min_distance: -0.5,
-            ..SlamConfig::default()
-        };
         assert_eq!(
-            config.validate().map_err(|e| e.field),
-            Err("update_min_distance")
+            refused(|c| c.confirm_observations = 0),
+            Some("confirm_observations")
+        );
+        assert_eq!(
+            refused(|c| c.revisit_min_corners = 1),
+            Some("revisit_min_corners")
+        );
+        assert_eq!(
+            refused(|c| c.update_min_distance = -0.5),
+            Some("update_min_distance")
         );
     }
 }

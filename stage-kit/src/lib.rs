@@ -10,6 +10,8 @@
 //! - [`settings`]: a TOML settings file read into a library's config struct, with one error
 //!   type naming the file; [`SettingError`] and [`check`] for the range checks of those
 //!   structs.
+//! - [`odometry_buffer`]: the odometry at a scan's stamp, interpolated between the readings
+//!   around it, with a typed answer while it may still change.
 //! - [`odometry_covariance`]: the covariance a source without one sends with its odometry,
 //!   grown along the motion.
 //! - [`SourceArgs`]: the arguments every scan source takes (domain, subscribers).
@@ -31,6 +33,7 @@
 
 mod console;
 mod exit;
+pub mod odometry_buffer;
 pub mod odometry_covariance;
 pub mod pacing;
 pub mod settings;

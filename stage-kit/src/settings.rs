@@ -5,6 +5,8 @@
 //! process reads one from a TOML file with [`load`] and checks it with the library's
 //! `validate`, built from [`check`].
 
+use std::borrow::Cow;
+use std::ops::{Bound, RangeBounds};
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
@@ -60,7 +62,7 @@ pub struct SettingError {
     /// Its value (counts converted to `f64`).
     pub value: f64,
     /// What it should be.
-    pub reason: &'static str,
+    pub reason: Cow<'static, str>,
 }
 
 /// `Err` naming `field`, `value` and `reason` unless `ok`.
@@ -76,7 +78,7 @@ pub fn check(
         Err(SettingError {
             field,
             value,
-            reason,
+            reason: reason.into(),
         })
     }
 }
@@ -105,8 +107,43 @@ pub fn check_non_negative(fields: &[(&'static str, f64)]) -> Result<(), SettingE
     })
 }
 
-/// The named `f64` fields of a config as `[(name, value), ...]`, for [`check_positive`] and
-/// [`check_non_negative`]: each field is written once and its name is its spelling, with a
+/// Checks that every count `(field, value)` lies in `range` (`lo..=hi`, `lo..` or `..=hi`);
+/// the error says which range.
+pub fn check_counts(
+    fields: &[(&'static str, usize)],
+    range: impl RangeBounds<usize>,
+) -> Result<(), SettingError> {
+    fields.iter().try_for_each(|&(field, value)| {
+        if range.contains(&value) {
+            return Ok(());
+        }
+        let reason = match (range.start_bound(), range.end_bound()) {
+            (Bound::Included(lo), Bound::Included(hi)) => format!("must be in {lo}..={hi}"),
+            (Bound::Included(lo), _) => format!("must be >= {lo}"),
+            (_, Bound::Included(hi)) => format!("must be <= {hi}"),
+            _ => "is out of range".to_owned(),
+        };
+        Err(SettingError {
+            field,
+            value: value as f64,
+            reason: reason.into(),
+        })
+    })
+}
+
+/// The setting a configuration is refused for once `spoil` has changed its defaults (`None`
+/// if it passes `validate`): what the tests of a config's range checks ask.
+pub fn refused_field<T: Default>(
+    spoil: impl FnOnce(&mut T),
+    validate: impl Fn(&T) -> Result<(), SettingError>,
+) -> Option<&'static str> {
+    let mut config = T::default();
+    spoil(&mut config);
+    validate(&config).err().map(|e| e.field)
+}
+
+/// The named fields of a config as `[(name, value), ...]`, for [`check_positive`],
+/// [`check_non_negative`] (`f64` fields) and [`check_counts`] (`usize` fields): each field is written once and its name is its spelling, with a
 /// prefix for a nested section's (`named_fields!(self, "localize."; kld_z)`).
 #[macro_export]
 macro_rules! named_fields {
@@ -166,6 +203,35 @@ mod tests {
     }
 
     #[test]
+    fn counts_out_of_range_name_the_range() {
+        let counts = [("beams", 0), ("keyframes", 50)];
+        assert!(check_counts(&counts[1..], 1..=64).is_ok());
+        let refused = |range: (Bound<usize>, Bound<usize>)| {
+            check_counts(&counts, range).unwrap_err().to_string()
+        };
+        use Bound::{Included, Unbounded};
+        assert_eq!(
+            refused((Included(1), Included(64))),
+            "beams = 0: must be in 1..=64"
+        );
+        assert_eq!(refused((Included(1), Unbounded)), "beams = 0: must be >= 1");
+        assert_eq!(
+            check_counts(&counts, ..=10).unwrap_err().to_string(),
+            "keyframes = 50: must be <= 10"
+        );
+    }
+
+    #[test]
+    fn a_spoilt_default_is_refused_for_its_field() {
+        let validate = |s: &Sample| check("gain", s.gain, s.gain >= 0.0, "must be >= 0");
+        assert_eq!(refused_field(|_: &mut Sample| {}, validate), None);
+        assert_eq!(
+            refused_field(|s: &mut Sample| s.gain = -1.0, validate),
+            Some("gain")
+        );
+    }
+
+    #[test]
     fn named_fields_are_checked_under_their_own_names() {
         struct Gains {
             gain: f64,
@@ -184,7 +250,7 @@ mod tests {
             Err(SettingError {
                 field: "section.floor",
                 value: -1.0,
-                reason: "must be finite and >= 0",
+                reason: "must be finite and >= 0".into(),
             })
         );
     }
