@@ -15,6 +15,16 @@ fn decode<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> T {
     value
 }
 
+/// Checks that `message` survives encoding: its record decodes and rebuilds it unchanged.
+fn assert_rebuilds<M, R>(message: &M, from_record: fn(&R) -> Result<Box<M>, CapacityError>)
+where
+    M: serde::Serialize + PartialEq + std::fmt::Debug,
+    R: serde::de::DeserializeOwned,
+{
+    let record: R = decode(&encode(message));
+    assert_eq!(*from_record(&record).unwrap(), *message);
+}
+
 fn header(seq: u64) -> Header {
     let mut header = Header::new(seq, 1_234_567_890_123_456_789, "laser");
     header.sent_ns = 42;
@@ -32,6 +42,23 @@ fn corner(i: usize) -> Corner {
         heading: 0.1 * i as f64,
         angle: 1.5,
         covariance,
+    }
+}
+
+fn map_corner(i: usize) -> MapCorner {
+    MapCorner {
+        corner: corner(i),
+        observations: i as u32,
+        reserved: 0,
+    }
+}
+
+fn true_corner(i: usize) -> TrueCorner {
+    TrueCorner {
+        x: i as f64,
+        y: 2.0 * i as f64,
+        heading: 0.01 * i as f64,
+        angle: 1.57,
     }
 }
 
@@ -136,24 +163,16 @@ fn features_round_trip() {
         .collect();
     let corners: Vec<Corner> = (0..4).map(corner).collect();
     features.set(&lines, &corners).unwrap();
-    let record: FeaturesRecord = decode(&encode(&*features));
-    assert_eq!(*Features::from_record(&record).unwrap(), *features);
+    assert_rebuilds(&*features, Features::from_record);
 }
 
 #[test]
 fn map_snapshot_round_trips_at_full_capacity() {
     let mut map = MapSnapshot::boxed_zeroed();
     map.header = header(1199);
-    let corners: Vec<MapCorner> = (0..MAX_MAP_CORNERS)
-        .map(|i| MapCorner {
-            corner: corner(i),
-            observations: i as u32,
-            reserved: 0,
-        })
-        .collect();
+    let corners: Vec<MapCorner> = (0..MAX_MAP_CORNERS).map(map_corner).collect();
     map.set(&corners).unwrap();
-    let record: MapSnapshotRecord = decode(&encode(&*map));
-    assert_eq!(*MapSnapshot::from_record(&record).unwrap(), *map);
+    assert_rebuilds(&*map, MapSnapshot::from_record);
 }
 
 #[test]
@@ -169,8 +188,7 @@ fn path_chunk_round_trips_at_full_capacity_and_refuses_more() {
         })
         .collect();
     chunk.set(&poses).unwrap();
-    let record: PathChunkRecord = decode(&encode(&*chunk));
-    assert_eq!(*PathChunk::from_record(&record).unwrap(), *chunk);
+    assert_rebuilds(&*chunk, PathChunk::from_record);
     let mut more = poses.clone();
     more.push(poses[0]);
     assert!(chunk.set(&more).is_err());
@@ -180,17 +198,9 @@ fn path_chunk_round_trips_at_full_capacity_and_refuses_more() {
 fn world_corners_round_trip() {
     let mut world = WorldCorners::boxed_zeroed();
     world.header = header(0);
-    let corners: Vec<TrueCorner> = (0..100)
-        .map(|i| TrueCorner {
-            x: i as f64,
-            y: 2.0 * i as f64,
-            heading: 0.01 * i as f64,
-            angle: 1.57,
-        })
-        .collect();
+    let corners: Vec<TrueCorner> = (0..100).map(true_corner).collect();
     world.set(&corners).unwrap();
-    let record: WorldCornersRecord = decode(&encode(&*world));
-    assert_eq!(*WorldCorners::from_record(&record).unwrap(), *world);
+    assert_rebuilds(&*world, WorldCorners::from_record);
 }
 
 #[test]

@@ -20,6 +20,29 @@ fn unique_domain(tag: &str) -> Domain {
     Domain::new(&format!("t-{tag}-{}-{nanos}", std::process::id())).unwrap()
 }
 
+/// A domain of its own for one test, and the guard that cleans it up (declare it before the
+/// nodes, so it drops after them).
+fn scratch_domain(tag: &str) -> (Domain, Cleanup) {
+    let domain = unique_domain(tag);
+    let cleanup = Cleanup(domain.clone());
+    (domain, cleanup)
+}
+
+/// A node that publishes scans and subscribes to them itself.
+fn scans_to_self(
+    domain: &Domain,
+    delivery: Delivery,
+) -> (
+    iceoryx2::node::Node<iceoryx2::service::ipc::Service>,
+    Outlet<LaserScan>,
+    Inlet<LaserScan>,
+) {
+    let node = domain.node("both").unwrap();
+    let outlet = Outlet::create(domain, &node, topic::SCAN, delivery, 0).unwrap();
+    let inlet = Inlet::open(&node, topic::SCAN).unwrap();
+    (node, outlet, inlet)
+}
+
 /// Publishes `count` three-beam scans numbered from 0, then the end of stream.
 fn publish_scans(outlet: &Outlet<LaserScan>, count: u64) {
     for seq in 0..count {
@@ -52,8 +75,7 @@ fn drain_until_end<T: Message>(inlet: &Inlet<T>) -> Vec<u64> {
 
 #[test]
 fn lossless_stream_delivers_every_message_in_order() {
-    let domain = unique_domain("lossless");
-    let _cleanup = Cleanup(domain.clone());
+    let (domain, _cleanup) = scratch_domain("lossless");
     let publisher_domain = domain.clone();
     let sender = std::thread::spawn(move || {
         let node = publisher_domain.node("sender").unwrap();
@@ -81,11 +103,8 @@ fn a_subscriber_that_waits_before_receiving_loses_nothing() {
     // one when the second subscriber opens it: the subscriber must not be made before the
     // next publisher, or that publisher cannot block on it and drops what does not fit its
     // one-message queue while it does not receive.
-    let domain = unique_domain("late");
-    let _cleanup = Cleanup(domain.clone());
-    let node = domain.node("main").unwrap();
-    let first = Outlet::create(&domain, &node, topic::SCAN, Delivery::Lossless, 0).unwrap();
-    let holder = Inlet::open(&node, topic::SCAN).unwrap();
+    let (domain, _cleanup) = scratch_domain("late");
+    let (node, first, holder) = scans_to_self(&domain, Delivery::Lossless);
     drop(first);
 
     let receiver_domain = domain.clone();
@@ -110,11 +129,8 @@ fn a_subscriber_that_waits_before_receiving_loses_nothing() {
 
 #[test]
 fn latest_delivery_drops_the_oldest_and_never_blocks() {
-    let domain = unique_domain("latest");
-    let _cleanup = Cleanup(domain.clone());
-    let node = domain.node("both").unwrap();
-    let outlet = Outlet::create(&domain, &node, topic::SCAN, Delivery::Latest, 0).unwrap();
-    let inlet = Inlet::open(&node, topic::SCAN).unwrap();
+    let (domain, _cleanup) = scratch_domain("latest");
+    let (_node, outlet, inlet) = scans_to_self(&domain, Delivery::Latest);
     assert_eq!(inlet.delivery(), Delivery::Latest);
     let total = ipc_types::LATEST_QUEUE as u64 * 3;
     for seq in 0..total {
@@ -155,8 +171,7 @@ fn two_domains_never_cross() {
 
 #[test]
 fn history_reaches_a_late_subscriber() {
-    let domain = unique_domain("history");
-    let _cleanup = Cleanup(domain.clone());
+    let (domain, _cleanup) = scratch_domain("history");
     let node = domain.node("n").unwrap();
     let outlet =
         Outlet::create(&domain, &node, topic::WORLD_CORNERS, Delivery::Lossless, 1).unwrap();
@@ -179,8 +194,7 @@ fn history_reaches_a_late_subscriber() {
 
 #[test]
 fn each_end_waits_for_the_other_and_a_timeout_is_kept() {
-    let domain = unique_domain("discovery");
-    let _cleanup = Cleanup(domain.clone());
+    let (domain, _cleanup) = scratch_domain("discovery");
     let node = domain.node("main").unwrap();
     // The subscriber comes first and waits for the topic to be created.
     let subscriber_domain = domain.clone();

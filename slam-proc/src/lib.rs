@@ -50,7 +50,7 @@ use filter::observation;
 use path::pose_graph;
 
 pub use config::SlamConfig;
-pub use filter::estimate::{Estimate, StageTiming};
+pub use filter::estimate::Estimate;
 pub use filter::fast_slam::{FastSlam, FilterStats};
 pub use filter::memory;
 pub use filter::observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};

@@ -270,13 +270,7 @@ fn fill_estimate(pose: &mut PoseEstimate, estimate: &slam_proc::Estimate) {
     pose.effective_particles = estimate.effective_particles;
     pose.particle_count = u32::try_from(estimate.particle_count).unwrap_or(u32::MAX);
     pose.map_corners = u32::try_from(estimate.map_size).unwrap_or(u32::MAX);
-    pose.timing = StageTiming {
-        motion_ns: estimate.timing.motion_ns,
-        predict_ns: estimate.timing.predict_ns,
-        update_ns: estimate.timing.update_ns,
-        resample_ns: estimate.timing.resample_ns,
-        total_ns: estimate.timing.total_ns,
-    };
+    pose.timing = estimate.timing;
 }
 
 /// The saved map in `dir`, refused with the file and the reason when it cannot be used.

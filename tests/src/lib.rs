@@ -80,6 +80,34 @@ pub fn launch_replay(domain: &str, out: &Path, log: &Path, args: &[&str]) -> Out
     launch(domain, out, &[&["--replay", log], args].concat())
 }
 
+/// A finished, successful run of `slam-launch`: its domain, its output directory and what
+/// it printed.
+pub struct Run {
+    pub domain: String,
+    pub out: PathBuf,
+    pub output: Output,
+}
+
+/// Runs `slam-launch` with `args` as [`launch`] does, in a domain and a scratch directory of
+/// its own both named by `tag`, and panics unless it succeeded.
+pub fn launched(tag: &str, args: &[&str]) -> Run {
+    let domain = domain(tag);
+    let out = scratch(tag);
+    let output = launch(&domain, &out, args);
+    assert_success(&output);
+    Run {
+        domain,
+        out,
+        output,
+    }
+}
+
+/// [`launched`] on the recorded log `log` (`--replay LOG`).
+pub fn replayed(tag: &str, log: &Path, args: &[&str]) -> Run {
+    let log = log.to_str().expect("a UTF-8 path");
+    launched(tag, &[&["--replay", log], args].concat())
+}
+
 /// Runs `slam-launch` on the (emulated) Hokuyo at `addr` for its first `frames` scans (the
 /// driver's `[hokuyo] frames`, from a config file written into `out`) with `args`, as
 /// [`launch`].

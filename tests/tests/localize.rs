@@ -9,19 +9,15 @@ use tests::*;
 
 /// Maps the whole office loop (seed 1): the map the office tests localize on.
 fn office_map(tag: &str) -> PathBuf {
-    let out = scratch(&format!("office-map-{tag}"));
-    let output = launch(
-        &domain(&format!("map-{tag}")),
-        &out,
+    launched(
+        &format!("office-map-{tag}"),
         &["--world", "office", "--seed", "1", "--rate", "0"],
-    );
-    assert_success(&output);
-    out
+    )
+    .out
 }
 
 /// Localizes the office loop of `seed` on `map`, from `initial_pose` or searching.
 fn localize_office(map: &Path, seed: u64, initial_pose: Option<&str>, tag: &str) -> PathBuf {
-    let out = scratch(&format!("office-localize-{tag}"));
     let seed = seed.to_string();
     let mut args = vec![
         "--world",
@@ -39,9 +35,7 @@ fn localize_office(map: &Path, seed: u64, initial_pose: Option<&str>, tag: &str)
         pose_arg = format!("--initial-pose={pose}");
         args.push(&pose_arg);
     }
-    let output = launch(&domain(&format!("loc-{tag}")), &out, &args);
-    assert_success(&output);
-    out
+    launched(&format!("office-localize-{tag}"), &args).out
 }
 
 /// The truth of a localization run, moved into the map's frame (the mapping run's first
@@ -126,18 +120,14 @@ fn office_convergence_over_seeds() {
 #[test]
 fn mapping_on_a_saved_map_extends_its_landmarks() {
     // The first 1200 scans, then the whole loop on top of them.
-    let first = scratch("office-first-part");
-    let output = launch(
-        &domain("map-first"),
-        &first,
+    let first = launched(
+        "office-first-part",
         &["--world", "office", "--frames", "1200", "--rate", "0"],
-    );
-    assert_success(&output);
+    )
+    .out;
     let saved = read_map_corners(&first).len();
-    let out = scratch("office-on-top");
-    let output = launch(
-        &domain("map-on-top"),
-        &out,
+    let out = launched(
+        "office-on-top",
         &[
             "--world",
             "office",
@@ -148,8 +138,8 @@ fn mapping_on_a_saved_map_extends_its_landmarks() {
             "--map",
             first.to_str().unwrap(),
         ],
-    );
-    assert_success(&output);
+    )
+    .out;
     let corners = read_map_corners(&out);
     assert!(corners.len() > saved + 40, "{saved} -> {}", corners.len());
     let duplicates = duplicate_corners(&corners, 0.5, 0.5);
@@ -171,13 +161,11 @@ fn refused(output: &Output, names: &str) {
 
 #[test]
 fn a_damaged_map_is_refused_before_anything_starts() {
-    let map = scratch("small-map");
-    let output = launch(
-        &domain("small-map"),
-        &map,
+    let map = launched(
+        "small-map",
         &["--world", "hall", "--frames", "100", "--rate", "0"],
-    );
-    assert_success(&output);
+    )
+    .out;
     let try_map = |dir: &Path, tag: &str| {
         launch(
             &domain(tag),
@@ -244,19 +232,10 @@ fn a_damaged_map_is_refused_before_anything_starts() {
 #[test]
 fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
     let log = data_dir().join("carmen/aces.clf");
-    let map = scratch("aces-map");
-    let output = launch_replay(
-        &domain("aces-map"),
-        &map,
-        &log,
-        &["--rate", "0", "--seed", "1"],
-    );
-    assert_success(&output);
+    let map = replayed("aces-map", &log, &["--rate", "0", "--seed", "1"]).out;
     for start in ["1000", "3000", "5000"] {
-        let out = scratch(&format!("aces-from-{start}"));
-        let output = launch_replay(
-            &domain(&format!("aces-{start}")),
-            &out,
+        let out = replayed(
+            &format!("aces-from-{start}"),
             &log,
             &[
                 "--rate",
@@ -267,8 +246,8 @@ fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
                 "--replay-start",
                 start,
             ],
-        );
-        assert_success(&output);
+        )
+        .out;
         let converged = metrics(&out)
             .converged_at_scan
             .expect("metrics.json has converged_at_scan");

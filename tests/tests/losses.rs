@@ -28,13 +28,7 @@ fn losses_block(output: &Output) -> Vec<String> {
 
 #[test]
 fn a_run_that_lost_nothing_says_so() {
-    let out = scratch("losses-none");
-    let output = launch(
-        &domain("losses-none"),
-        &out,
-        &["--world", "office", "--frames", "30"],
-    );
-    assert_success(&output);
+    let output = launched("losses-none", &["--world", "office", "--frames", "30"]).output;
     assert_eq!(
         losses_block(&output),
         ["slam-launch: nothing lost (every stage counted no skipped or lost data)"]

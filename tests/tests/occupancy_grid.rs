@@ -189,14 +189,11 @@ fn seen_wall_points(world: &World, truth: &[TumPose]) -> Vec<[f64; 2]> {
 
 #[test]
 fn the_office_grid_matches_the_world() {
-    let domain = domain("grid-office");
-    let out = scratch("grid-office");
-    let output = launch(
-        &domain,
-        &out,
+    let out = launched(
+        "grid-office",
         &["--world", "office", "--rate", "0", "--seed", "1"],
-    );
-    assert_success(&output);
+    )
+    .out;
 
     let yaml = std::fs::read_to_string(out.join("map.yaml")).expect("map.yaml");
     let map = parse_yaml(&yaml);

@@ -6,26 +6,22 @@ use tests::*;
 #[test]
 fn seed_hall_replay_maps_the_hall_without_duplicate_corners() {
     let log = data_dir().join("seed-hall/scans.csv");
-    let domain = domain("seed-hall");
-    let out = scratch("seed-hall");
-    let output = launch_replay(
-        &domain,
-        &out,
+    let run = replayed(
+        "seed-hall",
         &log,
         &["--format", "seed-csv", "--particles", "50"],
     );
-    assert_success(&output);
-    let metrics = metrics(&out);
+    let metrics = metrics(&run.out);
     assert_eq!(metrics.frames_published, 400);
     assert_eq!(metrics.frames_processed, 400);
-    let corners = read_map_corners(&out);
+    let corners = read_map_corners(&run.out);
     assert!(corners.len() >= 20, "{} map corners", corners.len());
     let duplicates = duplicate_corners(&corners, 0.5, 0.5);
     assert!(duplicates.is_empty(), "duplicated corners: {duplicates:?}");
     // About 50 m through the hall, about 0.11 m a scan.
     let path = metrics.path_length_m;
     assert!((30.0..70.0).contains(&path), "path {path} m");
-    assert!(shm_leftovers(&domain).is_empty());
+    assert!(shm_leftovers(&run.domain).is_empty());
 }
 
 #[test]
@@ -41,22 +37,18 @@ fn emulated_hokuyo_gives_the_same_map_as_the_replayed_log() {
     assert_success(&output);
     assert_eq!(metrics(&live_out).frames_processed, 400);
 
-    let replay_out = scratch("hokuyo-replay");
-    let replay_domain = domain("hokuyo-replay");
-    let output = launch_replay(
-        &replay_domain,
-        &replay_out,
+    let replay = replayed(
+        "hokuyo-replay",
         &log,
         &["--format", "seed-csv", "--particles", "50"],
     );
-    assert_success(&output);
 
     // Same scans, same geometry, same seed: the same map, up to the stamps' effect on the
     // motion prior (the live sensor runs at 40 Hz, the log is stamped at a nominal 10 Hz),
     // which moves the scans the corners update the particles at (every 0.5 m) and so adds
     // or drops a borderline corner or two.
     let live = read_map_corners(&live_out);
-    let replayed = read_map_corners(&replay_out);
+    let replayed = read_map_corners(&replay.out);
     let matched = live
         .iter()
         .filter(|a| {
@@ -72,5 +64,5 @@ fn emulated_hokuyo_gives_the_same_map_as_the_replayed_log() {
         replayed.len()
     );
     assert!(shm_leftovers(&live_domain).is_empty());
-    assert!(shm_leftovers(&replay_domain).is_empty());
+    assert!(shm_leftovers(&replay.domain).is_empty());
 }

@@ -26,12 +26,13 @@ fn mean(stats: Option<slam_eval::ErrorStats>) -> f64 {
 fn mit_csail_is_scored_against_the_relations_beside_it() {
     let log = data_dir().join("carmen/mit-csail.clf");
     let relations = log.with_extension("relations");
-    let domain = domain("mit-csail-rpe");
-    let out = scratch("mit-csail-rpe");
     // No --relations: slam-launch finds mit-csail.relations beside the log.
-    let output = launch_replay(
-        &domain,
-        &out,
+    let Run {
+        domain,
+        out,
+        output,
+    } = replayed(
+        "mit-csail-rpe",
         &log,
         &[
             "--format",
@@ -44,7 +45,6 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
             "100",
         ],
     );
-    assert_success(&output);
     let metrics = metrics(&out);
     assert_eq!(metrics.frames_processed, 400);
 
@@ -86,10 +86,11 @@ fn aces_closes_its_overlapping_loops_together() {
     // The best particle closes several loops whose stretches overlap; the final path meets
     // them all at once. Lockstep, so the figure is the same on a busy machine.
     let log = data_dir().join("carmen/aces.clf");
-    let domain = domain("aces-rpe");
-    let out = scratch("aces-rpe");
-    let output = launch_replay(&domain, &out, &log, &["--seed", "1", "--particles", "100"]);
-    assert_success(&output);
+    let Run {
+        domain,
+        out,
+        output,
+    } = replayed("aces-rpe", &log, &["--seed", "1", "--particles", "100"]);
     // slam-proc's summary block, on the console's stderr.
     let stderr = String::from_utf8_lossy(&output.stderr);
     let closed = stderr

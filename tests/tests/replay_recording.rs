@@ -201,14 +201,12 @@ fn check_recording_of(out: &Path, odometry: bool) {
 #[test]
 fn recordings_of_a_real_log_and_a_live_hokuyo_read_back_with_the_runs_counts() {
     let log = data_dir().join("seed-hall/scans.csv");
-    let replay_out = scratch("record-seed-hall");
-    let output = launch_replay(
-        &domain("record-seed-hall"),
-        &replay_out,
+    let replay_out = replayed(
+        "record-seed-hall",
         &log,
         &["--format", "seed-csv", "--particles", "30", "--record"],
-    );
-    assert_success(&output);
+    )
+    .out;
     assert_eq!(metrics(&replay_out).frames_published, 400);
     check_recording_of(&replay_out, false);
 
@@ -227,15 +225,8 @@ fn recordings_of_a_real_log_and_a_live_hokuyo_read_back_with_the_runs_counts() {
     check_recording_of(&live_out, false);
 
     // The live run replays from its recording offline, with the same results.
-    let offline = scratch("record-hokuyo-offline");
     let recording = live_out.join("run.mcap");
-    let output = launch_replay(
-        &domain("record-hokuyo-offline"),
-        &offline,
-        &recording,
-        &["--particles", "30"],
-    );
-    assert_success(&output);
+    let offline = replayed("record-hokuyo-offline", &recording, &["--particles", "30"]).out;
     assert_same_results(&live_out, &offline);
     for dir in [replay_out, live_out, offline] {
         let _ = std::fs::remove_dir_all(dir);

@@ -2,6 +2,7 @@
 
 mod bounded_array;
 mod corner;
+mod corner_list;
 mod features;
 mod ground_truth;
 mod laser_scan;
@@ -16,6 +17,7 @@ mod world_corners;
 
 pub use bounded_array::BoundedArray;
 pub use corner::{Corner, MapCorner, TrueCorner};
+pub use corner_list::CornerListRecord;
 pub use features::{Features, FeaturesRecord, OdometryAtScan};
 pub use ground_truth::GroundTruthPose;
 pub use laser_scan::{LaserScan, LaserScanRecord};

@@ -1,5 +1,7 @@
 //! The SLAM estimate for one scan.
 
+use std::time::Instant;
+
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
 use zerocopy::FromZeros;
@@ -15,11 +17,33 @@ use crate::header::Header;
 #[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
 #[type_name("slam::StageTiming::v1")]
 pub struct StageTiming {
+    /// Scan-to-scan motion estimate.
     pub motion_ns: u64,
+    /// Sampling every particle's new pose.
     pub predict_ns: u64,
+    /// Association, map updates and weights of every particle.
     pub update_ns: u64,
+    /// Normalisation, statistics and (when needed) resampling.
     pub resample_ns: u64,
+    /// The whole update.
     pub total_ns: u64,
+}
+
+impl StageTiming {
+    /// The stages' durations from the instants that bound them: the start, the ends of the
+    /// motion estimate, the prediction and the update, and the end.
+    pub fn between(instants: [Instant; 5]) -> Self {
+        let [start, motion_done, predict_done, update_done, end] = instants;
+        let ns =
+            |from: Instant, to: Instant| u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX);
+        Self {
+            motion_ns: ns(start, motion_done),
+            predict_ns: ns(motion_done, predict_done),
+            update_ns: ns(predict_done, update_done),
+            resample_ns: ns(update_done, end),
+            total_ns: ns(start, end),
+        }
+    }
 }
 
 /// The pose estimate after one scan, in the map frame (the first pose is the origin).

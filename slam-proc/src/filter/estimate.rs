@@ -1,43 +1,10 @@
 //! What the filter reports after each scan.
 
-use std::time::Instant;
-
 use nalgebra::{Matrix3, Vector3};
 
+use ipc_types::StageTiming;
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;
-
-/// Time spent in each stage of one update, nanoseconds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct StageTiming {
-    /// Scan-to-scan motion estimate.
-    pub motion_ns: u64,
-    /// Sampling every particle's new pose.
-    pub predict_ns: u64,
-    /// Association, map updates and weights of every particle.
-    pub update_ns: u64,
-    /// Normalisation, statistics and (when needed) resampling.
-    pub resample_ns: u64,
-    /// The whole call.
-    pub total_ns: u64,
-}
-
-impl StageTiming {
-    /// The stages' durations from the instants that bound them: the start, the ends of the
-    /// motion estimate, the prediction and the update, and the end.
-    pub(crate) fn between(instants: [Instant; 5]) -> Self {
-        let [start, motion_done, predict_done, update_done, end] = instants;
-        let ns =
-            |from: Instant, to: Instant| u64::try_from((to - from).as_nanos()).unwrap_or(u64::MAX);
-        Self {
-            motion_ns: ns(start, motion_done),
-            predict_ns: ns(motion_done, predict_done),
-            update_ns: ns(predict_done, update_done),
-            resample_ns: ns(update_done, end),
-            total_ns: ns(start, end),
-        }
-    }
-}
 
 /// The pose estimate after one scan, in the map frame (the first pose is the origin).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -2,11 +2,12 @@
 
 use std::time::Instant;
 
+use ipc_types::StageTiming;
 use rand::Rng;
 use rayon::prelude::*;
 
 use crate::config::SlamConfig;
-use crate::filter::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
+use crate::filter::estimate::{Estimate, weighted_mean_and_covariance};
 use crate::math::chi2::Gates;
 use crate::update::jcbb::PoseUncertainty;
 use slam_geom::MapCorner;

@@ -7,11 +7,12 @@
 use std::f64::consts::PI;
 use std::time::Instant;
 
+use ipc_types::StageTiming;
 use nalgebra::Matrix3;
 use rand::Rng;
 use rayon::prelude::*;
 
-use crate::filter::estimate::{Estimate, StageTiming, weighted_mean_and_covariance};
+use crate::filter::estimate::{Estimate, weighted_mean_and_covariance};
 use crate::filter::observation::MeasuredMotion;
 use crate::filter::resample::{effective_sample_size, heaviest, normalise};
 use crate::filter::rng::Streams;
