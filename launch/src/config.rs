@@ -203,12 +203,16 @@ const STALL_RANGE_S: std::ops::RangeInclusive<f64> = 0.5..=86_400.0;
 pub struct GridSection {
     /// Edge of a cell, metres (`map-sink --resolution`).
     pub resolution: f64,
+    /// Passes refining the final path against its own grid (`map-sink --refine-passes`);
+    /// 0 keeps the filter's path.
+    pub refine_passes: usize,
 }
 
 impl Default for GridSection {
     fn default() -> Self {
         Self {
             resolution: map_sink::GridConfig::default().resolution_m,
+            refine_passes: map_sink::PathRefinementConfig::default().passes,
         }
     }
 }

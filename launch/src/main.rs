@@ -303,6 +303,7 @@ fn settings_args(
             ]);
             args.push("--status".into());
             args.push(format!("--resolution={}", config.grid.resolution));
+            args.push(format!("--refine-passes={}", config.grid.refine_passes));
             args
         }
         Role::Filter => {

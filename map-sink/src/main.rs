@@ -8,7 +8,9 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
-use map_sink::{GridConfig, PathAssembly, Recorder, RecorderOptions, StampedPose};
+use map_sink::{
+    GridConfig, PathAssembly, PathRefinementConfig, Recorder, RecorderOptions, StampedPose,
+};
 use slam_eval::{FrameCounts, METRICS_FILE, RelationsFile};
 use stage_kit::{say, say_err};
 
@@ -38,6 +40,10 @@ struct Args {
     /// Edge of the occupancy grid's cells, metres (0.005 to 5).
     #[arg(long, value_name = "METRES", default_value_t = GridConfig::default().resolution_m)]
     resolution: f64,
+    /// Passes refining the final path against the grid its scans trace before it is
+    /// written; 0 keeps the filter's path as it is.
+    #[arg(long, value_name = "N", default_value_t = PathRefinementConfig::default().passes)]
+    refine_passes: usize,
 }
 
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
@@ -97,6 +103,10 @@ fn run() -> Result<()> {
             grid: GridConfig {
                 resolution_m: args.resolution,
                 ..GridConfig::default()
+            },
+            refinement: PathRefinementConfig {
+                passes: args.refine_passes,
+                ..PathRefinementConfig::default()
             },
             ..RecorderOptions::default()
         },
