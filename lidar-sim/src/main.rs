@@ -11,7 +11,7 @@ use lidar_sim::{SensorConfig, Simulation, VehicleConfig, World};
 use serde::Deserialize;
 use stage_kit::odometry_covariance::OdometryCovariance;
 use stage_kit::pacing::Pacer;
-use stage_kit::{SourceArgs, say, say_err};
+use stage_kit::{SourceArgs, say, say_err, shutdown};
 
 /// What `--config` may set: the sensor and the vehicle (every field optional).
 #[derive(Debug, Default, Deserialize)]
@@ -51,12 +51,10 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    stage_kit::main("lidar-sim", run)
+    stage_kit::run_stage("lidar-sim", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     let settings: SimFileConfig = stage_kit::settings::load(args.config.as_deref())?;
     let world = World::resolve(&args.world).with_context(|| format!("world '{}'", args.world))?;
     let true_corners: Vec<TrueCorner> = world
