@@ -47,12 +47,10 @@ const IDLE_WAIT: Duration = Duration::from_millis(100);
 const ODOMETRY_PROBE: Duration = Duration::from_secs(1);
 
 fn main() -> ExitCode {
-    stage_kit::main("feature-proc", run)
+    stage_kit::run_stage("feature-proc", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     let config: FeatureConfig = stage_kit::settings::load(args.config.as_deref())?;
     config.validate().context("feature configuration")?;
     let mut extractor = Extractor::new(config);

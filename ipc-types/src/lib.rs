@@ -21,7 +21,7 @@
 //! use ipc_types::prelude::*;
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! shutdown::install()?;
+//! ipc_types::shutdown::install()?;
 //! let domain = Domain::new("example")?;
 //! let node = domain.node("scanner")?;
 //! let scans = Outlet::create(&domain, &node, topic::SCAN, Delivery::Latest, 0)?;
@@ -72,7 +72,7 @@ pub use zeroed::Zeroable;
 pub mod prelude {
     pub use crate::messages::*;
     pub use crate::{
-        Delivery, Domain, Header, Inlet, Message, Outlet, Wake, Zeroable, now_ns, shutdown, topic,
-        wait_any, wait_for_topic,
+        Delivery, Domain, Header, Inlet, Message, Outlet, Wake, Zeroable, now_ns, topic, wait_any,
+        wait_for_topic,
     };
 }

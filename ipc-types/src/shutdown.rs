@@ -3,6 +3,10 @@
 //! iceoryx2's own handler resets its flag when read, so a WaitSet and a process loop reading
 //! it would race for one signal. Instead every process installs this handler once and creates
 //! its nodes and WaitSets with signal handling disabled.
+//!
+//! The flag lives here, under the transport, because the transport's blocking waits
+//! (discovery, back-pressure, `wait_any`) end on it. A stage installs and reads it through
+//! stage-kit (`stage_kit::run_stage`, `stage_kit::shutdown`).
 
 use std::sync::Arc;
 use std::sync::OnceLock;

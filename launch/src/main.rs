@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
-use ipc_types::{Domain, shutdown};
+use ipc_types::Domain;
 use launch::cli::Args;
 use launch::config::{RunConfig, SourceKind};
 use launch::relations::relations_beside;
@@ -14,7 +14,7 @@ use launch::supervisor::{self, Display, Outcome, StagePlan};
 use launch::topology::{self, Role, RunKind};
 use map_sink::write_atomic;
 use slam_eval::{METRICS_FILE, Metrics, ScoreSummary};
-use stage_kit::{say, say_err};
+use stage_kit::{say, say_err, shutdown};
 
 fn main() -> ExitCode {
     match run() {

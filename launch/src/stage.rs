@@ -254,7 +254,7 @@ impl Stage {
 /// Has the kernel send the child SIGTERM when this process dies, however it dies (SIGKILL
 /// included), so no stage outlives the launcher holding its shared memory with nobody to
 /// stop it (and no slam-launch outlives slam-bench). SIGTERM, not SIGKILL: every stage and
-/// slam-launch take it as Ctrl-C (`ipc_types::shutdown`), so map-sink still writes its
+/// slam-launch take it as Ctrl-C (`stage_kit::shutdown`), so map-sink still writes its
 /// results from what it received and the others remove their iceoryx2 nodes on the way
 /// out. Linux only (`PR_SET_PDEATHSIG`); it is tied to the thread that forked the child,
 /// not the process: call it on the thread that lives as long as the child should.

@@ -240,8 +240,9 @@ mod tests {
 
     const SIM: usize = 3;
 
-    /// The pipeline's stages in slam-launch's order, the source last.
-    fn watch(lockstep: bool, now: Instant) -> StallWatch {
+    /// The pipeline's stages in slam-launch's order, the source last, with `counts` reported
+    /// at `now` (see [`report`]).
+    fn watch(lockstep: bool, now: Instant, counts: [(u64, u64); 4]) -> StallWatch {
         let names: Vec<String> = ["map-sink", "slam-proc", "feature-proc", "lidar-sim"]
             .map(String::from)
             .to_vec();
@@ -250,7 +251,9 @@ mod tests {
             limit: Duration::from_secs(60),
             lockstep,
         };
-        StallWatch::new(&names, SIM, limits, now)
+        let mut w = StallWatch::new(&names, SIM, limits, now);
+        report(&mut w, now, counts);
+        w
     }
 
     /// Counts as the stages report them: `(received, sent)` of map-sink, slam-proc,
@@ -299,8 +302,7 @@ mod tests {
         // slam-proc froze after taking feature 100: feature-proc sent 101 and is blocked
         // sending 102 (it took scan 102), the simulator sent 103 and is blocked on 104.
         // feature-proc has input pending too, but only because slam-proc does.
-        let mut w = watch(true, t0);
-        report(&mut w, t0, [(100, 0), (100, 100), (102, 101), (0, 103)]);
+        let mut w = watch(true, t0, [(100, 0), (100, 100), (102, 101), (0, 103)]);
         assert!(w.check(&running, t0).is_empty());
         assert!(w.check(&running, t0 + s(9)).is_empty());
         let reports = w.check(&running, t0 + s(10));
@@ -319,16 +321,14 @@ mod tests {
         ));
 
         // map-sink froze: everyone upstream waits on it.
-        let mut w = watch(true, t0);
         // It had taken pose 99; slam-proc sent pose 100 and took feature 101, feature-proc
         // sent feature 102 and took scan 103, the simulator sent scan 104.
-        report(&mut w, t0, [(99, 0), (101, 100), (103, 102), (0, 104)]);
+        let mut w = watch(true, t0, [(99, 0), (101, 100), (103, 102), (0, 104)]);
         assert!(w.check(&running, t0).is_empty());
         assert_eq!(names(&w.check(&running, t0 + s(10))), ["map-sink"]);
 
         // The simulator froze: nothing is pending anywhere.
-        let mut w = watch(true, t0);
-        report(&mut w, t0, [(100, 0), (100, 100), (100, 100), (0, 100)]);
+        let mut w = watch(true, t0, [(100, 0), (100, 100), (100, 100), (0, 100)]);
         assert!(w.check(&running, t0).is_empty());
         let reports = w.check(&running, t0 + s(10));
         assert_eq!(names(&reports), ["lidar-sim"]);
@@ -339,8 +339,7 @@ mod tests {
         let t0 = Instant::now();
         let running = [true; 4];
         let s = Duration::from_secs;
-        let mut w = watch(true, t0);
-        report(&mut w, t0, [(100, 0), (100, 100), (100, 100), (0, 101)]);
+        let mut w = watch(true, t0, [(100, 0), (100, 100), (100, 100), (0, 101)]);
         assert!(w.check(&running, t0).is_empty());
         assert_eq!(names(&w.check(&running, t0 + s(12))), ["feature-proc"]);
         let resumed = w.update(
@@ -362,14 +361,12 @@ mod tests {
         let t0 = Instant::now();
         let s = Duration::from_secs;
         // Everything went through and the source has ended: the stages wait for nothing.
-        let mut w = watch(true, t0);
-        report(&mut w, t0, [(100, 0), (100, 100), (100, 100), (0, 100)]);
+        let mut w = watch(true, t0, [(100, 0), (100, 100), (100, 100), (0, 100)]);
         assert!(w.check(&[true, true, true, false], t0 + s(100)).is_empty());
 
         // Real time: drops left sent > received, but nothing was sent since; a slow or
         // silent source is not judged.
-        let mut w = watch(false, t0);
-        report(&mut w, t0, [(90, 0), (90, 90), (95, 90), (0, 100)]);
+        let mut w = watch(false, t0, [(90, 0), (90, 90), (95, 90), (0, 100)]);
         assert!(w.check(&[true; 4], t0 + s(100)).is_empty());
         // A scan arrives after a long quiet spell and is taken at once: no stall.
         w.update(3, "out:lidar/scan=101", t0 + s(100));

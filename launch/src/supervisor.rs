@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use ipc_types::{Domain, shutdown};
-use stage_kit::say_err;
+use ipc_types::Domain;
+use stage_kit::{say_err, shutdown};
 
 use crate::losses::Losses;
 use crate::stage::{Stage, StageError, StageEvent, describe};

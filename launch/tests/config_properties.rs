@@ -76,17 +76,17 @@ fn text_of(lines: &[(String, String)]) -> String {
         .collect()
 }
 
-/// A section's text as its process loads it: a refusal must name a key of the input or the
-/// line of a syntax error.
+/// A section's text as its process loads it: a refusal must name a key of the section or
+/// the line of a syntax error.
 fn check_section<T, E>(
     text: &str,
-    keys: &[String],
     validate: impl Fn(&T) -> Result<(), E>,
 ) -> Result<(), TestCaseError>
 where
-    T: DeserializeOwned,
+    T: DeserializeOwned + std::fmt::Debug,
     E: Display,
 {
+    let keys = known_keys::<T>();
     let names_problem = |message: &str| {
         message.contains("line")
             || keys
@@ -109,6 +109,18 @@ where
             }
         }
     }
+    Ok(())
+}
+
+/// Each process's section as its process loads it: slam-proc's, feature-proc's, the front
+/// end's, and the simulator's sensor and vehicle, in that order.
+fn check_every_section(texts: [&str; 5]) -> Result<(), TestCaseError> {
+    let [slam, features, front_end, sensor, vehicle] = texts;
+    check_section::<slam_proc::SlamConfig, _>(slam, |c| c.validate())?;
+    check_section::<feature_proc::FeatureConfig, _>(features, |c| c.validate())?;
+    check_section::<scan_match::FrontEndConfig, _>(front_end, |c| c.validate())?;
+    check_section::<lidar_sim::SensorConfig, _>(sensor, |c| c.validate())?;
+    check_section::<lidar_sim::VehicleConfig, _>(vehicle, |c| c.validate())?;
     Ok(())
 }
 
@@ -192,46 +204,24 @@ proptest! {
         bytes in vec(any::<u8>(), 0..2000),
     ) {
         let text = String::from_utf8_lossy(&bytes);
-        check_section::<slam_proc::SlamConfig, _>(&text, &known_keys::<slam_proc::SlamConfig>(), |c| c.validate())?;
-        check_section::<feature_proc::FeatureConfig, _>(&text, &known_keys::<feature_proc::FeatureConfig>(), |c| c.validate())?;
-        check_section::<scan_match::FrontEndConfig, _>(&text, &known_keys::<scan_match::FrontEndConfig>(), |c| c.validate())?;
-        check_section::<lidar_sim::SensorConfig, _>(&text, &known_keys::<lidar_sim::SensorConfig>(), |c| c.validate())?;
-        check_section::<lidar_sim::VehicleConfig, _>(&text, &known_keys::<lidar_sim::VehicleConfig>(), |c| c.validate())?;
+        check_every_section([&text; 5])?;
     }
 
     #[test]
-    fn near_valid_slam_sections_are_a_config_or_a_named_error(
-        lines in near_valid_lines(known_keys::<slam_proc::SlamConfig>()),
-    ) {
-        let keys = known_keys::<slam_proc::SlamConfig>();
-        check_section::<slam_proc::SlamConfig, _>(&text_of(&lines), &keys, |c| c.validate())?;
-    }
-
-    #[test]
-    fn near_valid_feature_sections_are_a_config_or_a_named_error(
-        lines in near_valid_lines(known_keys::<feature_proc::FeatureConfig>()),
-    ) {
-        let keys = known_keys::<feature_proc::FeatureConfig>();
-        check_section::<feature_proc::FeatureConfig, _>(&text_of(&lines), &keys, |c| c.validate())?;
-    }
-
-    #[test]
-    fn near_valid_front_end_sections_are_a_config_or_a_named_error(
-        lines in near_valid_lines(known_keys::<scan_match::FrontEndConfig>()),
-    ) {
-        let keys = known_keys::<scan_match::FrontEndConfig>();
-        check_section::<scan_match::FrontEndConfig, _>(&text_of(&lines), &keys, |c| c.validate())?;
-    }
-
-    #[test]
-    fn near_valid_sensor_and_vehicle_sections_are_a_config_or_a_named_error(
+    fn near_valid_sections_are_a_config_or_a_named_error(
+        slam in near_valid_lines(known_keys::<slam_proc::SlamConfig>()),
+        features in near_valid_lines(known_keys::<feature_proc::FeatureConfig>()),
+        front_end in near_valid_lines(known_keys::<scan_match::FrontEndConfig>()),
         sensor in near_valid_lines(known_keys::<lidar_sim::SensorConfig>()),
         vehicle in near_valid_lines(known_keys::<lidar_sim::VehicleConfig>()),
     ) {
-        let keys = known_keys::<lidar_sim::SensorConfig>();
-        check_section::<lidar_sim::SensorConfig, _>(&text_of(&sensor), &keys, |c| c.validate())?;
-        let keys = known_keys::<lidar_sim::VehicleConfig>();
-        check_section::<lidar_sim::VehicleConfig, _>(&text_of(&vehicle), &keys, |c| c.validate())?;
+        check_every_section([
+            &text_of(&slam),
+            &text_of(&features),
+            &text_of(&front_end),
+            &text_of(&sensor),
+            &text_of(&vehicle),
+        ])?;
     }
 
     #[test]
@@ -241,8 +231,7 @@ proptest! {
     ) {
         let text = format!("{key} = {}{}", "[".repeat(depth), "]".repeat(depth));
         check_run(&text)?;
-        let keys = known_keys::<slam_proc::SlamConfig>();
-        check_section::<slam_proc::SlamConfig, _>(&text, &keys, |c| c.validate())?;
+        check_section::<slam_proc::SlamConfig, _>(&text, |c| c.validate())?;
     }
 }
 

@@ -94,13 +94,8 @@ mod tests {
 
     #[test]
     fn a_closed_port_is_an_error_not_a_hang() {
-        // Bind then drop a listener: its port is (almost certainly) closed afterwards.
-        let port = std::net::TcpListener::bind("127.0.0.1:0")
-            .and_then(|l| l.local_addr())
-            .unwrap()
-            .port();
         let mut connector = TcpConnector::new(
-            &format!("127.0.0.1:{port}"),
+            &test_child::closed_address(),
             Duration::from_millis(500),
             Duration::from_millis(50),
         );

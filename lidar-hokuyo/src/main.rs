@@ -11,7 +11,7 @@ use ipc_types::prelude::*;
 use lidar_hokuyo::{
     ConnectionNotices, Driver, DriverConfig, DriverStats, Finish, ScanRequest, TcpConnector,
 };
-use stage_kit::{SourceArgs, say, say_err};
+use stage_kit::{SourceArgs, say, say_err, shutdown};
 
 /// Live Hokuyo lidar (UTM-30LX-EW, UST-10LX/20LX, ...) on the shared-memory scan topic.
 #[derive(Debug, Parser)]
@@ -50,14 +50,12 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    stage_kit::main("lidar-hokuyo", run)
+    stage_kit::run_stage("lidar-hokuyo", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
+fn run(args: Args) -> Result<()> {
     // A typo in the address would otherwise be retried for ever, quietly.
     lidar_hokuyo::resolve(&args.addr).context("--addr")?;
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
     let config = DriverConfig {
         request: ScanRequest {
             min_angle: args.min_angle,

@@ -528,4 +528,42 @@ mod tests {
         assert!(sensor.sync_clock(1, &|| 0).unwrap_err().is_damaged_reply());
         assert_eq!(sensor.get_ref().written(), b"TM0\nTM1\nTM2\n");
     }
+
+    /// The client reading a whole handshake off a wire of noise.
+    mod on_noise {
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        use super::*;
+
+        proptest! {
+                #![proptest_config(ProptestConfig::with_cases(512))]
+
+        #[test]
+        fn the_client_on_a_wire_of_arbitrary_bytes_fails_with_a_typed_error(
+            input in vec(any::<u8>(), 0..4096),
+        ) {
+            let mut sensor = Sensor::new(ScriptedStream::new(input), Duration::from_millis(20));
+            let result = sensor.connect();
+            // No sensor's handshake hides in noise of this length: it must be refused, for a
+            // reason the driver can act on.
+            match result {
+                Ok(identity) => prop_assert!(false, "took noise for a sensor: {:?}", identity),
+                Err(e) => {
+                    let actionable = matches!(
+                        e,
+                        SensorError::Line(_)
+                            | SensorError::Protocol(_)
+                            | SensorError::Refused { .. }
+                            | SensorError::NoReply { .. }
+                            | SensorError::NotScip { .. }
+                    );
+                    prop_assert!(actionable, "{}", e);
+                }
+            }
+            // It said little: QT, and at most a TM2 and a QT more to leave time adjustment.
+            prop_assert!(sensor.get_ref().written().len() <= b"QT\nTM2\nQT\n".len());
+        }
+            }
+    }
 }

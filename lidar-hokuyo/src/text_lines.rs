@@ -175,6 +175,16 @@ mod tests {
         step: usize,
     }
 
+    impl Trickle {
+        fn new(data: &[u8], step: usize) -> Self {
+            Self {
+                data: data.to_vec(),
+                at: 0,
+                step,
+            }
+        }
+    }
+
     impl Read for Trickle {
         fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
             if self.at >= self.data.len() {
@@ -189,12 +199,7 @@ mod tests {
 
     #[test]
     fn replies_keep_empty_lines_and_survive_short_reads() {
-        let stream = Trickle {
-            data: b"PP\r\n00P\n\nVV\n".to_vec(),
-            at: 0,
-            step: 3,
-        };
-        let mut reader = LineReader::replies(stream);
+        let mut reader = LineReader::replies(Trickle::new(b"PP\r\n00P\n\nVV\n", 3));
         let lines: Vec<_> = (0..4)
             .map(|_| reader.read_line(SECOND, NEVER).unwrap())
             .collect();
@@ -219,12 +224,7 @@ mod tests {
 
     #[test]
     fn a_stop_request_ends_the_wait() {
-        let stream = Trickle {
-            data: b"partial".to_vec(),
-            at: 0,
-            step: 100,
-        };
-        let mut reader = LineReader::replies(stream);
+        let mut reader = LineReader::replies(Trickle::new(b"partial", 100));
         assert!(matches!(
             reader.read_line(Duration::from_secs(60), &|| true),
             Err(LineError::Stopped)

@@ -44,12 +44,7 @@ fn an_address_that_cannot_be_resolved_is_refused_at_start() {
 
 #[test]
 fn a_closed_port_shows_on_the_console_and_a_run_without_scans_fails() {
-    // A port nobody listens on.
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .unwrap()
-        .port();
-    let addr = format!("127.0.0.1:{port}");
+    let addr = test_child::closed_address();
     let domain = unique_domain("closed");
     let mut child = Command::new(env!("CARGO_BIN_EXE_lidar-hokuyo"))
         .args([

@@ -12,10 +12,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use common::*;
-use test_child::{finish, lines_of, terminate, wait_for_line};
+use test_child::{lines_of, stop, wait_for_line};
 
 /// Generous for a loaded 2-core machine; the driver's reply timeout is 2 s.
 const LIMIT: Duration = Duration::from_secs(60);
@@ -117,10 +117,8 @@ fn named_retried_and_stopped(peer: &Peer, tag: &str, last_began: &str) -> String
     // Back-off, then the second try: the driver is in its first exchange again.
     peer.wait_for_connection(LIMIT);
     let child = child.0.take().unwrap();
-    terminate(&child);
-    let signalled = Instant::now();
-    let output = finish(child, LIMIT);
-    let stopped_in = signalled.elapsed();
+    let stopped = stop(child, LIMIT);
+    let output = stopped.output;
     seen.extend(lines.iter());
     let log = seen.join("\n");
     // No scan came: the run failed, and says so.
@@ -133,8 +131,9 @@ fn named_retried_and_stopped(peer: &Peer, tag: &str, last_began: &str) -> String
     // most 100 ms: well within a second. The bound leaves room for a loaded machine and
     // stays below the 2 s the exchange would otherwise still have had.
     assert!(
-        stopped_in < Duration::from_millis(1900),
-        "{stopped_in:?}: {log}"
+        stopped.took < Duration::from_millis(1900),
+        "{:?}: {log}",
+        stopped.took
     );
     clean_up(&domain);
     log

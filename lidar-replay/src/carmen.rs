@@ -29,7 +29,7 @@ use std::f64::consts::{PI, TAU};
 use std::io::BufRead;
 
 use crate::error::{LineError, Malformation, ReadError};
-use crate::lines::{NumberedLines, StopFlag, snippet};
+use crate::lines::{NumberedLines, snippet};
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
 use slam_geom::parse_stamp_ns;
@@ -61,7 +61,8 @@ pub fn flaser_angle_increment(beams: usize) -> Option<f64> {
 /// [`ReorderConfig`] window (see [`crate::reorder`]).
 #[derive(Debug)]
 pub struct CarmenReader<R> {
-    lines: NumberedLines<R>,
+    /// The log's lines; [`crate::LogReader`] sets the stop and reads the counts here.
+    pub(crate) lines: NumberedLines<R>,
     window: ReorderWindow,
     /// Whether an `ODOM` line has been read: from then on the odometry comes from those
     /// lines alone.
@@ -95,23 +96,6 @@ impl<R: BufRead> CarmenReader<R> {
             ended: false,
             stopped: false,
         }
-    }
-
-    /// Ends the reading with [`ReadError::Stopped`] once `stop` returns true (asked between
-    /// reads, so also within an endless line).
-    pub fn stop_when(mut self, stop: StopFlag) -> Self {
-        self.lines.set_stop(stop);
-        self
-    }
-
-    /// Number of the line read last (0 before the first).
-    pub fn line_number(&self) -> u64 {
-        self.lines.line_number()
-    }
-
-    /// Bytes read so far.
-    pub(crate) fn bytes_read(&self) -> u64 {
-        self.lines.bytes_read()
     }
 
     /// Record types skipped so far (`PARAM`, `SYNC`, ...) and how many lines of each.

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use crate::carmen::CarmenReader;
 use crate::error::{CheckError, OpenError, ReadError};
-use crate::lines::{StopFlag, never};
+use crate::lines::{NumberedLines, StopFlag, never};
 use crate::record::LogRecord;
 use crate::reorder::{ReorderConfig, ReorderCounts};
 use crate::seed_csv::SeedCsvReader;
@@ -106,21 +106,27 @@ impl<R: BufRead> LogReader<R> {
 
     /// Ends the reading with [`ReadError::Stopped`] once `stop` returns true; it is asked
     /// between reads, so even an endless line does not hold up a stop.
-    pub fn stop_when(self, stop: StopFlag) -> Self {
+    pub fn stop_when(mut self, stop: StopFlag) -> Self {
+        match &mut self {
+            Self::SeedCsv(reader) => reader.lines.set_stop(stop),
+            Self::Carmen(reader) => reader.lines.set_stop(stop),
+            Self::NotText { .. } => {}
+        }
+        self
+    }
+
+    /// The lines of a text log; `None` for a recording asked for as one.
+    fn lines(&self) -> Option<&NumberedLines<R>> {
         match self {
-            Self::SeedCsv(reader) => Self::SeedCsv(reader.stop_when(stop)),
-            Self::Carmen(reader) => Self::Carmen(Box::new(reader.stop_when(stop))),
-            not_text @ Self::NotText { .. } => not_text,
+            Self::SeedCsv(reader) => Some(&reader.lines),
+            Self::Carmen(reader) => Some(&reader.lines),
+            Self::NotText { .. } => None,
         }
     }
 
     /// Bytes read so far.
     fn bytes_read(&self) -> u64 {
-        match self {
-            Self::SeedCsv(reader) => reader.bytes_read(),
-            Self::Carmen(reader) => reader.bytes_read(),
-            Self::NotText { .. } => 0,
-        }
+        self.lines().map_or(0, NumberedLines::bytes_read)
     }
 
     /// The reordering window and what it did so far; `None` for a format read in line order.
@@ -133,11 +139,7 @@ impl<R: BufRead> LogReader<R> {
 
     /// Number of the line read last (0 before the first).
     pub fn line_number(&self) -> u64 {
-        match self {
-            Self::SeedCsv(reader) => reader.line_number(),
-            Self::Carmen(reader) => reader.line_number(),
-            Self::NotText { .. } => 0,
-        }
+        self.lines().map_or(0, NumberedLines::line_number)
     }
 
     /// Record types the reader skipped as not its business, with their line counts.

@@ -15,7 +15,7 @@ use lidar_replay::{
 };
 use recorder::Recorded;
 use stage_kit::pacing::Pacer;
-use stage_kit::{SourceArgs, say, say_err};
+use stage_kit::{SourceArgs, say, say_err, shutdown};
 
 /// Replays a recorded lidar log onto the pipeline: LaserScan on the scan topic and, where the
 /// log has it, Odometry (published before the scan it goes with, with the same stamp).
@@ -70,12 +70,10 @@ struct Args {
 const REPORTED_LINES: u64 = 100;
 
 fn main() -> ExitCode {
-    stage_kit::main("lidar-replay", run)
+    stage_kit::run_stage("lidar-replay", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     match args.format {
         LogFormat::Mcap => replay_recording(&args),
         LogFormat::SeedCsv | LogFormat::Carmen => replay_log(&args),
@@ -186,6 +184,19 @@ impl Streams {
         Ok(())
     }
 
+    /// Whether the replay stops before its next record: Ctrl-C, or `--frames` reached (said
+    /// in the summary).
+    fn stops_before_next(&self, args: &Args, summary: &mut ReplaySummary) -> bool {
+        if shutdown::requested() {
+            return true;
+        }
+        if args.frames > 0 && self.published == args.frames {
+            summary.stopped = Some(format!("--frames {} reached", args.frames));
+            return true;
+        }
+        false
+    }
+
     fn published(&self) -> Records {
         Records {
             scans: self.published,
@@ -227,11 +238,7 @@ fn replay_log(args: &Args) -> Result<()> {
     // that scan's stamp has a reading at or before it to pair with.
     let mut odometry_before_start = None;
     for record in log.by_ref() {
-        if shutdown::requested() {
-            break;
-        }
-        if args.frames > 0 && streams.published == args.frames {
-            summary.stopped = Some(format!("--frames {} reached", args.frames));
+        if streams.stops_before_next(args, &mut summary) {
             break;
         }
         let record = match record {
@@ -325,11 +332,7 @@ fn replay_recording(args: &Args) -> Result<()> {
         ..ReplaySummary::default()
     };
     for next in recording.by_ref() {
-        if shutdown::requested() {
-            break;
-        }
-        if args.frames > 0 && streams.published == args.frames {
-            summary.stopped = Some(format!("--frames {} reached", args.frames));
+        if streams.stops_before_next(args, &mut summary) {
             break;
         }
         let published = match next {

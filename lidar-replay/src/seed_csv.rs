@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 use std::io::BufRead;
 
 use crate::error::{LineError, Malformation, ReadError};
-use crate::lines::{NumberedLines, StopFlag, snippet};
+use crate::lines::{NumberedLines, snippet};
 use crate::record::{LogRecord, ScanGeometry, ScanRecord};
 
 /// Beams per scan: 270 degrees in quarter degrees, both ends included.
@@ -55,7 +55,8 @@ pub fn range_from_code(millimetres: u32) -> f32 {
 /// line leaves a gap in time instead of shifting the scans after it.
 #[derive(Debug)]
 pub struct SeedCsvReader<R> {
-    lines: NumberedLines<R>,
+    /// The log's lines; [`crate::LogReader`] sets the stop and reads the counts here.
+    pub(crate) lines: NumberedLines<R>,
     failed: bool,
 }
 
@@ -65,23 +66,6 @@ impl<R: BufRead> SeedCsvReader<R> {
             lines: NumberedLines::new(reader),
             failed: false,
         }
-    }
-
-    /// Ends the reading with [`ReadError::Stopped`] once `stop` returns true (asked between
-    /// reads, so also within an endless line).
-    pub fn stop_when(mut self, stop: StopFlag) -> Self {
-        self.lines.set_stop(stop);
-        self
-    }
-
-    /// Number of the line read last (0 before the first).
-    pub fn line_number(&self) -> u64 {
-        self.lines.line_number()
-    }
-
-    /// Bytes read so far.
-    pub(crate) fn bytes_read(&self) -> u64 {
-        self.lines.bytes_read()
     }
 }
 

@@ -3,12 +3,13 @@
 //! with its heap capped (RLIMIT_DATA), so a reader that held a whole line would fail here
 //! instead of filling the machine's memory.
 
+use std::fs::File;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use test_child::{finish, lines_of, terminate, wait_for_line};
+use test_child::{finish, lines_of, stop, wait_for_line};
 
 /// Heap a replay may have. A replay needs a few MiB plus its longest line (1 MiB); a reader
 /// that held a 3 MiB line would get near this only with much more, and one that held
@@ -17,10 +18,13 @@ const HEAP_LIMIT: u64 = 256 << 20;
 /// Generous for a loaded 2-core machine; a good run takes well under a second.
 const LIMIT: Duration = Duration::from_secs(60);
 
-fn fixture(name: &str) -> PathBuf {
+/// A new file `name` in a directory of this test process's own, to write a log into.
+fn fixture(name: &str) -> (PathBuf, File) {
     let dir = std::env::temp_dir().join(format!("lidar-replay-hostile-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    let path = dir.join(name);
+    let file = File::create(&path).unwrap();
+    (path, file)
 }
 
 /// A FLASER line of 180 beams of 2.5 m with the stamp `stamp`.
@@ -29,14 +33,25 @@ fn flaser(stamp: f64) -> String {
     format!("FLASER 180 {ranges} 0 0 0 0 0 0 {stamp} robot 0.1\n")
 }
 
-/// `lidar-replay` with `args` in a domain of its own, its heap capped at [`HEAP_LIMIT`] by
-/// prlimit(1), which then runs it as itself (same process, so a signal reaches the replay).
-fn spawn_replay(tag: &str, args: &[&str]) -> Child {
+/// Fails the test unless `stderr` says each of `expected`.
+fn assert_says(stderr: &str, expected: &[&str]) {
+    for text in expected {
+        assert!(stderr.contains(text), "{text:?} in {stderr}");
+    }
+}
+
+/// `lidar-replay` of the CARMEN log `file` with `extra` arguments, scans only, for no
+/// subscriber, in a domain of its own; its heap capped at [`HEAP_LIMIT`] by prlimit(1),
+/// which then runs it as itself (same process, so a signal reaches the replay).
+fn spawn_replay(tag: &str, file: &Path, extra: &[&str]) -> Child {
     Command::new("prlimit")
         .arg(format!("--data={HEAP_LIMIT}"))
         .arg("--")
         .arg(env!("CARGO_BIN_EXE_lidar-replay"))
-        .args(args)
+        .args(["--format", "carmen", "--file"])
+        .arg(file)
+        .args(["--subscribers", "0", "--no-odometry"])
+        .args(extra)
         .args([
             "--domain",
             &format!("replay-hostile-{tag}-{}", std::process::id()),
@@ -49,24 +64,22 @@ fn spawn_replay(tag: &str, args: &[&str]) -> Child {
 
 #[test]
 fn a_file_without_newlines_is_refused_at_once() {
-    let child = spawn_replay("zero", &["--format", "carmen", "--file", "/dev/zero"]);
+    let child = spawn_replay("zero", Path::new("/dev/zero"), &[]);
     let output = finish(child, LIMIT);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success(), "{stderr}");
-    assert!(
-        stderr.contains("/dev/zero is not a carmen log: no valid scan in its first 64 MiB"),
-        "{stderr}"
-    );
-    assert!(
-        stderr.contains("line 1: 67108864 bytes long, over the 1048576 bytes a line may have"),
-        "{stderr}"
+    assert_says(
+        &stderr,
+        &[
+            "/dev/zero is not a carmen log: no valid scan in its first 64 MiB",
+            "line 1: 67108864 bytes long, over the 1048576 bytes a line may have",
+        ],
     );
 }
 
 #[test]
 fn a_huge_line_is_skipped_and_counted_and_the_log_read_on() {
-    let path = fixture("huge-line.clf");
-    let mut file = std::fs::File::create(&path).unwrap();
+    let (path, mut file) = fixture("huge-line.clf");
     for k in 0..3 {
         file.write_all(flaser(100.0 + f64::from(k)).as_bytes())
             .unwrap();
@@ -79,33 +92,22 @@ fn a_huge_line_is_skipped_and_counted_and_the_log_read_on() {
             .unwrap();
     }
     drop(file);
-    let child = spawn_replay(
-        "huge",
-        &[
-            "--format",
-            "carmen",
-            "--file",
-            path.to_str().unwrap(),
-            "--subscribers",
-            "0",
-            "--no-odometry",
-        ],
-    );
+    let child = spawn_replay("huge", &path, &[]);
     let output = finish(child, LIMIT);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
-    assert!(
-        stderr.contains(&format!(
-            "line 4: {} bytes long, over the 1048576 bytes a line may have (skipped)",
-            (3 << 20) + 1
-        )),
-        "{stderr}"
+    let too_long = format!(
+        "line 4: {} bytes long, over the 1048576 bytes a line may have (skipped)",
+        (3 << 20) + 1
     );
-    assert!(stderr.contains("(6 lines read)"), "{stderr}");
-    assert!(stderr.contains("published:       5 scans\n"), "{stderr}");
-    assert!(
-        stderr.contains("malformed lines: 1 skipped, by reason:\n    line too long: 1"),
-        "{stderr}"
+    assert_says(
+        &stderr,
+        &[
+            &too_long,
+            "(6 lines read)",
+            "published:       5 scans\n",
+            "malformed lines: 1 skipped, by reason:\n    line too long: 1",
+        ],
     );
 }
 
@@ -113,8 +115,7 @@ fn a_huge_line_is_skipped_and_counted_and_the_log_read_on() {
 fn sigterm_ends_a_replay_reading_an_endless_line() {
     // Three scans, a malformed line that tells the test the replay is past them, then a line
     // of zeros a terabyte long: a sparse file, so it takes no disk space.
-    let path = fixture("endless.clf");
-    let mut file = std::fs::File::create(&path).unwrap();
+    let (path, mut file) = fixture("endless.clf");
     file.write_all(flaser(100.0).as_bytes()).unwrap();
     file.write_all(flaser(101.0).as_bytes()).unwrap();
     file.write_all(flaser(102.0).as_bytes()).unwrap();
@@ -124,14 +125,8 @@ fn sigterm_ends_a_replay_reading_an_endless_line() {
     drop(file);
     let mut child = spawn_replay(
         "endless",
+        &path,
         &[
-            "--format",
-            "carmen",
-            "--file",
-            path.to_str().unwrap(),
-            "--subscribers",
-            "0",
-            "--no-odometry",
             // Nothing held back for reordering but the newest scan: two go out before the
             // endless line.
             "--reorder-window",
@@ -146,10 +141,8 @@ fn sigterm_ends_a_replay_reading_an_endless_line() {
         panic!("no report of line 4: {e}");
     }
     // Reading a terabyte takes minutes: the replay is inside the endless line.
-    terminate(&child);
-    let signalled = Instant::now();
-    let output = finish(child, LIMIT);
-    let stopped_in = signalled.elapsed();
+    let stopped = stop(child, LIMIT);
+    let output = stopped.output;
     // The child has gone: the rest of its stderr ends with the pipe.
     seen.extend(lines.iter());
     let stderr = seen.join("\n");
@@ -160,6 +153,6 @@ fn sigterm_ends_a_replay_reading_an_endless_line() {
     );
     // The reader asks the stop flag every few KiB: the replay ends within milliseconds. The
     // bound leaves room for a loaded machine and stays far below the minutes of reading on.
-    assert!(stopped_in < Duration::from_secs(5), "{stopped_in:?}");
+    assert!(stopped.took < Duration::from_secs(5), "{:?}", stopped.took);
     std::fs::remove_file(&path).unwrap();
 }

@@ -105,10 +105,11 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
     #[test]
-    fn arbitrary_bytes_as_carmen_are_records_or_line_errors(
+    fn arbitrary_bytes_are_records_or_line_errors_in_either_format(
         bytes in vec(any::<u8>(), 0..2000),
     ) {
         read_all(CarmenReader::new(&bytes[..]), &bytes)?;
+        read_all(SeedCsvReader::new(&bytes[..]), &bytes)?;
     }
 
     #[test]
@@ -166,13 +167,6 @@ proptest! {
         prop_assert!(records.is_empty(), "{:?} read from {:?} field {}", spoil, text, at);
         prop_assert_eq!(errors.len(), 1);
         prop_assert_eq!(errors[0].line, 1);
-    }
-
-    #[test]
-    fn arbitrary_bytes_as_seed_csv_are_scans_or_line_errors(
-        bytes in vec(any::<u8>(), 0..2000),
-    ) {
-        read_all(SeedCsvReader::new(&bytes[..]), &bytes)?;
     }
 
     #[test]

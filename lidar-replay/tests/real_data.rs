@@ -70,6 +70,15 @@ fn assert_strictly_increasing(stamps: &[u64]) {
     );
 }
 
+/// The readings of all `scans` for which `which` holds.
+fn count_ranges(scans: &[ScanRecord], which: impl Fn(f32) -> bool) -> usize {
+    scans
+        .iter()
+        .flat_map(|s| &s.ranges)
+        .filter(|&&r| which(r))
+        .count()
+}
+
 #[test]
 fn seed_hall_is_400_scans_of_1081_beams() {
     let (scans, odometry, stamps) = read_all(LogFormat::SeedCsv, "seed-hall/scans.csv");
@@ -80,16 +89,8 @@ fn seed_hall_is_400_scans_of_1081_beams() {
     assert_eq!(stamps[0], 0);
     assert_eq!(stamps[399], 39_900_000_000, "nominal 0.1 s period");
     let readings = 400 * 1081;
-    let no_return = scans
-        .iter()
-        .flat_map(|s| &s.ranges)
-        .filter(|r| **r == f32::INFINITY)
-        .count();
-    let errors = scans
-        .iter()
-        .flat_map(|s| &s.ranges)
-        .filter(|r| r.is_nan())
-        .count();
+    let no_return = count_ranges(&scans, |r| r == f32::INFINITY);
+    let errors = count_ranges(&scans, f32::is_nan);
     // FORMAT.md: code 1 on about 9.5 % of the readings, code 19 on 22.
     assert_eq!(errors, 22);
     let share = no_return as f64 / readings as f64;
@@ -124,11 +125,7 @@ fn mit_csail_is_1988_scans_of_361_beams_with_odometry() {
     );
     // About 3 % of the readings are the 81.91 m "no return".
     let readings = 1988 * 361;
-    let no_return = scans
-        .iter()
-        .flat_map(|s| &s.ranges)
-        .filter(|r| **r == f32::INFINITY)
-        .count();
+    let no_return = count_ranges(&scans, |r| r == f32::INFINITY);
     let share = no_return as f64 / readings as f64;
     assert!((0.02..0.05).contains(&share), "no-return share {share}");
     assert!(scans.iter().flat_map(|s| &s.ranges).all(|r| !r.is_nan()));

@@ -8,11 +8,7 @@ use std::time::{Duration, Instant};
 use ipc_types::prelude::*;
 
 fn fixture(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lidar-replay-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
+    test_child::fixture("lidar-replay-test", name, text)
 }
 
 fn domain(tag: &str) -> Domain {
@@ -39,6 +35,15 @@ impl Replay {
             child: Some(child),
             domain,
         }
+    }
+
+    /// Writes `log` as `{tag}.clf` and replays it as a CARMEN log with `extra` arguments, in
+    /// a domain of its own.
+    fn carmen(tag: &str, log: &str, extra: &[&str]) -> Self {
+        let file = fixture(&format!("{tag}.clf"), log);
+        let mut args = vec!["--format", "carmen", "--file", file.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        Self::start(domain(tag), &args)
     }
 
     /// Waits for the process; it must succeed. Returns its stderr.
@@ -189,21 +194,7 @@ fn lockstep_delivers_every_scan_and_odometry_with_exact_stamps() {
             log.push_str("FLASER 180 1.0 oops\n");
         }
     }
-    let file = fixture("lockstep.clf", &log);
-    let file = file.to_str().unwrap();
-    let replay = Replay::start(
-        domain("lockstep"),
-        &[
-            "--format",
-            "carmen",
-            "--file",
-            file,
-            "--rate",
-            "0",
-            "--subscribers",
-            "1",
-        ],
-    );
+    let replay = Replay::carmen("lockstep", &log, &["--rate", "0", "--subscribers", "1"]);
     let received = receive(&replay.domain, true);
     let stderr = replay.finish();
 
@@ -306,20 +297,7 @@ fn no_odometry_and_frames_limit_what_is_published() {
     let log: String = (0..10)
         .map(|k| flaser(0.0, &format!("{}.5", 100 + k)))
         .collect();
-    let file = fixture("frames.clf", &log);
-    let file = file.to_str().unwrap();
-    let replay = Replay::start(
-        domain("frames"),
-        &[
-            "--format",
-            "carmen",
-            "--file",
-            file,
-            "--no-odometry",
-            "--frames",
-            "4",
-        ],
-    );
+    let replay = Replay::carmen("frames", &log, &["--no-odometry", "--frames", "4"]);
     let received = receive(&replay.domain, false);
     let stderr = replay.finish();
     let seqs: Vec<u64> = received.scans.iter().map(|s| s.0).collect();
@@ -343,12 +321,7 @@ fn real_time_follows_the_logs_clock_scaled_by_the_rate() {
     let log: String = (0..5)
         .map(|k| flaser(0.0, &format!("{:.1}", 50.0 + 0.5 * f64::from(k))))
         .collect();
-    let file = fixture("rate.clf", &log);
-    let file = file.to_str().unwrap();
-    let replay = Replay::start(
-        domain("rate"),
-        &["--format", "carmen", "--file", file, "--rate", "10"],
-    );
+    let replay = Replay::carmen("rate", &log, &["--rate", "10"]);
     let received = receive(&replay.domain, true);
     replay.finish();
     assert_eq!(received.scans.len(), 5);

@@ -10,7 +10,7 @@ use ipc_types::prelude::*;
 use lidar_sim::{SimSettings, Simulation, World};
 use stage_kit::odometry_covariance::OdometryCovariance;
 use stage_kit::pacing::Pacer;
-use stage_kit::{SourceArgs, say, say_err};
+use stage_kit::{SourceArgs, say, say_err, shutdown};
 
 /// Simulated 2D lidar with ground truth, on the shared-memory scan topic of a domain.
 #[derive(Debug, Parser)]
@@ -42,12 +42,10 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    stage_kit::main("lidar-sim", run)
+    stage_kit::run_stage("lidar-sim", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     let settings: SimSettings = stage_kit::settings::load(args.config.as_deref())?;
     let world = World::resolve(&args.world).with_context(|| format!("world '{}'", args.world))?;
     let true_corners: Vec<TrueCorner> = world

@@ -6,33 +6,24 @@ use std::time::{Duration, Instant};
 
 use ipc_types::prelude::*;
 
+mod common;
+use common::Sim;
+
 #[test]
 fn lockstep_delivers_every_scan_with_its_ground_truth() {
     const FRAMES: u64 = 150;
-    let domain = Domain::new(&format!("sim-lockstep-{}", std::process::id())).unwrap();
-    let mut sim = Command::new(env!("CARGO_BIN_EXE_lidar-sim"))
-        .args([
-            "--world",
-            "office",
-            "--frames",
-            &FRAMES.to_string(),
-            "--rate",
-            "0",
-        ])
-        .args([
-            "--seed",
-            "3",
-            "--domain",
-            domain.name(),
-            "--subscribers",
-            "1",
-        ])
-        .stdout(Stdio::null())
-        .spawn()
-        .expect("start lidar-sim");
-
-    let node = domain.node("test-subscriber").unwrap();
-    wait_for_topic(&node, topic::SCAN).unwrap();
+    let frames = FRAMES.to_string();
+    let Sim {
+        child: mut sim,
+        node,
+        domain,
+    } = Sim::start(
+        "lockstep",
+        &[
+            "--world", "office", "--frames", &frames, "--rate", "0", "--seed", "3",
+        ],
+        Stdio::inherit(),
+    );
     let truth = Inlet::open(&node, topic::GROUND_TRUTH).unwrap();
     let corners = Inlet::open(&node, topic::WORLD_CORNERS).unwrap();
     let scans = Inlet::open(&node, topic::SCAN).unwrap();

@@ -6,6 +6,9 @@ use std::time::{Duration, Instant};
 
 use ipc_types::prelude::*;
 
+mod common;
+use common::Sim;
+
 /// Generous for a loaded 2-core machine.
 const LIMIT: Duration = Duration::from_secs(60);
 
@@ -27,16 +30,15 @@ fn a_rate_out_of_range_is_refused_with_the_range() {
 #[test]
 fn sigterm_ends_the_wait_for_a_slow_rates_next_scan() {
     // One scan every 100 s: the first goes out at once, the second is 100 s away.
-    let domain = Domain::new(&format!("sim-slow-rate-{}", std::process::id())).unwrap();
-    let sim = Command::new(env!("CARGO_BIN_EXE_lidar-sim"))
-        .args(["--world", "hall", "--rate", "0.01", "--subscribers", "1"])
-        .args(["--domain", domain.name()])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start lidar-sim");
-    let node = domain.node("test-subscriber").unwrap();
-    wait_for_topic(&node, topic::SCAN).unwrap();
+    let Sim {
+        child: sim,
+        node,
+        domain,
+    } = Sim::start(
+        "slow-rate",
+        &["--world", "hall", "--rate", "0.01"],
+        Stdio::piped(),
+    );
     let scans = Inlet::open(&node, topic::SCAN).unwrap();
     let deadline = Instant::now() + LIMIT;
     let first = loop {
@@ -48,16 +50,14 @@ fn sigterm_ends_the_wait_for_a_slow_rates_next_scan() {
     };
     assert_eq!(first, 0);
     // The simulator is now waiting for the second scan's time.
-    test_child::terminate(&sim);
-    let signalled = Instant::now();
-    let output = test_child::finish(sim, LIMIT);
-    let stopped_in = signalled.elapsed();
+    let stopped = test_child::stop(sim, LIMIT);
+    let output = stopped.output;
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
     assert!(stderr.contains("stopped after 1 scans"), "{stderr}");
     // Waits are sliced in 50 ms naps: the stop comes within one. The bound leaves room for
     // a loaded machine and stays far below the 100 s an unsliced wait would take.
-    assert!(stopped_in < Duration::from_secs(5), "{stopped_in:?}");
+    assert!(stopped.took < Duration::from_secs(5), "{:?}", stopped.took);
     drop((scans, node));
     let _ = domain.remove_leftovers();
 }

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
@@ -49,7 +49,7 @@ struct Args {
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
 
 fn main() -> ExitCode {
-    stage_kit::main("map-sink", run)
+    stage_kit::run_stage("map-sink", run)
 }
 
 /// What the status line shows, from the latest pose.
@@ -86,9 +86,7 @@ impl Progress {
     }
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     // A bad relations file fails the run now, not after the whole log.
     let relations = args
         .relations

@@ -10,7 +10,7 @@ use iceoryx2::prelude::{CallbackProgression, Node, SignalHandlingMode, WaitSetBu
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use recorder::Recording;
-use stage_kit::{say, say_err};
+use stage_kit::{say, say_err, shutdown};
 
 /// Subscribes to every topic of the pipeline (scans, odometry, features, pose estimates, map
 /// snapshots, the final path and, from a simulator, the ground truth and the world's
@@ -29,7 +29,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    stage_kit::main("slam-record", run)
+    stage_kit::run_stage("slam-record", run)
 }
 
 /// Longest sleep without a notification: a wake-up missed under load costs at most this.
@@ -127,9 +127,7 @@ fn drain<T: Message>(
     Ok(taken)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create directory {}", args.out.display()))?;
     let mut recording = Recording::create(&args.out)?;

@@ -33,11 +33,10 @@ struct Args {
 const LISTED_UNMATCHED: usize = 10;
 
 fn main() -> ExitCode {
-    stage_kit::main("slam-score", run)
+    stage_kit::run_tool("slam-score", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
+fn run(args: Args) -> Result<()> {
     anyhow::ensure!(
         args.tolerance_ms.is_finite() && args.tolerance_ms >= 0.0,
         "--tolerance-ms must be a non-negative number, not {}",

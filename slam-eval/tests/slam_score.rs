@@ -4,11 +4,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn fixture(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("slam-score-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
+    test_child::fixture("slam-score-test", name, text)
 }
 
 /// What a run of `slam-score` said.

@@ -13,7 +13,7 @@ use slam_proc::{
     FastSlam, FilterStats, LineObservation, LocalizeStats, Localizer, MeasuredMotion, Observation,
     OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
 };
-use stage_kit::{say, say_err};
+use stage_kit::{say, say_err, shutdown};
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
 /// publishes a pose estimate for every scan, the best particle's map every few scans and at
@@ -55,12 +55,10 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    stage_kit::main("slam-proc", run)
+    stage_kit::run_stage("slam-proc", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     let mut config: SlamConfig = stage_kit::settings::load(args.config.as_deref())?;
     if let Some(particles) = args.particles {
         anyhow::ensure!(particles > 0, "--particles must be at least 1");

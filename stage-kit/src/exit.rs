@@ -1,12 +1,39 @@
-//! The `main` of every process: the error handled once, at the top.
+//! The entry point of every process: arguments parsed, Ctrl-C installed and the error handled
+//! once, at the top.
 
 use std::process::ExitCode;
 
+use anyhow::Context;
+
 use crate::console::say_err;
 
-/// Runs `run`; on an error prints `name: error` with its whole source chain on stderr and
-/// exits with a failing status.
-pub fn main(name: &str, run: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
+/// The `main` of a pipeline stage: parses `A` from the command line (clap prints usage and
+/// exits on a bad argument), installs the Ctrl-C/SIGTERM flag the stage's loops poll
+/// ([`crate::shutdown`]), runs `run`, and on an error prints `name: error` with its whole
+/// source chain on stderr and exits with a failing status.
+pub fn run_stage<A: clap::Parser>(
+    name: &str,
+    run: impl FnOnce(A) -> anyhow::Result<()>,
+) -> ExitCode {
+    let args = A::parse();
+    report(name, || {
+        crate::shutdown::install().context("cannot install the Ctrl-C handler")?;
+        run(args)
+    })
+}
+
+/// The `main` of a command-line tool that polls no stop flag: as [`run_stage`] without the
+/// Ctrl-C handler, so Ctrl-C ends it at once.
+pub fn run_tool<A: clap::Parser>(
+    name: &str,
+    run: impl FnOnce(A) -> anyhow::Result<()>,
+) -> ExitCode {
+    let args = A::parse();
+    report(name, || run(args))
+}
+
+/// Runs `run`; an error becomes one `name: error` line (`{:#}`) and a failing status.
+fn report(name: &str, run: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -22,7 +49,7 @@ mod tests {
 
     #[test]
     fn an_error_is_a_failing_status() {
-        assert_eq!(main("t", || Ok(())), ExitCode::SUCCESS);
-        assert_eq!(main("t", || anyhow::bail!("no")), ExitCode::FAILURE);
+        assert_eq!(report("t", || Ok(())), ExitCode::SUCCESS);
+        assert_eq!(report("t", || anyhow::bail!("no")), ExitCode::FAILURE);
     }
 }

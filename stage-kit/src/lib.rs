@@ -3,8 +3,12 @@
 //! What every process of the pipeline does the same way, so that each `main.rs` is its
 //! ports and its loop:
 //!
-//! - [`main`]: runs the process's `run` and turns its error into one `name: error` line on
-//!   stderr (the whole source chain, `{:#}`) and a failing exit status.
+//! - [`run_stage`]: the whole opening of a stage's `main`: parses its arguments, installs
+//!   the Ctrl-C/SIGTERM flag ([`shutdown`]), runs the stage and turns its error into one
+//!   `name: error` line on stderr (the whole source chain, `{:#}`) and a failing exit status;
+//!   [`run_tool`] the same for a command-line tool that has no loop to stop.
+//! - [`shutdown`]: the latched Ctrl-C/SIGTERM flag every loop polls. It is defined in
+//!   ipc-types because the transport's blocking waits end on it too; a stage reads it here.
 //! - [`say`] and [`say_err`]: console lines that are dropped, not a panic, when the reader
 //!   of the pipe has gone (slam-launch killed while a stage writes its results).
 //! - [`settings`]: a TOML settings file read into a library's config struct, with one error
@@ -21,12 +25,25 @@
 //! ```no_run
 //! use std::process::ExitCode;
 //!
-//! fn main() -> ExitCode {
-//!     stage_kit::main("my-stage", run)
+//! /// My stage.
+//! #[derive(clap::Parser)]
+//! struct Args {
+//!     /// Scans to take.
+//!     #[arg(long, default_value_t = 10)]
+//!     frames: u64,
 //! }
 //!
-//! fn run() -> anyhow::Result<()> {
-//!     stage_kit::say("status: running");
+//! fn main() -> ExitCode {
+//!     stage_kit::run_stage("my-stage", run)
+//! }
+//!
+//! fn run(args: Args) -> anyhow::Result<()> {
+//!     for _ in 0..args.frames {
+//!         if stage_kit::shutdown::requested() {
+//!             break;
+//!         }
+//!     }
+//!     stage_kit::say("status: done");
 //!     Ok(())
 //! }
 //! ```
@@ -40,6 +57,7 @@ pub mod settings;
 mod source_args;
 
 pub use console::{say, say_err};
-pub use exit::main;
+pub use exit::{run_stage, run_tool};
+pub use ipc_types::shutdown;
 pub use settings::{SettingError, SettingsFileError, check};
 pub use source_args::SourceArgs;

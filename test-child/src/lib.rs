@@ -1,16 +1,38 @@
 //! # test-child
 //!
-//! What the integration tests of the process crates (lidar-sim, lidar-replay, lidar-hokuyo)
-//! do with the process under test the same way: read its console as it comes, wait for it
-//! with a deadline, stop it as a user would (SIGTERM), and check that a bad `--rate` is
-//! refused before anything starts.
+//! What the integration tests of the process crates (lidar-sim, lidar-replay, lidar-hokuyo,
+//! slam-eval's `slam-score`, the end-to-end tests) do with the process under test the same
+//! way: give it an input file, read its console as it comes, wait for it with a deadline, stop
+//! it as a user would (SIGTERM), point it at a port nobody listens on, and check that a bad
+//! `--rate` is refused before anything starts.
 //!
 //! Test support only (a dev-dependency): it panics where a test should fail.
 
 use std::io::{BufRead, BufReader, Read};
+use std::path::PathBuf;
 use std::process::{Child, Command, Output};
 use std::sync::mpsc::{self, Receiver};
 use std::time::{Duration, Instant};
+
+/// Writes `text` to the file `name` in a directory of this test process's own (`suite`
+/// names the test suite, so two suites running at once do not share it) and returns its path.
+pub fn fixture(suite: &str, name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("{suite}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("create the fixture directory");
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("write the fixture");
+    path
+}
+
+/// An address on the loopback where nobody listens: a port bound and released again, so it
+/// is (almost certainly) closed and no other test's server is on it.
+pub fn closed_address() -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|listener| listener.local_addr())
+        .expect("bind a port on the loopback")
+        .port();
+    format!("127.0.0.1:{port}")
+}
 
 /// The lines of a child's pipe (its stdout or stderr) as they come, read on a thread of
 /// their own so that a test can wait for one with a deadline.
@@ -60,6 +82,24 @@ pub fn terminate(child: &Child) {
         .status()
         .expect("run kill(1)");
     assert!(status.success(), "kill -s TERM {}: {status}", child.id());
+}
+
+/// A child stopped with SIGTERM: its exit status and output, and how long it took to go.
+pub struct Stopped {
+    pub output: Output,
+    pub took: Duration,
+}
+
+/// Sends SIGTERM to `child` ([`terminate`]) and waits for it at most `limit` ([`finish`]),
+/// timing how long it took to stop.
+pub fn stop(child: Child, limit: Duration) -> Stopped {
+    terminate(&child);
+    let signalled = Instant::now();
+    let output = finish(child, limit);
+    Stopped {
+        output,
+        took: signalled.elapsed(),
+    }
 }
 
 /// Waits for `child` at most `limit` and returns its exit status and output; kills it and
@@ -114,6 +154,33 @@ mod tests {
         let output = finish(child, Duration::from_secs(10));
         use std::os::unix::process::ExitStatusExt;
         assert_eq!(output.status.signal(), Some(15), "SIGTERM");
+    }
+
+    #[test]
+    fn a_stopped_child_is_timed() {
+        let child = Command::new("sleep").arg("60").spawn().unwrap();
+        let stopped = stop(child, Duration::from_secs(10));
+        use std::os::unix::process::ExitStatusExt;
+        assert_eq!(stopped.output.status.signal(), Some(15), "SIGTERM");
+        assert!(stopped.took < Duration::from_secs(10), "{:?}", stopped.took);
+    }
+
+    #[test]
+    fn a_fixture_holds_its_text() {
+        let path = fixture("test-child-fixture", "a.txt", "one\ntwo\n");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "one\ntwo\n");
+        assert!(path.ends_with("a.txt"));
+    }
+
+    #[test]
+    fn a_closed_address_refuses_a_connection() {
+        let addr = closed_address();
+        let refused = std::net::TcpStream::connect(&addr).unwrap_err();
+        assert_eq!(
+            refused.kind(),
+            std::io::ErrorKind::ConnectionRefused,
+            "{addr}"
+        );
     }
 
     #[test]

@@ -46,12 +46,7 @@ fn an_address_that_cannot_be_resolved_is_refused_before_starting() {
 
 #[test]
 fn a_run_that_never_gets_a_scan_shows_why_and_fails() {
-    // A port nobody listens on.
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .unwrap()
-        .port();
-    let addr = format!("127.0.0.1:{port}");
+    let addr = test_child::closed_address();
     let out = scratch("hokuyo-closed").join("run");
     let mut child = Command::new(bin("slam-launch"))
         .args(["--domain", &domain("hokuyo-closed"), "--out"])

@@ -51,11 +51,10 @@ const LOG_FORMAT: &str = "carmen";
 const REPORT_FILE: &str = "bench.json";
 
 fn main() -> ExitCode {
-    stage_kit::main("slam-bench", run)
+    stage_kit::run_tool("slam-bench", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
+fn run(args: Args) -> Result<()> {
     let seeds = parse_seeds(&args.seeds).context("--seeds")?;
     anyhow::ensure!(args.particles > 0, "--particles must be at least 1");
     let launcher = std::env::current_exe()

@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use ipc_types::shutdown;
 use lidar_hokuyo::emulator::{Emulator, EmulatorConfig, Faults, load_scans};
+use stage_kit::shutdown;
 
 /// Emulated Hokuyo UTM-30LX (SCIP 2.0 over TCP) serving the scans of a CSV file.
 #[derive(Debug, Parser)]
@@ -44,12 +44,10 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    stage_kit::main("hokuyo-emulator", run)
+    stage_kit::run_stage("hokuyo-emulator", run)
 }
 
-fn run() -> Result<()> {
-    let args = Args::parse();
-    shutdown::install().context("cannot install the Ctrl-C handler")?;
+fn run(args: Args) -> Result<()> {
     let scans = load_scans(&args.file)?;
     let mut config = EmulatorConfig::utm_30lx(scans);
     config.params.scan_rpm = args.rpm;

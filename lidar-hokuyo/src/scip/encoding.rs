@@ -93,26 +93,21 @@ fn group_of(byte: u8) -> Option<u8> {
 mod tests {
     use super::*;
 
-    // The worked examples of the SCIP 2.0 specification (section 6, figures 2 to 7).
     #[test]
-    fn two_character_example_of_the_specification() {
-        // 1234 mm = 010011 010010 = 0x13 0x12 -> 0x43 0x42 = "CB"
-        assert_eq!(decode(b"CB"), Ok(1234));
-        assert_eq!(encode(1234, 2).unwrap(), b"CB");
-    }
-
-    #[test]
-    fn three_character_example_of_the_specification() {
-        // 5432 mm = 000001 010100 111000 = 0x01 0x14 0x38 -> "1Dh"
-        assert_eq!(decode(b"1Dh"), Ok(5432));
-        assert_eq!(encode(5432, 3).unwrap(), b"1Dh");
-    }
-
-    #[test]
-    fn four_character_example_of_the_specification() {
-        // 16 000 000 ms = 111101 000010 010000 000000 = 0x3d 0x02 0x10 0x00 -> "m2@0"
-        assert_eq!(decode(b"m2@0"), Ok(16_000_000));
-        assert_eq!(encode(16_000_000, 4).unwrap(), b"m2@0");
+    fn worked_examples_of_the_specification() {
+        // The SCIP 2.0 specification's examples (section 6, figures 2 to 7): two, three and
+        // four characters.
+        for (value, text) in [
+            // 1234 mm = 010011 010010 = 0x13 0x12 -> 0x43 0x42 = "CB"
+            (1234, &b"CB"[..]),
+            // 5432 mm = 000001 010100 111000 = 0x01 0x14 0x38 -> "1Dh"
+            (5432, b"1Dh"),
+            // 16 000 000 ms = 111101 000010 010000 000000 = 0x3d 0x02 0x10 0x00 -> "m2@0"
+            (16_000_000, b"m2@0"),
+        ] {
+            assert_eq!(decode(text), Ok(value));
+            assert_eq!(encode(value, text.len()).unwrap(), text);
+        }
     }
 
     #[test]
