@@ -263,10 +263,11 @@ fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
             gaps.matched, gaps.rmse_m, gaps.stats.mean, gaps.stats.max
         );
         assert!(converged <= 300, "converged at scan {converged}");
-        // Converged in the right place: a wrong one is metres off. The map's own loops
-        // are open by 0.2-0.3 m in places (README), which bounds the agreement with the
-        // mapping run's path; a known start from scan 0 agrees no better.
-        assert!(gaps.rmse_m <= 0.25, "{gaps:?}");
-        assert!(gaps.stats.mean <= 0.12, "{gaps:?}");
+        // Converged in the right place (a wrong one is metres off) and then following the
+        // mapping run's path. Where that path's loops stayed open by more than its
+        // refinement could pull together, the map holds a wall twice and the two paths
+        // part by a decimetre or two for a while (README), which the RMSE allows for.
+        assert!(gaps.rmse_m <= 0.15, "{gaps:?}");
+        assert!(gaps.stats.mean <= 0.10, "{gaps:?}");
     }
 }
