@@ -8,6 +8,8 @@ use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
 
 use map_sink::LineFile;
+use nix::sys::signal::{Signal, kill};
+use nix::unistd::Pid;
 use slam_eval::IncompleteOutput;
 use stage_kit::say_err;
 
@@ -228,17 +230,15 @@ impl Stage {
         }
     }
 
-    /// Sends `signal` unless the child has already ended.
-    pub fn signal(&mut self, signal: libc::c_int) {
+    /// Sends `signal` unless the child has already ended (and so not to a pid that may have
+    /// been given to another process since it was reaped).
+    pub fn signal(&mut self, signal: Signal) {
         if self.poll_exit().is_some() {
             return;
         }
-        if let Ok(pid) = libc::pid_t::try_from(self.child.id()) {
-            // SAFETY: kill(2) with a pid we own and have not reaped yet. std's `Child` sends
-            // only SIGKILL, and no dependency of the workspace wraps kill(2) safely.
-            unsafe {
-                libc::kill(pid, signal);
-            }
+        if let Ok(pid) = i32::try_from(self.child.id()) {
+            // A child that ends just now is a zombie until we reap it: the pid is still ours.
+            let _ = kill(Pid::from_raw(pid), signal);
         }
     }
 

@@ -6,6 +6,7 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use ipc_types::Domain;
+use nix::sys::signal::Signal;
 use stage_kit::{say_err, shutdown};
 
 use crate::losses::Losses;
@@ -273,11 +274,11 @@ pub fn run(
 /// finish writing and kills whoever has not after the grace period.
 fn stop_all(stages: &mut [Stage], domain: &Domain) {
     for stage in stages.iter_mut().rev() {
-        stage.signal(libc::SIGTERM);
+        stage.signal(Signal::SIGTERM);
         // A stage frozen by SIGSTOP (a stall, or Ctrl-Z sent to it alone) would sit on
         // the SIGTERM until the grace period ends and it is killed: wake it so it stops
         // as the others do (map-sink writing its results). A running one ignores it.
-        stage.signal(libc::SIGCONT);
+        stage.signal(Signal::SIGCONT);
     }
     let deadline = Instant::now() + STOP_GRACE;
     while Instant::now() < deadline && stages.iter_mut().any(|s| s.poll_exit().is_none()) {
