@@ -73,7 +73,7 @@ pub struct GridReport {
     pub scan_bytes: usize,
     /// Bytes of the grid's log-odds (as much again was used while tracing).
     pub grid_bytes: usize,
-    /// Tracing and thresholding, seconds.
+    /// Refining the final path, tracing and thresholding, seconds.
     pub build_s: f64,
     /// What refining the final path did (`None` when there was no filter path to refine).
     pub refinement: Option<RefinementReport>,
@@ -312,10 +312,12 @@ impl Recorder {
         }
         let started = Instant::now();
         let (final_path, refinement): (Vec<StampedPose>, _) = match &self.final_path {
-            Some(path) => {
-                let (path, report) = self.refine(path)?;
-                (path, Some(report))
-            }
+            // A path that cannot be refined (its grid would be too large) is written as the
+            // filter gave it; the grid's own tracing then says why there is no grid.
+            Some(path) => match self.refine(path) {
+                Ok((path, report)) => (path, Some(report)),
+                Err(_) => (path.clone(), None),
+            },
             None => (
                 self.estimates
                     .values()

@@ -341,6 +341,35 @@ fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
 }
 
 #[test]
+fn a_path_too_wide_for_a_grid_is_written_as_the_filter_gave_it() -> TestResult {
+    let dir = common::scratch_dir("too-wide");
+    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+    // Two scans 4 km apart: their grid would have 80 000 x 80 000 cells of 0.05 m, so
+    // neither the refinement nor the grid can be traced.
+    let poses = [Pose2::new(0.0, 0.0, 0.0), Pose2::new(4000.0, 4000.0, 0.5)];
+    let mut path = Vec::new();
+    for (seq, pose) in poses.iter().enumerate() {
+        let (seq, stamp_ns) = (seq as u64, 1_000_000_000 + seq as u64 * 100_000_000);
+        recorder.record_scan(seq, -1.0, 0.5, 0.1, 30.0, &[2.0, 2.1, 2.2, 2.3, 2.2]);
+        recorder.record_pose(seq, stamp_ns, *pose, None, None)?;
+        path.push(StampedPose {
+            stamp_ns,
+            pose: *pose,
+        });
+    }
+    recorder.set_final_path(&path);
+    let result = recorder.finish();
+    assert!(matches!(result, Err(SinkError::Grid(_))), "{result:?}");
+    let written = read_tum(&dir.join(TRAJECTORY_FILE))?;
+    assert_eq!(written.len(), 2);
+    for ((_, w), p) in written.iter().zip(&poses) {
+        assert!((w.position[0] - p.x).abs() < 1e-9 && (w.position[1] - p.y).abs() < 1e-9);
+    }
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+#[test]
 fn killed_run_keeps_its_trajectory_and_no_stale_results() -> TestResult {
     let dir = common::scratch_dir("killed");
     fs::create_dir_all(&dir)?;
