@@ -94,8 +94,9 @@ mod tests {
 
     #[test]
     fn a_closed_port_is_an_error_not_a_hang() {
+        let closed = test_child::closed_port();
         let mut connector = TcpConnector::new(
-            &test_child::closed_address(),
+            closed.addr(),
             Duration::from_millis(500),
             Duration::from_millis(50),
         );

@@ -44,12 +44,13 @@ fn an_address_that_cannot_be_resolved_is_refused_at_start() {
 
 #[test]
 fn a_closed_port_shows_on_the_console_and_a_run_without_scans_fails() {
-    let addr = test_child::closed_address();
+    let closed = test_child::closed_port();
+    let addr = closed.addr();
     let domain = unique_domain("closed");
     let mut child = Command::new(env!("CARGO_BIN_EXE_lidar-hokuyo"))
         .args([
             "--addr",
-            &addr,
+            addr,
             "--domain",
             domain.name(),
             "--subscribers",

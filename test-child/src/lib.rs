@@ -9,6 +9,7 @@
 //! Test support only (a dev-dependency): it panics where a test should fail.
 
 use std::io::{BufRead, BufReader, Read};
+use std::os::fd::{AsRawFd, OwnedFd};
 use std::path::PathBuf;
 use std::process::{Child, Command, Output};
 use std::sync::mpsc::{self, Receiver};
@@ -24,14 +25,42 @@ pub fn fixture(suite: &str, name: &str, text: &str) -> PathBuf {
     path
 }
 
-/// An address on the loopback where nobody listens: a port bound and released again, so it
-/// is (almost certainly) closed and no other test's server is on it.
-pub fn closed_address() -> String {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|listener| listener.local_addr())
-        .expect("bind a port on the loopback")
-        .port();
-    format!("127.0.0.1:{port}")
+/// A loopback port that refuses connections for as long as this lives.
+///
+/// A port bound and released again may be taken by another test's server before it is
+/// used; this one stays bound to a socket that never listens, so nothing else can take it
+/// and a connection to it is refused at once.
+#[derive(Debug)]
+pub struct ClosedPort {
+    _socket: OwnedFd,
+    addr: String,
+}
+
+impl ClosedPort {
+    /// `127.0.0.1:PORT`.
+    pub fn addr(&self) -> &str {
+        &self.addr
+    }
+}
+
+/// A new [`ClosedPort`].
+pub fn closed_port() -> ClosedPort {
+    use nix::sys::socket::{
+        AddressFamily, SockFlag, SockType, SockaddrIn, bind, getsockname, socket,
+    };
+    let socket = socket(
+        AddressFamily::Inet,
+        SockType::Stream,
+        SockFlag::SOCK_CLOEXEC,
+        None,
+    )
+    .expect("a TCP socket");
+    bind(socket.as_raw_fd(), &SockaddrIn::new(127, 0, 0, 1, 0)).expect("bind on the loopback");
+    let bound: SockaddrIn = getsockname(socket.as_raw_fd()).expect("the bound port");
+    ClosedPort {
+        _socket: socket,
+        addr: format!("127.0.0.1:{}", bound.port()),
+    }
 }
 
 /// The lines of a child's pipe (its stdout or stderr) as they come, read on a thread of
@@ -173,9 +202,10 @@ mod tests {
     }
 
     #[test]
-    fn a_closed_address_refuses_a_connection() {
-        let addr = closed_address();
-        let refused = std::net::TcpStream::connect(&addr).unwrap_err();
+    fn a_closed_port_refuses_a_connection() {
+        let port = closed_port();
+        let addr = port.addr();
+        let refused = std::net::TcpStream::connect(addr).unwrap_err();
         assert_eq!(
             refused.kind(),
             std::io::ErrorKind::ConnectionRefused,

@@ -46,12 +46,13 @@ fn an_address_that_cannot_be_resolved_is_refused_before_starting() {
 
 #[test]
 fn a_run_that_never_gets_a_scan_shows_why_and_fails() {
-    let addr = test_child::closed_address();
+    let closed = test_child::closed_port();
+    let addr = closed.addr();
     let out = scratch("hokuyo-closed").join("run");
     let mut child = Command::new(bin("slam-launch"))
         .args(["--domain", &domain("hokuyo-closed"), "--out"])
         .arg(&out)
-        .args(["--source", "hokuyo", "--addr", &addr])
+        .args(["--source", "hokuyo", "--addr", addr])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
