@@ -307,6 +307,16 @@ fn empty_run_still_finishes() -> TestResult {
     Ok(())
 }
 
+/// `trajectory.tum` holds `poses`, in order.
+fn assert_trajectory_is(dir: &Path, poses: &[Pose2]) -> TestResult {
+    let written = read_tum(&dir.join(TRAJECTORY_FILE))?;
+    assert_eq!(written.len(), poses.len());
+    assert!(written.iter().zip(poses).all(
+        |((_, w), p)| (w.position[0] - p.x).abs() < 1e-9 && (w.position[1] - p.y).abs() < 1e-9
+    ));
+    Ok(())
+}
+
 #[test]
 fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
     let dir = common::scratch_dir("final-path");
@@ -326,11 +336,7 @@ fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
     recorder.set_final_path(&path);
     let metrics = recorder.finish()?;
 
-    let written = read_tum(&dir.join(TRAJECTORY_FILE))?;
-    assert_eq!(written.len(), 50);
-    assert!(written.iter().zip(&truth).all(
-        |((_, w), t)| (w.position[0] - t.x).abs() < 1e-9 && (w.position[1] - t.y).abs() < 1e-9
-    ));
+    assert_trajectory_is(&dir, &truth)?;
     assert_eq!(read_tum(&dir.join(TRAJECTORY_ONLINE_FILE))?.len(), 50);
     let ate = metrics.ate_rmse_m.ok_or("no ATE")?;
     let online = metrics.online_ate_rmse_m.ok_or("no online ATE")?;
@@ -347,24 +353,19 @@ fn a_path_too_wide_for_a_grid_is_written_as_the_filter_gave_it() -> TestResult {
     // Two scans 4 km apart: their grid would have 80 000 x 80 000 cells of 0.05 m, so
     // neither the refinement nor the grid can be traced.
     let poses = [Pose2::new(0.0, 0.0, 0.0), Pose2::new(4000.0, 4000.0, 0.5)];
-    let mut path = Vec::new();
-    for (seq, pose) in poses.iter().enumerate() {
-        let (seq, stamp_ns) = (seq as u64, 1_000_000_000 + seq as u64 * 100_000_000);
+    let path: Vec<StampedPose> = poses
+        .iter()
+        .zip([1_000_000_000, 1_100_000_000])
+        .map(|(&pose, stamp_ns)| StampedPose { stamp_ns, pose })
+        .collect();
+    for (seq, p) in (0_u64..).zip(&path) {
         recorder.record_scan(seq, -1.0, 0.5, 0.1, 30.0, &[2.0, 2.1, 2.2, 2.3, 2.2]);
-        recorder.record_pose(seq, stamp_ns, *pose, None, None)?;
-        path.push(StampedPose {
-            stamp_ns,
-            pose: *pose,
-        });
+        recorder.record_pose(seq, p.stamp_ns, p.pose, None, None)?;
     }
     recorder.set_final_path(&path);
     let result = recorder.finish();
     assert!(matches!(result, Err(SinkError::Grid(_))), "{result:?}");
-    let written = read_tum(&dir.join(TRAJECTORY_FILE))?;
-    assert_eq!(written.len(), 2);
-    for ((_, w), p) in written.iter().zip(&poses) {
-        assert!((w.position[0] - p.x).abs() < 1e-9 && (w.position[1] - p.y).abs() < 1e-9);
-    }
+    assert_trajectory_is(&dir, &poses)?;
     let _ = fs::remove_dir_all(&dir);
     Ok(())
 }
