@@ -10,6 +10,11 @@ pub const MAX_FEATURE_CORNERS: usize = 128;
 pub const MAX_MAP_CORNERS: usize = 4096;
 /// Poses a [`crate::PathChunk`] can carry (a path of any length travels as several).
 pub const MAX_PATH_CHUNK_POSES: usize = 4096;
+/// Particles a [`crate::ParticleCloud`] piece carries (a cloud of any size travels as
+/// several): 64 KiB, a scan's size.
+pub const MAX_CLOUD_CHUNK_PARTICLES: usize = 2048;
+/// Cells a [`crate::GridCells`] piece carries (a grid of any size travels as several).
+pub const MAX_GRID_CHUNK_CELLS: usize = 65536;
 /// True corners a [`crate::WorldCorners`] message can carry.
 pub const MAX_WORLD_CORNERS: usize = 4096;
 

@@ -44,4 +44,12 @@ const _: () = {
     assert!(offset_of!(MapSnapshot, corners) == 64);
     assert!(offset_of!(PathChunk, poses) == 80);
     assert!(size_of::<PathChunk>() == 88 + 32 * crate::MAX_PATH_CHUNK_POSES);
+    assert!(size_of::<Particle>() == 32);
+    assert!(offset_of!(ParticleCloud, particles) == 80);
+    assert!(size_of::<ParticleCloud>() == 88 + 32 * crate::MAX_CLOUD_CHUNK_PARTICLES);
+    assert!(size_of::<GridGeometry>() == 32);
+    assert!(offset_of!(GridCells, grid) == 64);
+    assert!(offset_of!(GridCells, first) == 96);
+    assert!(offset_of!(GridCells, cells) == 112);
+    assert!(size_of::<GridCells>() == 120 + crate::MAX_GRID_CHUNK_CELLS);
 };

@@ -52,8 +52,8 @@ mod transport;
 mod zeroed;
 
 pub use capacity::{
-    CapacityError, MAX_BEAMS, MAX_FEATURE_CORNERS, MAX_LINES, MAX_MAP_CORNERS,
-    MAX_PATH_CHUNK_POSES, MAX_WORLD_CORNERS,
+    CapacityError, MAX_BEAMS, MAX_CLOUD_CHUNK_PARTICLES, MAX_FEATURE_CORNERS, MAX_GRID_CHUNK_CELLS,
+    MAX_LINES, MAX_MAP_CORNERS, MAX_PATH_CHUNK_POSES, MAX_WORLD_CORNERS,
 };
 pub use domain::{
     Claim, ClaimError, Domain, DomainError, FILE_PREFIX, NodeError, user_prefix, user_root,

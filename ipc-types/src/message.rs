@@ -6,8 +6,8 @@ use iceoryx2::prelude::ZeroCopySend;
 
 use crate::header::Header;
 use crate::messages::{
-    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
-    WorldCorners,
+    Features, GridCells, GroundTruthPose, LaserScan, MapSnapshot, Odometry, ParticleCloud,
+    PathChunk, PoseEstimate, WorldCorners,
 };
 use crate::zeroed::Zeroable;
 
@@ -42,4 +42,6 @@ impl_message!(
     PoseEstimate,
     MapSnapshot,
     PathChunk,
+    ParticleCloud,
+    GridCells,
 );

@@ -78,7 +78,8 @@ pub struct RunShape {
 }
 
 /// The service of the topic named `topic_name` with `subscribers` readers, as the stages
-/// create it: the histories of their `Outlet::create` calls, the path always lossless.
+/// create it: the histories of their `Outlet::create` calls, the paths and the grid (sent
+/// once, at the end) always lossless.
 /// `None` for a name that is no topic of [`crate::topic`].
 pub fn service_size(
     topic_name: &str,
@@ -95,6 +96,9 @@ pub fn service_size(
         t if t == topic::POSE.name() => service(topic::POSE, d, 0, n),
         t if t == topic::MAP.name() => service(topic::MAP, d, 1, n),
         t if t == topic::PATH.name() => service(topic::PATH, Delivery::Lossless, 0, n),
+        t if t == topic::PARTICLES.name() => service(topic::PARTICLES, d, 0, n),
+        t if t == topic::MAP_PATH.name() => service(topic::MAP_PATH, Delivery::Lossless, 0, n),
+        t if t == topic::MAP_GRID.name() => service(topic::MAP_GRID, Delivery::Lossless, 0, n),
         _ => return None,
     })
 }

@@ -3,8 +3,8 @@
 use std::marker::PhantomData;
 
 use crate::messages::{
-    Features, GroundTruthPose, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
-    WorldCorners,
+    Features, GridCells, GroundTruthPose, LaserScan, MapSnapshot, Odometry, ParticleCloud,
+    PathChunk, PoseEstimate, WorldCorners,
 };
 
 /// A service name bound to its message type, so a process cannot open a service with the
@@ -58,3 +58,11 @@ pub const POSE: Topic<PoseEstimate> = Topic::new("slam/pose");
 pub const PATH: Topic<PathChunk> = Topic::new("slam/path");
 /// The best particle's map, every few scans and at the end.
 pub const MAP: Topic<MapSnapshot> = Topic::new("slam/map");
+/// Every particle's pose and weight every few scans, in pieces, for a recording (slam-proc
+/// publishes it only when the run is recorded).
+pub const PARTICLES: Topic<ParticleCloud> = Topic::new("slam/particles");
+/// The final path as map-sink wrote it (`trajectory.tum`, refined against its grid), at the
+/// end of the run, in chunks.
+pub const MAP_PATH: Topic<PathChunk> = Topic::new("map/path");
+/// The occupancy grid as map-sink wrote it (`map.pgm`), at the end of the run, in pieces.
+pub const MAP_GRID: Topic<GridCells> = Topic::new("map/grid");

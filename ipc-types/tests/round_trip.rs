@@ -195,6 +195,51 @@ fn path_chunk_round_trips_at_full_capacity_and_refuses_more() {
 }
 
 #[test]
+fn a_particle_cloud_piece_round_trips_at_full_capacity_and_refuses_more() {
+    let mut cloud = ParticleCloud::boxed_zeroed();
+    cloud.header = header(40);
+    cloud.first = MAX_CLOUD_CHUNK_PARTICLES as u64;
+    cloud.total = 2 * MAX_CLOUD_CHUNK_PARTICLES as u64;
+    let particles: Vec<Particle> = (0..MAX_CLOUD_CHUNK_PARTICLES)
+        .map(|i| Particle {
+            pose: Pose2::new(0.25 * i as f64, -(i as f64), 0.002 * i as f64 - 3.0),
+            weight: 1.0 / (1 + i) as f64,
+        })
+        .collect();
+    cloud.set(&particles).unwrap();
+    assert!(cloud.is_last_piece());
+    assert_rebuilds(&*cloud, ParticleCloud::from_record);
+    let mut more = particles.clone();
+    more.push(particles[0]);
+    assert!(cloud.set(&more).is_err());
+    assert_eq!(
+        cloud.particles(),
+        &particles[..],
+        "a refused set keeps the cloud"
+    );
+}
+
+#[test]
+fn grid_cells_round_trip_at_full_capacity_and_refuse_more() {
+    let mut grid = GridCells::boxed_zeroed();
+    grid.header = header(3);
+    grid.grid = GridGeometry {
+        resolution: 0.05,
+        origin: [-12.35, 4.5],
+        width: 955,
+        height: 595,
+    };
+    grid.first = 3 * MAX_GRID_CHUNK_CELLS as u64;
+    grid.total = 955 * 595;
+    let cells: Vec<u8> = (0..MAX_GRID_CHUNK_CELLS)
+        .map(|i| [0, 205, 254][i % 3])
+        .collect();
+    grid.set(&cells).unwrap();
+    assert_rebuilds(&*grid, GridCells::from_record);
+    assert!(grid.set(&vec![0; MAX_GRID_CHUNK_CELLS + 1]).is_err());
+}
+
+#[test]
 fn world_corners_round_trip() {
     let mut world = WorldCorners::boxed_zeroed();
     world.header = header(0);

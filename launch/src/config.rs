@@ -175,6 +175,9 @@ pub struct SlamSection {
     pub seed: u64,
     /// Publish the map every this many scans (and at the end).
     pub map_every: u64,
+    /// Publish the particle cloud every this many scans, when the run is recorded (each
+    /// cloud holds every particle, so it is kept rare for the recording's size).
+    pub particle_cloud_every: u64,
     #[serde(flatten)]
     pub filter: slam_proc::SlamConfig,
 }
@@ -184,6 +187,7 @@ impl Default for SlamSection {
         Self {
             seed: 1,
             map_every: 20,
+            particle_cloud_every: 20,
             filter: slam_proc::SlamConfig::default(),
         }
     }
@@ -321,6 +325,11 @@ impl RunConfig {
         }
         if self.slam.map_every == 0 {
             return Err(ConfigError::Invalid("map_every must be at least 1".into()));
+        }
+        if self.slam.particle_cloud_every == 0 {
+            return Err(ConfigError::Invalid(
+                "particle_cloud_every must be at least 1".into(),
+            ));
         }
         for (key, value) in [
             ("stall_warning (--stall-warning)", self.stall_warning),

@@ -285,8 +285,18 @@ fn settings_args(
     };
     let out = out.display().to_string();
     let path = |p: &Path| p.display().to_string();
+    // The topics published only for the recorder, when the run records them.
+    let run = RunKind::of(config);
+    let particles = topology::published(&run, ipc_types::topic::PARTICLES.name());
+    let final_map = topology::published(&run, ipc_types::topic::MAP_GRID.name());
+    let switch = |on: bool, flag: &str| on.then(|| flag.to_owned());
     Ok(match role {
-        Role::Recorder => flag_values([("--out", Some(out))]),
+        Role::Recorder => {
+            let mut args = flag_values([("--out", Some(out))]);
+            args.extend(switch(particles, "--particles"));
+            args.extend(switch(final_map, "--final-map"));
+            args
+        }
         Role::Sink => {
             let title = format!(
                 "{}: {} particles, seed {}",
@@ -304,6 +314,7 @@ fn settings_args(
             args.push("--status".into());
             args.push(format!("--resolution={}", config.grid.resolution));
             args.push(format!("--refine-passes={}", config.grid.refine_passes));
+            args.extend(switch(final_map, "--publish-final"));
             args
         }
         Role::Filter => {
@@ -318,6 +329,12 @@ fn settings_args(
             ]);
             if config.localize {
                 args.push("--localize".into());
+            }
+            if particles {
+                args.push(format!(
+                    "--particles-every={}",
+                    config.slam.particle_cloud_every
+                ));
             }
             if let Some(pose) = &config.initial_pose {
                 args.push(format!("--initial-pose={pose}"));

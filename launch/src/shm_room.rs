@@ -99,6 +99,30 @@ mod tests {
     }
 
     #[test]
+    fn a_recording_s_own_topics_take_little_shared_memory() {
+        // The cloud and the grid travel in pieces the size of a scan (the path in chunks
+        // twice that), so they add a few MiB at most, in lockstep and in real time, to what
+        // one more reader of every topic (the recorder) takes.
+        for rate in [0.0, 40.0] {
+            let mut config = RunConfig::default();
+            config.sim.rate = rate;
+            let plain = shm::pipeline_bytes(&run_shape(&config));
+            config.record.enabled = true;
+            let shape = run_shape(&config);
+            for topic in ["slam/particles", "map/path", "map/grid"] {
+                assert!(shape.topics.contains(&(topic, 1)), "{topic}");
+            }
+            let own: u64 = shm::pipeline_services(&shape)
+                .iter()
+                .filter(|s| ["slam/particles", "map/path", "map/grid"].contains(&s.topic))
+                .map(|s| s.bytes)
+                .sum();
+            assert!(own < 4 << 20, "{own} bytes for the recording's own topics");
+            assert!(shm::pipeline_bytes(&shape) < plain * 2, "{rate}");
+        }
+    }
+
+    #[test]
     fn a_sigbus_names_the_free_space() {
         assert!(
             sigbus_explanation()

@@ -167,6 +167,17 @@ const FEATURES: &str = topic::FEATURES.name();
 const POSE: &str = topic::POSE.name();
 const PATH: &str = topic::PATH.name();
 const MAP: &str = topic::MAP.name();
+const PARTICLES: &str = topic::PARTICLES.name();
+const MAP_PATH: &str = topic::MAP_PATH.name();
+const MAP_GRID: &str = topic::MAP_GRID.name();
+
+/// A topic published only for the recorder: a run without it does no work for it.
+const fn for_the_recording(topic: &'static str) -> Publication {
+    Publication {
+        topic,
+        when: When::Recorded,
+    }
+}
 
 /// A source's odometry, when the robot has some (and a replay is not told to drop it).
 const SOURCE_ODOMETRY: Publication = Publication {
@@ -191,6 +202,9 @@ pub const STAGES: &[Stage] = &[
             reads(POSE),
             reads(MAP),
             reads(PATH),
+            reads(PARTICLES),
+            reads(MAP_PATH),
+            reads(MAP_GRID),
         ],
         waits_for: &[],
     },
@@ -198,7 +212,8 @@ pub const STAGES: &[Stage] = &[
         binary: "map-sink",
         role: Role::Sink,
         runs: When::Always,
-        publishes: &[],
+        // The final path and grid as written, once they are: the recorder's last messages.
+        publishes: &[for_the_recording(MAP_PATH), for_the_recording(MAP_GRID)],
         reads: &[
             reads(SCAN),
             reads_if_published(GROUND_TRUTH),
@@ -213,7 +228,12 @@ pub const STAGES: &[Stage] = &[
         binary: "slam-proc",
         role: Role::Filter,
         runs: When::Always,
-        publishes: &[publishes(POSE), publishes(MAP), publishes(PATH)],
+        publishes: &[
+            publishes(POSE),
+            publishes(MAP),
+            publishes(PATH),
+            for_the_recording(PARTICLES),
+        ],
         reads: &[
             reads(FEATURES),
             // The beams weight the particles on a saved map.
@@ -274,6 +294,9 @@ pub const TOPICS: &[&str] = &[
     POSE,
     MAP,
     PATH,
+    PARTICLES,
+    MAP_PATH,
+    MAP_GRID,
 ];
 
 /// The stages a run of `run` starts, in their start order.
@@ -606,6 +629,33 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_recording_s_own_topics_exist_only_when_recorded() {
+        let own = [PARTICLES, MAP_PATH, MAP_GRID];
+        for run in every_run() {
+            for topic in own {
+                assert_eq!(published(&run, topic), run.recorded, "{topic} in {run:?}");
+                assert_eq!(
+                    subscribers(&run, topic),
+                    usize::from(run.recorded),
+                    "{topic}"
+                );
+            }
+        }
+        let recorded = RunKind {
+            recorded: true,
+            ..PLAIN
+        };
+        let publisher = |topic: &str| {
+            stages(&recorded)
+                .find(|s| s.publishes.iter().any(|p| p.topic == topic))
+                .map(|s| s.binary)
+        };
+        assert_eq!(publisher(PARTICLES), Some("slam-proc"));
+        assert_eq!(publisher(MAP_PATH), Some("map-sink"));
+        assert_eq!(publisher(MAP_GRID), Some("map-sink"));
     }
 
     #[test]

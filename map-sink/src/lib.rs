@@ -97,7 +97,9 @@ pub use path_assembly::{ChunkError, PathAssembly};
 pub use path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
 pub use pgm::{Pgm, PgmError, encode_pgm};
 pub use pose_chain::{PosePrior, solve_pose_chain};
-pub use recorder::{GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions};
+pub use recorder::{
+    FinishedRun, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions,
+};
 pub use saved_map::{GridMap, SavedMap};
 pub use scan_alignment::{ScanAlignment, ScanAlignmentConfig};
 pub use scan_keeper::ScanKeeper;

@@ -9,7 +9,8 @@ use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use map_sink::{
-    GridConfig, PathAssembly, PathRefinementConfig, Recorder, RecorderOptions, StampedPose,
+    FinishedRun, GridConfig, OccupancyGrid, PathAssembly, PathRefinementConfig, Recorder,
+    RecorderOptions, StampedPose, trinary_pixel,
 };
 use slam_eval::{FrameCounts, METRICS_FILE, RelationsFile};
 use stage_kit::{say, say_err};
@@ -44,6 +45,11 @@ struct Args {
     /// written; 0 keeps the filter's path as it is.
     #[arg(long, value_name = "N", default_value_t = PathRefinementConfig::default().passes)]
     refine_passes: usize,
+    /// Once the files are written, publish the final path of trajectory.tum on `map/path`
+    /// and the grid of map.pgm on `map/grid`, then an end marker on `map/grid` (for a
+    /// recording).
+    #[arg(long)]
+    publish_final: bool,
 }
 
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
@@ -112,6 +118,15 @@ fn run(args: Args) -> Result<()> {
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("map-sink")?;
+    // Made now, before the recorder looks for them: it subscribes once the scans exist.
+    let final_outlets = if args.publish_final {
+        Some((
+            Outlet::create(&domain, &node, topic::MAP_PATH, Delivery::Lossless, 0)?,
+            Outlet::create(&domain, &node, topic::MAP_GRID, Delivery::Lossless, 0)?,
+        ))
+    } else {
+        None
+    };
     // The source creates its ground truth and world before the scans: once the scans exist,
     // so do they, if the source is a simulator.
     wait_for_topic(&node, topic::SCAN)?;
@@ -212,7 +227,20 @@ fn run(args: Args) -> Result<()> {
         });
     }
     tell_incomplete(&recorder, &mut told);
-    let (metrics, grid) = recorder.finish_with_report()?;
+    let finished = recorder.finish_run()?;
+    if let Some((path_outlet, grid_outlet)) = &final_outlets {
+        // The run's results are written; what cannot be passed on is said, not fatal.
+        if let Err(e) = publish_final(path_outlet, grid_outlet, &finished) {
+            say_err(&format!(
+                "map-sink: cannot publish the final path and grid: {e:#}"
+            ));
+        }
+    }
+    let FinishedRun {
+        metrics,
+        report: grid,
+        ..
+    } = finished;
     say_err(&format!(
         "map-sink: {} poses, {} map corners written to {}",
         metrics.frames_processed,
@@ -265,6 +293,53 @@ fn run(args: Args) -> Result<()> {
             say_err(&format!("  {}", output.line()));
         }
         anyhow::bail!("the run's results are incomplete");
+    }
+    Ok(())
+}
+
+/// Publishes the final path and the grid as they were written, then the grid's end marker:
+/// the recorder's cue that nothing more comes from map-sink.
+fn publish_final(
+    path_outlet: &Outlet<PathChunk>,
+    grid_outlet: &Outlet<GridCells>,
+    finished: &FinishedRun,
+) -> Result<()> {
+    let path = finished.final_path.as_deref().unwrap_or_default();
+    let stamp_ns = path.last().map_or(0, |p| p.stamp_ns);
+    if !path.is_empty() {
+        let poses: Vec<ipc_types::StampedPose> = path.iter().map(|&p| p.into()).collect();
+        path_outlet.publish_path(&poses, stamp_ns)?;
+    }
+    if let Some(grid) = &finished.grid {
+        publish_grid(grid_outlet, grid, stamp_ns)?;
+    }
+    grid_outlet.publish_end_of_stream(u64::from(finished.grid.is_some()), stamp_ns)?;
+    Ok(())
+}
+
+/// The grid's cells as map.pgm's trinary pixels, row by row from the lowest y, in pieces.
+fn publish_grid(outlet: &Outlet<GridCells>, grid: &OccupancyGrid, stamp_ns: u64) -> Result<()> {
+    let (width, height) = (grid.width(), grid.height());
+    let cells: Vec<u8> = (0..height)
+        .flat_map(|row| (0..width).map(move |col| trinary_pixel(grid.state(col, row))))
+        .collect();
+    let (Ok(width), Ok(height)) = (u32::try_from(width), u32::try_from(height)) else {
+        anyhow::bail!("the grid of {width} x {height} cells is too large to publish");
+    };
+    for (index, piece) in cells.chunks(ipc_types::MAX_GRID_CHUNK_CELLS).enumerate() {
+        outlet.publish(|message| {
+            message.header = Header::new(index as u64, stamp_ns, "map");
+            message.grid = GridGeometry {
+                resolution: grid.resolution_m(),
+                origin: grid.origin(),
+                width,
+                height,
+            };
+            message.first = (index * ipc_types::MAX_GRID_CHUNK_CELLS) as u64;
+            message.total = cells.len() as u64;
+            // Pieces are cut to the capacity, so this cannot fail.
+            let _ = message.set(piece);
+        })?;
     }
     Ok(())
 }

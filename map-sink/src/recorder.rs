@@ -79,6 +79,21 @@ pub struct GridReport {
     pub refinement: Option<RefinementReport>,
 }
 
+/// What a finished run wrote, for whoever passes it on (map-sink publishes it for a
+/// recording).
+#[derive(Debug)]
+pub struct FinishedRun {
+    pub metrics: Metrics,
+    /// What the occupancy grid cost.
+    pub report: Option<GridReport>,
+    /// The poses of `trajectory.tum` (refined when there was a filter path to refine), or
+    /// `None` when the file was not written.
+    pub final_path: Option<Vec<StampedPose>>,
+    /// The grid of `map.pgm` and `map.yaml`, or `None` when there is none or it was not
+    /// written.
+    pub grid: Option<OccupancyGrid>,
+}
+
 #[derive(Debug, Clone, Copy)]
 struct Estimate {
     stamp_ns: u64,
@@ -306,7 +321,13 @@ impl Recorder {
     }
 
     /// [`finish`](Self::finish), also saying what the occupancy grid cost.
-    pub fn finish_with_report(mut self) -> Result<(Metrics, Option<GridReport>), SinkError> {
+    pub fn finish_with_report(self) -> Result<(Metrics, Option<GridReport>), SinkError> {
+        self.finish_run().map(|run| (run.metrics, run.report))
+    }
+
+    /// [`finish`](Self::finish), also handing on what the occupancy grid cost, the final
+    /// path and the grid as they were written.
+    pub fn finish_run(mut self) -> Result<FinishedRun, SinkError> {
         for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
             self.incomplete.extend(stream.sync());
         }
@@ -333,7 +354,9 @@ impl Recorder {
             .iter()
             .map(|p| format_tum_line(p.stamp_ns, &p.pose))
             .collect();
+        let unwritten = self.incomplete.len();
         self.write_result(TRAJECTORY_FILE, text.as_bytes());
+        let path_written = self.incomplete.len() == unwritten;
         let trajectory: Vec<[f64; 2]> = final_path
             .iter()
             .map(|p| p.pose.position().into())
@@ -373,13 +396,18 @@ impl Recorder {
             refinement,
         });
         let grid = grid.map(|(grid, _)| grid);
-        if let Err(e) = write_map(&self.dir, grid.as_ref(), &self.map) {
-            // The map's files name each other: they are written in an order that leaves
-            // none naming a file that is not there, and the first failure ends them.
-            let name = format!("{MAP_PGM_FILE}, {MAP_PNG_FILE}, {MAP_YAML_FILE}, {LANDMARKS_FILE}");
-            self.incomplete
-                .push(IncompleteOutput::new(&name, "not all written", &e));
-        }
+        let map_written = match write_map(&self.dir, grid.as_ref(), &self.map) {
+            Ok(()) => true,
+            Err(e) => {
+                // The map's files name each other: they are written in an order that leaves
+                // none naming a file that is not there, and the first failure ends them.
+                let name =
+                    format!("{MAP_PGM_FILE}, {MAP_PNG_FILE}, {MAP_YAML_FILE}, {LANDMARKS_FILE}");
+                self.incomplete
+                    .push(IncompleteOutput::new(&name, "not all written", &e));
+                false
+            }
+        };
         let svg = self.picture(&trajectory, stats, &metrics, grid.as_ref());
         self.write_result(MAP_SVG_FILE, svg.as_bytes());
         metrics.incomplete_outputs = self.incomplete.clone();
@@ -391,7 +419,12 @@ impl Recorder {
                 .incomplete_outputs
                 .push(IncompleteOutput::new(METRICS_FILE, "not written", &e));
         }
-        Ok((metrics, report))
+        Ok(FinishedRun {
+            metrics,
+            report,
+            final_path: path_written.then_some(final_path),
+            grid: grid.filter(|_| map_written),
+        })
     }
 
     /// The filter's final path refined against the grid its kept scans trace.

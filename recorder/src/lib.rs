@@ -3,7 +3,7 @@
 //! Records a run of the pipeline as MCAP (`run.mcap`) that Foxglove opens ready to look at:
 //! every topic's messages as JSON, under Foxglove's well-known schemas where one fits
 //! (`foxglove.LaserScan`, `foxglove.FrameTransform`, `foxglove.PoseInFrame`,
-//! `foxglove.PosesInFrame`) and under schemas of our own (`slam.*`) where none does. A
+//! `foxglove.PosesInFrame`, `foxglove.Grid`) and under schemas of our own (`slam.*`) where none does. A
 //! message of a Foxglove schema carries Foxglove's fields and, after them, whatever of ours
 //! they lack, so a scan or a pose can be rebuilt exactly from the file. Our fields are the
 //! pipeline's own types in their serde form (`ipc_types`, `slam_geom::ScanGeometry`), with
@@ -25,9 +25,11 @@
 mod decode;
 mod error;
 mod geometry;
+mod grid;
 mod ground_truth;
 mod mcap_file;
 mod own;
+mod particles;
 mod path;
 mod pose;
 mod pose_in_frame;
@@ -41,10 +43,12 @@ mod transform;
 pub use decode::{DecodeError, Recorded, ReplayedChannel};
 pub use error::RecordError;
 pub use geometry::{Pose, Quaternion, Vector3};
+pub use grid::{GridMessage, GridPieces, PackedElementField, Vector2, base64};
 pub use ground_truth::{GroundTruthMessage, WORLD_FRAME};
 pub use mcap_file::{CHUNK_BYTES, ChannelCount, FLUSH_PERIOD, McapFile};
 pub use own::MapMessage;
-pub use path::{PathChunks, PathMessage};
+pub use particles::{ParticlePieces, ParticlesMessage};
+pub use path::{MapPathMessage, PathChunks, PathMessage};
 pub use pose::{MAP_FRAME, PoseMessage};
 pub use pose_in_frame::PoseInFrame;
 pub use reader::{

@@ -7,8 +7,8 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use clap::Parser;
 use iceoryx2::prelude::{CallbackProgression, Node, SignalHandlingMode, WaitSetBuilder, ipc};
-use ipc_types::Wakeable;
 use ipc_types::prelude::*;
+use ipc_types::{Topic, Wakeable};
 use recorder::Recording;
 use stage_kit::{say, say_err, shutdown};
 
@@ -26,6 +26,14 @@ struct Args {
     /// Output directory; the recording is DIR/run.mcap.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// slam-proc publishes its particle cloud every few scans: record it.
+    #[arg(long)]
+    particles: bool,
+    /// map-sink publishes the final path and grid it wrote once it has: record them, and end
+    /// only after its end marker (or on a signal: slam-launch stops the run when map-sink
+    /// dies).
+    #[arg(long)]
+    final_map: bool,
 }
 
 fn main() -> ExitCode {
@@ -45,12 +53,15 @@ struct Inlets {
     maps: Inlet<MapSnapshot>,
     path: Inlet<PathChunk>,
     scans: Inlet<LaserScan>,
+    particles: Option<Inlet<ParticleCloud>>,
+    map_path: Option<Inlet<PathChunk>>,
+    map_grid: Option<Inlet<GridCells>>,
 }
 
 impl Inlets {
     /// Subscribes to everything, the scans last: the source starts once it counts us among
     /// its scan subscribers, and by then we listen to every other topic too.
-    fn open(node: &Node<ipc::Service>) -> Result<Self> {
+    fn open(node: &Node<ipc::Service>, args: &Args) -> Result<Self> {
         // The source creates its ground truth, world and odometry before its scans: once
         // the scans exist, so do they, if the source publishes them.
         wait_for_topic(node, topic::SCAN)?;
@@ -61,8 +72,14 @@ impl Inlets {
         let poses = Inlet::open(node, topic::POSE)?;
         let maps = Inlet::open(node, topic::MAP)?;
         let path = Inlet::open(node, topic::PATH)?;
+        let particles = open_if(args.particles, node, topic::PARTICLES)?;
+        let map_path = open_if(args.final_map, node, topic::MAP_PATH)?;
+        let map_grid = open_if(args.final_map, node, topic::MAP_GRID)?;
         let scans = Inlet::open(node, topic::SCAN)?;
         Ok(Self {
+            particles,
+            map_path,
+            map_grid,
             truth,
             world,
             odometry,
@@ -91,6 +108,9 @@ impl Inlets {
         if let Some(odometry) = &self.odometry {
             all.push(odometry);
         }
+        all.extend(self.particles.as_ref().map(|i| i as &dyn Wakeable));
+        all.extend(self.map_path.as_ref().map(|i| i as &dyn Wakeable));
+        all.extend(self.map_grid.as_ref().map(|i| i as &dyn Wakeable));
         all
     }
 
@@ -110,8 +130,42 @@ impl Inlets {
         taken += drain(&self.features, |m| recording.features(m))?;
         taken += drain(&self.maps, |m| recording.map(m))?;
         taken += drain(&self.path, |m| recording.path_chunk(m))?;
+        if let Some(particles) = &self.particles {
+            taken += drain(particles, |m| recording.particles(m))?;
+        }
+        if let Some(map_path) = &self.map_path {
+            taken += drain(map_path, |m| recording.map_path_chunk(m))?;
+        }
         Ok(taken)
     }
+
+    /// Records the pieces of map-sink's grid queued; true once its end marker has come
+    /// (map-sink's last word, after its path and grid).
+    fn drain_grid(&self, recording: &mut Recording) -> Result<bool> {
+        let Some(grid) = &self.map_grid else {
+            return Ok(true);
+        };
+        while let Some(sample) = grid.receive()? {
+            if sample.header.is_end_of_stream() {
+                return Ok(true);
+            }
+            recording.grid_cells(&sample)?;
+        }
+        Ok(false)
+    }
+}
+
+/// Subscribes to `topic` when `wanted` (its publisher runs in this pipeline).
+fn open_if<T: Message>(
+    wanted: bool,
+    node: &Node<ipc::Service>,
+    topic: Topic<T>,
+) -> Result<Option<Inlet<T>>> {
+    Ok(if wanted {
+        Some(Inlet::open(node, topic)?)
+    } else {
+        None
+    })
 }
 
 /// Records every message queued on `inlet` with `record`; returns how many.
@@ -134,7 +188,7 @@ fn run(args: Args) -> Result<()> {
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("slam-record")?;
-    let inlets = Inlets::open(&node)?;
+    let inlets = Inlets::open(&node, &args)?;
     say("ready");
     let wakeables = inlets.wakeables();
 
@@ -154,8 +208,12 @@ fn run(args: Args) -> Result<()> {
         );
     }
 
+    // The poses end with slam-proc's marker; map-sink's path and grid come after it, once
+    // map-sink has written its files.
     let mut finished = false;
-    while !finished && !shutdown::requested() {
+    let mut final_map_done = inlets.map_grid.is_none();
+    let ended = |finished: bool, final_map_done: bool| finished && final_map_done;
+    while !ended(finished, final_map_done) && !shutdown::requested() {
         let woken = waitset.wait_and_process_once_with_timeout(
             |id| {
                 // Consume the notifications of the topics that woke us, so the next wait
@@ -175,6 +233,7 @@ fn run(args: Args) -> Result<()> {
         // A signal interrupting the wait surfaces as an error; the flag above tells.
         woken.map_err(|e| anyhow::anyhow!("cannot wait for messages: {e:?}"))?;
         inlets.drain_all_but_poses(&mut recording)?;
+        final_map_done = final_map_done || inlets.drain_grid(&mut recording)?;
         while let Some(sample) = inlets.poses.receive()? {
             if sample.header.is_end_of_stream() {
                 // slam-proc's last word: what every stage sent before it is queued (each
@@ -220,6 +279,18 @@ fn run(args: Args) -> Result<()> {
             summary.path_chunks_out_of_place
         ));
     }
-    ipc_types::losses::report(&[("path_chunks_out_of_place", summary.path_chunks_out_of_place)]);
+    if summary.particle_clouds_incomplete > 0 {
+        say_err(&format!(
+            "slam-record: {} particle clouds left out (a piece of each was lost)",
+            summary.particle_clouds_incomplete
+        ));
+    }
+    ipc_types::losses::report(&[
+        ("path_chunks_out_of_place", summary.path_chunks_out_of_place),
+        (
+            "final_map_pieces_out_of_place",
+            summary.final_map_pieces_out_of_place,
+        ),
+    ]);
     Ok(())
 }

@@ -40,6 +40,17 @@ impl PathMessage {
     }
 }
 
+/// The final path as map-sink wrote it (`trajectory.tum`: refined against its grid when it
+/// refines), one message at the end, in the form of [`PathMessage`].
+#[derive(Debug, Serialize, JsonSchema)]
+#[serde(transparent)]
+pub struct MapPathMessage(pub PathMessage);
+
+impl ChannelMessage for MapPathMessage {
+    const TOPIC: &'static str = "/map/path";
+    const SCHEMA: &'static str = "foxglove.PosesInFrame";
+}
+
 /// Collects a path's chunks; they arrive in order on one lossless topic.
 #[derive(Debug, Default)]
 pub struct PathChunks {

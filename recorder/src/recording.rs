@@ -3,15 +3,17 @@
 use std::path::{Path, PathBuf};
 
 use ipc_types::{
-    Features, GroundTruthPose, Header, LaserScan, MapSnapshot, Odometry, PathChunk, PoseEstimate,
-    WorldCorners,
+    Features, GridCells, GroundTruthPose, Header, LaserScan, MapSnapshot, Odometry, ParticleCloud,
+    PathChunk, PoseEstimate, WorldCorners,
 };
 
 use crate::error::RecordError;
+use crate::grid::{GridMessage, GridPieces};
 use crate::ground_truth::GroundTruthMessage;
 use crate::mcap_file::{ChannelCount, McapFile};
 use crate::own::MapMessage;
-use crate::path::{PathChunks, PathMessage};
+use crate::particles::{ParticlePieces, ParticlesMessage};
+use crate::path::{MapPathMessage, PathChunks, PathMessage};
 use crate::pose::{MAP_FRAME, PoseMessage};
 use crate::scan::ScanMessage;
 use crate::schema::ChannelMessage;
@@ -36,6 +38,10 @@ pub struct RecordingSummary {
     pub path_chunks_out_of_place: u64,
     /// Map snapshots left out as less than [`MAP_PERIOD_NS`] after the last one recorded.
     pub maps_left_out: u64,
+    /// Pieces of map-sink's path and grid that did not continue them (then not recorded).
+    pub final_map_pieces_out_of_place: u64,
+    /// Particle clouds left out because a piece of them was lost (real time only).
+    pub particle_clouds_incomplete: u64,
 }
 
 /// A recording being written. End-of-stream markers carry no data and are not recorded.
@@ -52,6 +58,9 @@ pub struct Recording {
     /// no later one was recorded, so the file ends with the run's final map.
     held_map: Option<(MapMessage, u64, u64)>,
     maps_left_out: u64,
+    map_path: PathChunks,
+    grid: GridPieces,
+    particles: ParticlePieces,
 }
 
 impl Recording {
@@ -66,6 +75,9 @@ impl Recording {
             last_map_ns: None,
             held_map: None,
             maps_left_out: 0,
+            map_path: PathChunks::default(),
+            grid: GridPieces::default(),
+            particles: ParticlePieces::default(),
         })
     }
 
@@ -154,6 +166,45 @@ impl Recording {
         Ok(())
     }
 
+    /// A piece of a particle cloud; the cloud is recorded once all of it is in.
+    pub fn particles(&mut self, piece: &ParticleCloud) -> Result<(), RecordError> {
+        if piece.header.is_end_of_stream() {
+            return Ok(());
+        }
+        if let Some((header, particles)) = self.particles.add(piece) {
+            let message = ParticlesMessage::new(&header, &particles);
+            self.file
+                .write(&message, header.stamp_ns, piece.header.sent_ns)?;
+        }
+        Ok(())
+    }
+
+    /// A chunk of the final path map-sink wrote; recorded once all of it is in.
+    pub fn map_path_chunk(&mut self, chunk: &PathChunk) -> Result<(), RecordError> {
+        let h = chunk.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        if let Some(poses) = self.map_path.add(chunk) {
+            let message = MapPathMessage(PathMessage::new(&poses));
+            self.file.write(&message, h.stamp_ns, h.sent_ns)?;
+        }
+        Ok(())
+    }
+
+    /// A piece of the grid map-sink wrote; recorded once all of it is in.
+    pub fn grid_cells(&mut self, piece: &GridCells) -> Result<(), RecordError> {
+        let h = piece.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        if let Some((stamp_ns, geometry, cells)) = self.grid.add(piece) {
+            let message = GridMessage::new(stamp_ns, &geometry, &cells);
+            self.file.write(&message, stamp_ns, h.sent_ns)?;
+        }
+        Ok(())
+    }
+
     pub fn ground_truth(&mut self, truth: &GroundTruthPose) -> Result<(), RecordError> {
         self.data(truth.header, || GroundTruthMessage::new(truth))
     }
@@ -187,6 +238,8 @@ impl Recording {
             path: self.path,
             path_chunks_out_of_place: out_of_place,
             maps_left_out: self.maps_left_out,
+            final_map_pieces_out_of_place: self.map_path.out_of_place + self.grid.out_of_place,
+            particle_clouds_incomplete: self.particles.incomplete,
         })
     }
 }

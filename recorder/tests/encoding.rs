@@ -5,12 +5,14 @@
 mod foxglove_schemas;
 
 use ipc_types::{
-    Corner, Features, GroundTruthPose, Header, LaserScan, Line, MapCorner, MapSnapshot, Odometry,
-    PathChunk, Pose2, PoseEstimate, ScanMotion, StampedPose, TrueCorner, WorldCorners, Zeroable,
+    Corner, Features, GridCells, GridGeometry, GroundTruthPose, Header, LaserScan, Line, MapCorner,
+    MapSnapshot, Odometry, Particle, ParticleCloud, PathChunk, Pose2, PoseEstimate, ScanMotion,
+    StampedPose, TrueCorner, WorldCorners, Zeroable,
 };
 use recorder::{
-    ChannelMessage, GroundTruthMessage, MapMessage, PathChunks, PathMessage, PoseMessage,
-    ScanMessage, TransformMessage,
+    ChannelMessage, GridMessage, GridPieces, GroundTruthMessage, MapMessage, MapPathMessage,
+    ParticlePieces, ParticlesMessage, PathChunks, PathMessage, PoseMessage, ScanMessage,
+    TransformMessage,
 };
 use serde_json::Value;
 
@@ -223,6 +225,134 @@ fn the_final_path_is_one_foxglove_poses_in_frame_from_its_chunks() {
 }
 
 #[test]
+fn map_sink_s_path_is_a_foxglove_poses_in_frame_on_its_own_topic() {
+    let poses = [StampedPose {
+        stamp_ns: 7,
+        pose: Pose2::new(1.0, 2.0, 0.5),
+    }];
+    let json = check(&MapPathMessage(PathMessage::new(&poses)));
+    assert_eq!(MapPathMessage::TOPIC, "/map/path");
+    assert_eq!(
+        json,
+        serde_json::to_value(PathMessage::new(&poses)).unwrap()
+    );
+}
+
+/// A cloud of `n` particles at scan `seq`, in pieces of at most `piece` particles.
+fn cloud_pieces(seq: u64, n: usize, piece: usize) -> Vec<Box<ParticleCloud>> {
+    let particles: Vec<Particle> = (0..n)
+        .map(|i| Particle {
+            pose: Pose2::new(1.000_4 + i as f64, -2.123_456, 0.600_4),
+            weight: 1.0 / n as f64,
+        })
+        .collect();
+    particles
+        .chunks(piece)
+        .enumerate()
+        .map(|(k, part)| {
+            let mut message = ParticleCloud::boxed_zeroed();
+            message.header = header(seq, 50_000_000 * seq, "map");
+            message.first = (k * piece) as u64;
+            message.total = n as u64;
+            message.set(part).unwrap();
+            message
+        })
+        .collect()
+}
+
+#[test]
+fn a_particle_cloud_is_a_foxglove_poses_in_frame_rounded_for_display() {
+    let mut pieces = ParticlePieces::default();
+    let sent = cloud_pieces(40, 3, 2);
+    assert!(pieces.add(&sent[0]).is_none());
+    let (header, particles) = pieces.add(&sent[1]).expect("the second piece completes it");
+    assert_eq!(particles.len(), 3);
+    let json = check(&ParticlesMessage::new(&header, &particles));
+    assert_eq!(json["frame_id"], "map");
+    assert_eq!(json["seq"], 40);
+    assert_eq!(json["timestamp"]["sec"], 2);
+    assert_eq!(json["poses"].as_array().unwrap().len(), 3);
+    // Millimetres, and the quaternion of the yaw at a milliradian to four decimals.
+    let first = &json["poses"][0];
+    assert_eq!(first["position"]["x"], 1.0);
+    assert_eq!(first["position"]["y"], -2.123);
+    assert_eq!(first["orientation"]["z"], 0.2955);
+    assert_eq!(first["orientation"]["w"], 0.9553);
+    assert_eq!(json["weights"][2], 0.333);
+    assert_eq!(pieces.incomplete, 0);
+
+    // A cloud whose last piece is lost is left out and counted when the next one starts.
+    let next = cloud_pieces(60, 3, 2);
+    assert!(pieces.add(&next[0]).is_none());
+    let after = cloud_pieces(80, 3, 2);
+    assert!(pieces.add(&after[0]).is_none());
+    assert_eq!(pieces.incomplete, 1);
+    // A piece whose first one was lost completes nothing.
+    assert!(pieces.add(&next[1]).is_none());
+    assert_eq!(pieces.incomplete, 2);
+}
+
+#[test]
+fn the_grid_is_a_foxglove_grid_of_rgba_cells_from_its_pieces() {
+    // Three columns, two rows from the lowest y: occupied, free, unknown, then free ones.
+    let cells = [0u8, 254, 205, 254, 254, 0];
+    let mut pieces = GridPieces::default();
+    let mut whole = None;
+    for (first, part) in [(0, &cells[..4]), (4, &cells[4..])] {
+        let mut piece = GridCells::boxed_zeroed();
+        piece.header = header(first / 4, 9_000_000_000, "map");
+        piece.grid = GridGeometry {
+            resolution: 0.05,
+            origin: [-1.5, 2.25],
+            width: 3,
+            height: 2,
+        };
+        piece.first = first;
+        piece.total = 6;
+        piece.set(part).unwrap();
+        assert!(whole.is_none());
+        whole = pieces.add(&piece);
+    }
+    let (stamp_ns, geometry, got) = whole.expect("the second piece completes the grid");
+    assert_eq!(got, cells);
+    let json = check(&GridMessage::new(stamp_ns, &geometry, &got));
+    assert_eq!(json["frame_id"], "map");
+    assert_eq!(json["timestamp"]["sec"], 9);
+    assert_eq!(json["pose"]["position"]["x"], -1.5);
+    assert_eq!(json["pose"]["position"]["y"], 2.25);
+    assert_eq!(json["pose"]["orientation"]["w"], 1.0);
+    assert_eq!(json["column_count"], 3);
+    assert_eq!(json["row_count"], 2);
+    assert_eq!(json["cell_size"]["x"], 0.05);
+    assert_eq!(json["cell_stride"], 4);
+    assert_eq!(json["row_stride"], 12);
+    let names: Vec<&str> = json["fields"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["red", "green", "blue", "alpha"]);
+    // The grey of each pixel, opaque where known: the RGBA bytes, base64.
+    let rgba: Vec<u8> = cells
+        .iter()
+        .flat_map(|&p| [p, p, p, if p == 205 { 0 } else { 255 }])
+        .collect();
+    assert_eq!(json["data"], recorder::base64(&rgba));
+    assert_eq!(json["data"].as_str().unwrap().len(), 32);
+
+    // A piece out of place completes nothing and is counted.
+    let mut piece = GridCells::boxed_zeroed();
+    piece.grid.width = 3;
+    piece.grid.height = 2;
+    piece.total = 6;
+    piece.first = 4;
+    piece.set(&cells[4..]).unwrap();
+    assert!(pieces.add(&piece).is_none());
+    assert_eq!(pieces.out_of_place, 1);
+}
+
+#[test]
 fn the_validators_refuse_what_foxglove_would_not_read() {
     // The checks above mean something only if a bad message fails them: a null range (what
     // serde_json makes of a NaN), a negative stamp, a missing field.
@@ -247,6 +377,25 @@ fn the_validators_refuse_what_foxglove_would_not_read() {
     message.as_object_mut().unwrap().remove("start_angle");
     assert!(!foxglove.is_valid(&message));
     assert!(!registered.is_valid(&message));
+
+    // A grid field of a numeric type Foxglove does not have, a negative stride.
+    let grid = jsonschema::validator_for(&foxglove_schemas::grid()).unwrap();
+    let geometry = GridGeometry {
+        resolution: 0.05,
+        origin: [0.0, 0.0],
+        width: 1,
+        height: 1,
+    };
+    let good = serde_json::to_value(GridMessage::new(0, &geometry, &[0])).unwrap();
+    assert!(grid.is_valid(&good));
+    for (pointer, bad) in [
+        ("/fields/0/type", serde_json::json!(9)),
+        ("/row_stride", serde_json::json!(-4)),
+    ] {
+        let mut message = good.clone();
+        *message.pointer_mut(pointer).unwrap() = bad;
+        assert!(!grid.is_valid(&message), "{pointer}");
+    }
 }
 
 #[test]

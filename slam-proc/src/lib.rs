@@ -54,6 +54,7 @@ pub use filter::estimate::Estimate;
 pub use filter::fast_slam::{FastSlam, FilterStats};
 pub use filter::memory;
 pub use filter::observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
+pub use filter::resample::normalised_weights;
 pub use localize::likelihood_field::{BeamModel, LikelihoodField};
 pub use localize::localizer::{
     Localization, LocalizeError, LocalizeStats, Localizer, ScanRanges, Start,

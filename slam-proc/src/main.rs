@@ -33,6 +33,10 @@ struct Args {
     /// Publish the map every this many scans (and at the end).
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..))]
     map_every: u64,
+    /// Publish every particle's pose and weight every this many scans (for a recording;
+    /// without it the cloud is never published).
+    #[arg(long, value_name = "SCANS", value_parser = clap::value_parser!(u64).range(1..))]
+    particles_every: Option<u64>,
     /// TOML file with filter settings (every field optional).
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
@@ -97,6 +101,9 @@ fn run(args: Args) -> Result<()> {
     // The path goes out once, at the end, in many chunks: lossless whatever the run's
     // delivery, or a real-time run would keep only the last few.
     let path = Outlet::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
+    let clouds = CloudOutlet::create(args.particles_every, || {
+        Outlet::create(&domain, &node, topic::PARTICLES, delivery, 0)
+    })?;
     say("ready");
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
@@ -156,6 +163,10 @@ fn run(args: Args) -> Result<()> {
             if processed.is_multiple_of(args.map_every) {
                 left_out = left_out.max(publish_map(&maps, &slam.best_map(), header)?);
             }
+            if let Some(outlet) = clouds.due(processed) {
+                let log_weights: Vec<f64> = slam.particle_log_weights().collect();
+                publish_cloud(outlet, header, slam.particle_poses(), &log_weights)?;
+            }
         }
     }
     // Stopped by a signal: leave the map and the path as far as they got.
@@ -210,14 +221,65 @@ fn publish_path(outlet: &Outlet<PathChunk>, slam: &FastSlam, last: Header) -> Re
         .iter()
         .map(|&p| StampedPose::from(p))
         .collect();
-    let total = path.len() as u64;
-    for (index, chunk) in path.chunks(ipc_types::MAX_PATH_CHUNK_POSES).enumerate() {
+    outlet.publish_path(&path, last.stamp_ns)?;
+    Ok(())
+}
+
+/// The particle cloud's topic, when the run records it: every `every` scans.
+struct CloudOutlet {
+    outlet: Option<(Outlet<ParticleCloud>, u64)>,
+}
+
+impl CloudOutlet {
+    /// The topic, opened with `open` only when the cloud is wanted (`every` given): a run
+    /// that does not record it neither makes the cloud nor has its shared memory.
+    fn create(
+        every: Option<u64>,
+        open: impl FnOnce() -> Result<Outlet<ParticleCloud>, ipc_types::OpenError>,
+    ) -> Result<Self> {
+        let outlet = match every {
+            Some(every) => Some((open()?, every)),
+            None => None,
+        };
+        Ok(Self { outlet })
+    }
+
+    /// The outlet when the `processed`th scan is one whose cloud goes out.
+    fn due(&self, processed: u64) -> Option<&Outlet<ParticleCloud>> {
+        self.outlet
+            .as_ref()
+            .filter(|(_, every)| processed.is_multiple_of(*every))
+            .map(|(outlet, _)| outlet)
+    }
+}
+
+/// Every particle's pose and normalised weight at the scan of `header`, in pieces.
+fn publish_cloud(
+    outlet: &Outlet<ParticleCloud>,
+    header: Header,
+    poses: impl Iterator<Item = Pose2>,
+    log_weights: &[f64],
+) -> Result<()> {
+    let weights = slam_proc::normalised_weights(log_weights);
+    let particles: Vec<Particle> = poses
+        .zip(weights)
+        .map(|(pose, weight)| Particle {
+            pose: pose.into(),
+            weight,
+        })
+        .collect();
+    let total = particles.len() as u64;
+    for (index, piece) in particles
+        .chunks(ipc_types::MAX_CLOUD_CHUNK_PARTICLES)
+        .enumerate()
+    {
         outlet.publish(|message| {
-            message.header = Header::new(index as u64, last.stamp_ns, "map");
-            message.first = (index * ipc_types::MAX_PATH_CHUNK_POSES) as u64;
+            message.header = header;
+            message.header.set_frame_id("map");
+            message.first = (index * ipc_types::MAX_CLOUD_CHUNK_PARTICLES) as u64;
             message.total = total;
-            // Chunks are cut to the capacity, so this cannot fail.
-            let _ = message.set(chunk);
+            // Pieces are cut to the capacity, so this cannot fail.
+            let _ = message.set(piece);
         })?;
     }
     Ok(())
@@ -330,6 +392,9 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
     // map-sink waits for the path's topic; no path comes (no particle keeps one here), so
     // it writes the online estimate as the trajectory.
     let _path = Outlet::<PathChunk>::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
+    let clouds = CloudOutlet::create(args.particles_every, || {
+        Outlet::create(&domain, &node, topic::PARTICLES, delivery, 0)
+    })?;
     say("ready");
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
@@ -338,6 +403,7 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
     let mut last_header = Header::new(0, 0, "map");
     let mut left_out = publish_map(&maps, &corners, last_header)?;
     let mut step_ms: Vec<f64> = Vec::new();
+    let mut processed = 0u64;
     loop {
         if wait_any(&[&features, &scans], Duration::from_millis(100))? == Wake::Shutdown {
             break;
@@ -409,6 +475,11 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
                 };
             })?;
             last_header = header;
+            processed += 1;
+            if let Some(outlet) = clouds.due(processed) {
+                let poses = localizer.particle_poses().iter().copied();
+                publish_cloud(outlet, header, poses, localizer.particle_log_weights())?;
+            }
         }
     }
     publish_map(&maps, &corners, last_header)?;

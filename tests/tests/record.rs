@@ -78,6 +78,9 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         ("/slam/map", "slam.MapSnapshot"),
         ("/sim/world_corners", "slam.WorldCorners"),
         ("/robot/odometry", "slam.Odometry"),
+        ("/slam/particles", "foxglove.PosesInFrame"),
+        ("/map/path", "foxglove.PosesInFrame"),
+        ("/map/grid", "foxglove.Grid"),
     ]
     .into_iter()
     .collect();
@@ -118,6 +121,9 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(count("/slam/pose"), processed);
     assert_eq!(count("/sim/world_corners"), 1);
     assert_eq!(count("/slam/path"), 1);
+    assert_eq!(count("/map/path"), 1);
+    assert_eq!(count("/map/grid"), 1);
+    assert_eq!(count("/slam/particles"), processed / 20);
     assert!(count("/robot/odometry") > 0);
     // A map every 20 scans (0.5 s), recorded at most every 2 s of data, and the last.
     let maps = count("/slam/map");
@@ -179,5 +185,144 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert!(beams > 100, "{beams} beams");
     assert_eq!(scan["frame_id"], "laser");
 
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Every message of `topic` in the recording, as JSON, in the file's order.
+fn messages_on(bytes: &[u8], topic: &str) -> Vec<serde_json::Value> {
+    mcap::MessageStream::new(bytes)
+        .expect("a readable file")
+        .map(|m| m.expect("every message reads"))
+        .filter(|m| m.channel.topic == topic)
+        .map(|m| serde_json::from_slice(&m.data).expect("JSON"))
+        .collect()
+}
+
+/// Standard base64 with padding, as Foxglove's `bytes` travel in JSON.
+fn base64_decode(text: &str) -> Vec<u8> {
+    let value = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        b'/' => 63,
+        _ => panic!("not base64: {c}"),
+    };
+    let mut bytes = Vec::new();
+    for group in text.as_bytes().chunks(4) {
+        let digits: Vec<u8> = group
+            .iter()
+            .filter(|&&c| c != b'=')
+            .map(|&c| value(c))
+            .collect();
+        let n = digits
+            .iter()
+            .enumerate()
+            .fold(0u32, |n, (i, &d)| n | u32::from(d) << (18 - 6 * i));
+        bytes.extend_from_slice(&n.to_be_bytes()[1..digits.len()]);
+    }
+    bytes
+}
+
+/// map.pgm's width, height and pixels (rows from the top), read by the Netpbm rules for the
+/// header map-sink writes (no comments).
+fn read_pgm(bytes: &[u8]) -> (usize, usize, Vec<u8>) {
+    let mut fields = Vec::new();
+    let mut at = 0;
+    while fields.len() < 4 {
+        let start = at;
+        while !bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        fields.push(std::str::from_utf8(&bytes[start..at]).unwrap().to_owned());
+        at += 1;
+    }
+    assert_eq!(fields[0], "P5");
+    let width: usize = fields[1].parse().unwrap();
+    let height: usize = fields[2].parse().unwrap();
+    (width, height, bytes[at..].to_vec())
+}
+
+/// map.yaml's value of `key`.
+fn yaml_value(yaml: &str, key: &str) -> String {
+    yaml.lines()
+        .find_map(|l| l.strip_prefix(&format!("{key}: ")))
+        .unwrap_or_else(|| panic!("{key} in map.yaml"))
+        .to_owned()
+}
+
+#[test]
+fn a_recording_holds_the_grid_and_refined_path_map_sink_wrote_and_the_particle_clouds() {
+    // The final path refined (the default), so map-sink's path is not the filter's.
+    let out = scratch("record-grid");
+    let frames = FRAMES.to_string();
+    let args = [
+        "--world", "office", "--frames", &frames, "--rate", "0", "--record",
+    ];
+    assert_success(&launch(&domain("record-grid"), &out, &args));
+    let bytes = std::fs::read(out.join("run.mcap")).expect("run.mcap");
+
+    // The grid: one message, map.pgm's size, geometry and pixels, rows from the lowest y.
+    let grids = messages_on(&bytes, "/map/grid");
+    assert_eq!(grids.len(), 1);
+    let grid = &grids[0];
+    let (width, height, pixels) = read_pgm(&std::fs::read(out.join("map.pgm")).unwrap());
+    assert_eq!(grid["column_count"], width as u64);
+    assert_eq!(grid["row_count"], height as u64);
+    assert_eq!(grid["frame_id"], "map");
+    let yaml = std::fs::read_to_string(out.join("map.yaml")).unwrap();
+    let resolution: f64 = yaml_value(&yaml, "resolution").parse().unwrap();
+    assert_eq!(grid["cell_size"]["x"].as_f64(), Some(resolution));
+    let origin: Vec<f64> = yaml_value(&yaml, "origin")
+        .trim_matches(['[', ']'])
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    assert!((grid["pose"]["position"]["x"].as_f64().unwrap() - origin[0]).abs() < 1e-9);
+    assert!((grid["pose"]["position"]["y"].as_f64().unwrap() - origin[1]).abs() < 1e-9);
+    let rgba = base64_decode(grid["data"].as_str().unwrap());
+    assert_eq!(rgba.len(), 4 * width * height);
+    for row in 0..height {
+        // The image's first row is the largest y; the grid's first the lowest.
+        let image_row = &pixels[(height - 1 - row) * width..][..width];
+        let grid_row: Vec<u8> = rgba[row * width * 4..][..width * 4]
+            .chunks(4)
+            .map(|cell| cell[0])
+            .collect();
+        assert_eq!(grid_row, image_row, "row {row} from the bottom");
+    }
+
+    // map-sink's path is trajectory.tum's, pose for pose; the filter's differs from it.
+    let trajectory = read_tum(&out.join("trajectory.tum"));
+    let paths = messages_on(&bytes, "/map/path");
+    assert_eq!(paths.len(), 1);
+    let stamps = paths[0]["stamps_ns"].as_array().unwrap();
+    let planar = paths[0]["planar"].as_array().unwrap();
+    assert_eq!(planar.len(), trajectory.len());
+    for ((stamp, pose), tum) in stamps.iter().zip(planar).zip(&trajectory) {
+        assert_eq!(stamp.as_u64(), Some(tum.stamp_ns));
+        assert_eq!(pose["x"].as_f64(), Some(tum.position[0]));
+        assert_eq!(pose["y"].as_f64(), Some(tum.position[1]));
+        let yaw = pose["yaw"].as_f64().unwrap();
+        assert!((yaw - tum.yaw()).abs() < 1e-9, "{yaw} {}", tum.yaw());
+    }
+    let filter_path = messages_on(&bytes, "/slam/path");
+    assert_ne!(filter_path[0]["planar"], paths[0]["planar"], "refined");
+
+    // A particle cloud every 20 scans (the default), each of every particle.
+    let clouds = messages_on(&bytes, "/slam/particles");
+    assert_eq!(clouds.len() as u64, FRAMES / 20);
+    for (k, cloud) in clouds.iter().enumerate() {
+        assert_eq!(cloud["seq"], 20 * (k as u64 + 1) - 1, "the 20th scan's");
+        assert_eq!(cloud["frame_id"], "map");
+        assert_eq!(cloud["poses"].as_array().map(Vec::len), Some(100));
+        let total: f64 = cloud["weights"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w.as_f64().unwrap())
+            .sum();
+        assert!((total - 1.0).abs() < 0.01, "weights sum to {total}");
+    }
     let _ = std::fs::remove_dir_all(&out);
 }

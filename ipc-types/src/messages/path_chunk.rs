@@ -1,15 +1,15 @@
 //! The filter's whole trajectory, sent in pieces at the end of a run.
 
-use std::borrow::Cow;
-
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
 use zerocopy::FromZeros;
 
 use super::bounded_array::BoundedArray;
+use super::chunked::chunked_message;
 use super::pose::Pose2;
 use crate::capacity::{CapacityError, MAX_PATH_CHUNK_POSES};
 use crate::header::Header;
+use crate::transport::{Outlet, PublishError};
 
 /// One pose of a path: a scan's stamp and the pose (`map_from_robot`) at it.
 #[repr(C)]
@@ -40,61 +40,29 @@ impl From<StampedPose> for slam_geom::StampedPose {
     }
 }
 
-/// A piece of a path: poses `first .. first + pose_count` of `total`, in stamp order. A path
-/// of any length travels as consecutive chunks; the receiver has it all once it holds
-/// `total` poses.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
-#[type_name("slam::PathChunk::v1")]
-pub struct PathChunk {
-    /// `seq` numbers the chunks of one path from 0; `stamp_ns` is the last scan's.
-    pub header: Header,
-    /// Index in the whole path of this chunk's first pose.
-    pub first: u64,
-    /// Poses in the whole path.
-    pub total: u64,
-    pub poses: BoundedArray<StampedPose, MAX_PATH_CHUNK_POSES>,
+chunked_message! {
+    /// A piece of a path: poses `first .. first + pose_count` of `total`, in stamp order. A
+    /// path of any length travels as consecutive chunks; the receiver has it all once it
+    /// holds `total` poses. The header's `seq` numbers the chunks of one path from 0, its
+    /// `stamp_ns` is the last scan's.
+    PathChunk, PathChunkRecord, StampedPose, MAX_PATH_CHUNK_POSES, "slam::PathChunk::v1",
+    "path poses", poses {}
 }
 
-impl PathChunk {
-    pub fn poses(&self) -> &[StampedPose] {
-        self.poses.as_slice()
-    }
-
-    pub fn set(&mut self, poses: &[StampedPose]) -> Result<(), CapacityError> {
-        self.poses.set("path poses", poses)
-    }
-
-    pub fn to_record(&self) -> PathChunkRecord<'_> {
-        PathChunkRecord {
-            header: self.header,
-            first: self.first,
-            total: self.total,
-            poses: Cow::Borrowed(self.poses()),
+impl Outlet<PathChunk> {
+    /// Publishes a whole path as consecutive chunks numbered from 0 (their `seq`), each
+    /// stamped `stamp_ns` (the last scan's) in frame `map`.
+    pub fn publish_path(&self, path: &[StampedPose], stamp_ns: u64) -> Result<(), PublishError> {
+        let total = path.len() as u64;
+        for (index, chunk) in path.chunks(MAX_PATH_CHUNK_POSES).enumerate() {
+            self.publish(|message| {
+                message.header = Header::new(index as u64, stamp_ns, "map");
+                message.first = (index * MAX_PATH_CHUNK_POSES) as u64;
+                message.total = total;
+                // Chunks are cut to the capacity, so this cannot fail.
+                let _ = message.set(chunk);
+            })?;
         }
-    }
-
-    pub fn from_record(record: &PathChunkRecord<'_>) -> Result<Box<Self>, CapacityError> {
-        let mut message = <Self as crate::Zeroable>::boxed_zeroed();
-        message.header = record.header;
-        message.first = record.first;
-        message.total = record.total;
-        message.set(&record.poses)?;
-        Ok(message)
-    }
-}
-
-/// [`PathChunk`] without the unused capacity.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PathChunkRecord<'a> {
-    pub header: Header,
-    pub first: u64,
-    pub total: u64,
-    pub poses: Cow<'a, [StampedPose]>,
-}
-
-impl Serialize for PathChunk {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        self.to_record().serialize(serializer)
+        Ok(())
     }
 }

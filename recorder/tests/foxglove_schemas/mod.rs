@@ -1,6 +1,8 @@
 //! Foxglove's well-known schemas as JSON schemas, written from Foxglove's documented fields
 //! (foxglove.LaserScan, foxglove.FrameTransform, foxglove.PoseInFrame,
-//! foxglove.PosesInFrame): required fields, their types and the bounds of `time`. The
+//! foxglove.PosesInFrame, foxglove.Grid): required fields, their types and the bounds of
+//! `time` (foxglove.Grid from foxglove/schemas' `schemas/jsonschema/Grid.json`: its bounds
+//! and `NumericType`'s values too). The
 //! recorder's messages must validate against these, not only against the schemas the
 //! recorder derives from its own structs.
 
@@ -104,9 +106,53 @@ pub fn poses_in_frame() -> Value {
     })
 }
 
-/// Foxglove's schema of that name, if it is one of the four.
+fn vector2() -> Value {
+    json!({
+        "type": "object",
+        "properties": { "x": { "type": "number" }, "y": { "type": "number" } },
+        "required": ["x", "y"]
+    })
+}
+
+/// `foxglove.PackedElementField`, its `type` a `foxglove.NumericType` (UNKNOWN 0, UINT8 1,
+/// INT8 2, UINT16 3, INT16 4, UINT32 5, INT32 6, FLOAT32 7, FLOAT64 8).
+fn packed_element_field() -> Value {
+    let numeric_types: Vec<Value> = (0..=8).map(|v| json!({ "const": v })).collect();
+    json!({
+        "type": "object",
+        "properties": {
+            "name": { "type": "string" },
+            "offset": { "type": "integer", "minimum": 0 },
+            "type": { "oneOf": numeric_types }
+        },
+        "required": ["name", "offset", "type"]
+    })
+}
+
+pub fn grid() -> Value {
+    json!({
+        "title": "foxglove.Grid",
+        "type": "object",
+        "properties": {
+            "timestamp": time(),
+            "frame_id": { "type": "string" },
+            "pose": pose(),
+            "column_count": { "type": "integer", "minimum": 0 },
+            "cell_size": vector2(),
+            "row_stride": { "type": "integer", "minimum": 0 },
+            "cell_stride": { "type": "integer", "minimum": 0 },
+            "fields": { "type": "array", "items": packed_element_field() },
+            "data": { "type": "string", "contentEncoding": "base64" }
+        },
+        "required": ["timestamp", "frame_id", "pose", "column_count", "cell_size", "row_stride",
+                     "cell_stride", "fields", "data"]
+    })
+}
+
+/// Foxglove's schema of that name, if it is one of the five.
 pub fn by_name(name: &str) -> Option<Value> {
     match name {
+        "foxglove.Grid" => Some(grid()),
         "foxglove.LaserScan" => Some(laser_scan()),
         "foxglove.FrameTransform" => Some(frame_transform()),
         "foxglove.PoseInFrame" => Some(pose_in_frame()),

@@ -198,6 +198,11 @@ impl FastSlam {
         self.particles.iter().map(|p| p.pose)
     }
 
+    /// Every particle's log weight (since the last resampling), in particle order.
+    pub fn particle_log_weights(&self) -> impl Iterator<Item = f64> + '_ {
+        self.particles.iter().map(|p| p.log_weight)
+    }
+
     /// The whole path of the particle that carries the most weight now, one pose per scan
     /// from the first: the filter's answer for the trajectory, consistent with
     /// [`FastSlam::best_map`] (the map was built from these poses).

@@ -34,6 +34,14 @@ pub(crate) fn normalise(log_weights: &[f64], weights: &mut Vec<f64>) {
     }
 }
 
+/// The normalised weights of `log_weights`, as [`normalise`] makes them: the particles'
+/// weights as a viewer shows them.
+pub fn normalised_weights(log_weights: &[f64]) -> Vec<f64> {
+    let mut weights = Vec::with_capacity(log_weights.len());
+    normalise(log_weights, &mut weights);
+    weights
+}
+
 /// `1 / sum w_i^2` of normalised weights: N for uniform weights, 1 when one dominates.
 pub(crate) fn effective_sample_size(weights: &[f64]) -> f64 {
     let sum_squares: f64 = weights.iter().map(|w| w * w).sum();

@@ -253,6 +253,11 @@ impl Localizer {
         &self.poses
     }
 
+    /// Every particle's log weight, in the order of [`Localizer::particle_poses`].
+    pub fn particle_log_weights(&self) -> &[f64] {
+        &self.log_weights
+    }
+
     /// Moves the particles by the front end's step and, once the robot has moved enough
     /// (and at the first scan), weights them by the scan's beams and resamples. `scan` is
     /// `None` when the scan's beams did not arrive.
