@@ -171,6 +171,17 @@ fn check_recording_of(out: &Path, odometry: bool) {
     if odometry {
         expected.push(("/robot/odometry", "slam.Odometry"));
     }
+    // map-sink's path, its grid when it traced one, and a particle cloud every 20 scans.
+    let metrics = metrics(out);
+    let processed = metrics.frames_processed;
+    let grid = out.join("map.pgm").exists();
+    expected.push(("/map/path", "foxglove.PosesInFrame"));
+    if grid {
+        expected.push(("/map/grid", "foxglove.Grid"));
+    }
+    if processed >= 20 {
+        expected.push(("/slam/particles", "foxglove.PosesInFrame"));
+    }
     expected.sort_unstable();
     let found: Vec<(&str, &str)> = topics
         .iter()
@@ -181,15 +192,17 @@ fn check_recording_of(out: &Path, odometry: bool) {
         assert_eq!(read.schema_encoding, "jsonschema", "{topic}");
         assert_eq!(read.message_encoding, "json", "{topic}");
     }
-    let metrics = metrics(out);
     let published = metrics.frames_published;
-    let processed = metrics.frames_processed;
     assert_eq!(topics["/lidar/scan"].messages, published);
     assert_eq!(topics["/perception/features"].messages, published);
     assert_eq!(topics["/slam/pose"].messages, processed);
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(topics["/tf"].messages, processed + 1);
     assert_eq!(topics["/slam/path"].messages, 1);
+    assert_eq!(topics["/map/path"].messages, 1);
+    let count = |topic: &str| topics.get(topic).map_or(0, |t| t.messages);
+    assert_eq!(count("/map/grid"), u64::from(grid));
+    assert_eq!(count("/slam/particles"), processed / 20);
     // The front end's pose at every scan: the scans' first and last stamps.
     let (first, last) = first_and_last_stamps(&out.join("dead_reckoning.tum"));
     for topic in ["/lidar/scan", "/slam/pose", "/perception/features"] {
