@@ -23,9 +23,6 @@ struct Args {
     /// iceoryx2 domain of the run.
     #[arg(long, default_value = "default")]
     domain: String,
-    /// Output directory; the recording is DIR/run.mcap.
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
     /// slam-proc publishes its particle cloud every few scans: record it.
     #[arg(long)]
     particles: bool,
@@ -34,6 +31,9 @@ struct Args {
     /// dies).
     #[arg(long)]
     final_map: bool,
+    /// Output directory; the recording is DIR/run.mcap.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
 }
 
 fn main() -> ExitCode {

@@ -5,9 +5,9 @@
 mod foxglove_schemas;
 
 use ipc_types::{
-    Corner, Features, GridCells, GridGeometry, GroundTruthPose, Header, LaserScan, Line, MapCorner,
-    MapSnapshot, Odometry, Particle, ParticleCloud, PathChunk, Pose2, PoseEstimate, ScanMotion,
-    StampedPose, TrueCorner, WorldCorners, Zeroable,
+    Corner, Features, GridCells, GridCellsRecord, GridGeometry, GroundTruthPose, Header, LaserScan,
+    Line, MapCorner, MapSnapshot, Odometry, Particle, ParticleCloud, PathChunk, Pose2,
+    PoseEstimate, ScanMotion, StampedPose, TrueCorner, WorldCorners, Zeroable,
 };
 use recorder::{
     ChannelMessage, GridMessage, GridPieces, GroundTruthMessage, MapMessage, MapPathMessage,
@@ -341,14 +341,16 @@ fn the_grid_is_a_foxglove_grid_of_rgba_cells_from_its_pieces() {
     assert_eq!(json["data"], recorder::base64(&rgba));
     assert_eq!(json["data"].as_str().unwrap().len(), 32);
 
-    // A piece out of place completes nothing and is counted.
-    let mut piece = GridCells::boxed_zeroed();
-    piece.grid.width = 3;
-    piece.grid.height = 2;
-    piece.total = 6;
-    piece.first = 4;
-    piece.set(&cells[4..]).unwrap();
-    assert!(pieces.add(&piece).is_none());
+    // A piece out of place (its grid's start never came) completes nothing and is counted.
+    let stray = GridCells::from_record(&GridCellsRecord {
+        header: header(1, 9_000_000_000, "map"),
+        grid: geometry,
+        first: 4,
+        total: 6,
+        cells: cells[4..].into(),
+    })
+    .unwrap();
+    assert!(pieces.add(&stray).is_none());
     assert_eq!(pieces.out_of_place, 1);
 }
 

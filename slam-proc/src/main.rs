@@ -389,12 +389,12 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
     let delivery = features.delivery();
     let maps = Outlet::create(&domain, &node, topic::MAP, delivery, 1)?;
     let poses = Outlet::create(&domain, &node, topic::POSE, delivery, 0)?;
-    // map-sink waits for the path's topic; no path comes (no particle keeps one here), so
-    // it writes the online estimate as the trajectory.
-    let _path = Outlet::<PathChunk>::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
     let clouds = CloudOutlet::create(args.particles_every, || {
         Outlet::create(&domain, &node, topic::PARTICLES, delivery, 0)
     })?;
+    // map-sink waits for the path's topic; no path comes (no particle keeps one here), so
+    // it writes the online estimate as the trajectory.
+    let _path = Outlet::<PathChunk>::create(&domain, &node, topic::PATH, Delivery::Lossless, 0)?;
     say("ready");
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
