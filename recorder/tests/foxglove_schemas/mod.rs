@@ -1,8 +1,11 @@
 //! Foxglove's well-known schemas as JSON schemas, written from Foxglove's documented fields
 //! (foxglove.LaserScan, foxglove.FrameTransform, foxglove.PoseInFrame,
-//! foxglove.PosesInFrame): required fields, their types and the bounds of `time`. The
-//! recorder's messages must validate against these, not only against the schemas the
-//! recorder derives from its own structs.
+//! foxglove.PosesInFrame): required fields, their types and the bounds of `time`; and
+//! foxglove.SceneUpdate as Foxglove publishes it (`SceneUpdate.json`, unchanged from
+//! github.com/foxglove/foxglove-sdk, `schemas/jsonschema/SceneUpdate.json` at commit
+//! 9ed45b16aac79dcd9a541d45d5baf7a9c45e36d7), too deep to write out by hand without
+//! mistakes. The recorder's messages must validate against these, not only against the
+//! schemas the recorder derives from its own structs.
 
 use serde_json::{Value, json};
 
@@ -104,13 +107,18 @@ pub fn poses_in_frame() -> Value {
     })
 }
 
-/// Foxglove's schema of that name, if it is one of the four.
+pub fn scene_update() -> Value {
+    serde_json::from_str(include_str!("SceneUpdate.json")).expect("Foxglove's schema is JSON")
+}
+
+/// Foxglove's schema of that name, if it is one of the five.
 pub fn by_name(name: &str) -> Option<Value> {
     match name {
         "foxglove.LaserScan" => Some(laser_scan()),
         "foxglove.FrameTransform" => Some(frame_transform()),
         "foxglove.PoseInFrame" => Some(pose_in_frame()),
         "foxglove.PosesInFrame" => Some(poses_in_frame()),
+        "foxglove.SceneUpdate" => Some(scene_update()),
         _ => None,
     }
 }
