@@ -83,6 +83,8 @@ struct Received {
     end: Option<(u64, u64)>,
     odometry_end: Option<(u64, u64)>,
     first_to_last_scan: Duration,
+    /// When each scan came, after the first.
+    arrivals: Vec<Duration>,
 }
 
 /// Subscribes to the replay's topics in `domain` and collects until end of stream.
@@ -130,6 +132,7 @@ fn receive(domain: &Domain, with_odometry: bool) -> Received {
             assert_eq!(scan.ranges()[1], f32::INFINITY, "81.91 m = no return");
             let now = Instant::now();
             received.first_to_last_scan = now - *first_scan.get_or_insert(now);
+            received.arrivals.push(received.first_to_last_scan);
             received.scans.push((scan.header.seq, scan.header.stamp_ns));
         }
     }
@@ -329,6 +332,60 @@ fn real_time_follows_the_logs_clock_scaled_by_the_rate() {
         received.first_to_last_scan >= Duration::from_millis(180),
         "{:?}",
         received.first_to_last_scan
+    );
+}
+
+#[test]
+fn a_recording_replays_at_its_recorded_pace_scaled_by_the_rate() {
+    // Five scans recorded over 1.6 s with a long pause in the middle, replayed twice as fast:
+    // they come 0, 25, 525, 550 and 800 ms after the first, the pause kept (a replay at a
+    // steady rate would spread them evenly).
+    let offsets_ms: [u64; 5] = [0, 50, 1050, 1100, 1600];
+    let start_ns = 1_700_000_000_000_000_000;
+    let dir = std::env::temp_dir().join(format!("lidar-replay-paced-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut recording = recorder::Recording::create(&dir).unwrap();
+    let mut ranges = vec![2.5_f32; BEAMS];
+    ranges[0] = 1.0;
+    ranges[1] = f32::INFINITY;
+    for (seq, offset) in offsets_ms.iter().enumerate() {
+        let mut scan = LaserScan::boxed_zeroed();
+        scan.header = Header::new(seq as u64, start_ns + offset * 1_000_000, "laser");
+        scan.angle_increment = std::f32::consts::PI / 180.0;
+        scan.range_max = 81.0;
+        scan.set_beams(&ranges, &[]).unwrap();
+        recording.scan(&scan).unwrap();
+    }
+    let file = recording.finish().unwrap().path;
+
+    let args = [
+        "--format",
+        "mcap",
+        "--file",
+        file.to_str().unwrap(),
+        "--rate",
+        "2",
+    ];
+    let replay = Replay::start(domain("mcap-paced"), &args);
+    let received = receive(&replay.domain, false);
+    replay.finish();
+    let _ = std::fs::remove_dir_all(&dir);
+    let stamps: Vec<u64> = received.scans.iter().map(|s| s.1).collect();
+    let expected: Vec<u64> = offsets_ms
+        .iter()
+        .map(|offset| start_ns + offset * 1_000_000)
+        .collect();
+    assert_eq!(stamps, expected, "the recorded stamps, exactly");
+    // Never much early: a busy machine may delay a scan (which shortens the gap before the
+    // next), so the bounds leave 150 ms; a steady rate would leave 200 ms for the pause and
+    // lockstep almost nothing for the whole.
+    let arrivals = &received.arrivals;
+    let pause = arrivals[2] - arrivals[1];
+    assert!(pause >= Duration::from_millis(350), "{arrivals:?}");
+    assert!(
+        received.first_to_last_scan >= Duration::from_millis(650),
+        "{arrivals:?}"
     );
 }
 

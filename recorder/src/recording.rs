@@ -9,7 +9,9 @@ use ipc_types::{
 
 use crate::error::RecordError;
 use crate::grid::{GridMessage, GridPieces};
+use crate::features_scene::FeaturesScenes;
 use crate::ground_truth::GroundTruthMessage;
+use crate::map_scene::MapScenes;
 use crate::mcap_file::{ChannelCount, McapFile};
 use crate::own::MapMessage;
 use crate::particles::{ParticlePieces, ParticlesMessage};
@@ -22,10 +24,10 @@ use crate::transform::{BASE_FRAME, TransformMessage};
 /// The recording's file name in the run's directory.
 pub const RECORDING_FILE: &str = "run.mcap";
 
-/// A map snapshot is recorded at most once per this much data time, and the last one at
-/// the end: each holds the whole map, so a run's recording would otherwise grow with the
-/// square of its length (a 40 Hz run sends one every half second), and one every two
-/// seconds is plenty to watch the map grow.
+/// A map snapshot (and its scene) is recorded at most once per this much data time, and the
+/// last one at the end: each holds the whole map, so a run's recording would otherwise grow
+/// with the square of its length (a 40 Hz run sends one every half second), and one every
+/// two seconds is plenty to watch the map grow.
 pub const MAP_PERIOD_NS: u64 = 2_000_000_000;
 
 /// What a finished recording holds.
@@ -61,6 +63,10 @@ pub struct Recording {
     map_path: PathChunks,
     grid: GridPieces,
     particles: ParticlePieces,
+    /// The recorded map snapshots drawn as scenes.
+    map_scenes: MapScenes,
+    /// The features drawn as scenes, a few a second.
+    features_scenes: FeaturesScenes,
 }
 
 impl Recording {
@@ -78,6 +84,8 @@ impl Recording {
             map_path: PathChunks::default(),
             grid: GridPieces::default(),
             particles: ParticlePieces::default(),
+            map_scenes: MapScenes::default(),
+            features_scenes: FeaturesScenes::default(),
         })
     }
 
@@ -109,8 +117,17 @@ impl Recording {
         self.data(odometry.header, || *odometry)
     }
 
+    /// The features on `/perception/features` and, a few a second, as a scene.
     pub fn features(&mut self, features: &Features) -> Result<(), RecordError> {
-        self.data(features.header, || features.to_record())
+        self.data(features.header, || features.to_record())?;
+        let h = features.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        match self.features_scenes.scene(features) {
+            Some(scene) => self.file.write(&scene, h.stamp_ns, h.sent_ns),
+            None => Ok(()),
+        }
     }
 
     /// The estimate on `/slam/pose`, and `map → base_link` at it on `/tf`.
@@ -149,7 +166,19 @@ impl Recording {
             self.maps_left_out += 1;
         }
         self.last_map_ns = Some(h.stamp_ns);
-        self.file.write(&message, h.stamp_ns, h.sent_ns)
+        self.write_map(&message, h.stamp_ns, h.sent_ns)
+    }
+
+    /// A map snapshot on `/slam/map`, and as a scene.
+    fn write_map(
+        &mut self,
+        message: &MapMessage,
+        stamp_ns: u64,
+        sent_ns: u64,
+    ) -> Result<(), RecordError> {
+        self.file.write(message, stamp_ns, sent_ns)?;
+        let scene = self.map_scenes.scene(message);
+        self.file.write(&scene, stamp_ns, sent_ns)
     }
 
     /// A chunk of the final path; the path is recorded once all of it is in.
@@ -230,7 +259,7 @@ impl Recording {
     /// summary and indexes.
     pub fn finish(mut self) -> Result<RecordingSummary, RecordError> {
         if let Some((message, stamp_ns, sent_ns)) = self.held_map.take() {
-            self.file.write(&message, stamp_ns, sent_ns)?;
+            self.write_map(&message, stamp_ns, sent_ns)?;
         }
         let out_of_place = self.chunks.out_of_place;
         Ok(RecordingSummary {

@@ -10,9 +10,9 @@ use ipc_types::{
     PoseEstimate, ScanMotion, StampedPose, TrueCorner, WorldCorners, Zeroable,
 };
 use recorder::{
-    ChannelMessage, GridMessage, GridPieces, GroundTruthMessage, MapMessage, MapPathMessage,
-    ParticlePieces, ParticlesMessage, PathChunks, PathMessage, PoseMessage, ScanMessage,
-    TransformMessage,
+    ARM_LENGTH, ChannelMessage, FEATURES_SCENE_PERIOD_NS, FeaturesScenes, GridMessage, GridPieces,
+    GroundTruthMessage, MapMessage, MapPathMessage, MapScenes, ParticlePieces, ParticlesMessage,
+    PathChunks, PathMessage, PoseMessage, ScanMessage, TransformMessage, features_scene,
 };
 use serde_json::Value;
 
@@ -508,4 +508,253 @@ fn odometry_features_maps_and_world_corners_are_their_messages_in_serde_form() {
             head_json(0, "map")
         )
     );
+}
+
+/// A map corner at `tip` whose walls run along `d1` and `d2`, with a position covariance of
+/// standard deviations `sigmas` along axes turned by `yaw`.
+fn map_corner(tip: (f64, f64), d1: f64, d2: f64, sigmas: (f64, f64), yaw: f64) -> MapCorner {
+    let unit = |a: f64| slam_geom::Point2::new(a.cos(), a.sin());
+    let truth =
+        slam_geom::TrueCorner::from_arms(slam_geom::Point2::new(tip.0, tip.1), unit(d1), unit(d2));
+    let (c, s) = (yaw.cos(), yaw.sin());
+    let (major, minor) = (sigmas.0 * sigmas.0, sigmas.1 * sigmas.1);
+    let mut covariance = [0.0; 16];
+    covariance[0] = c * c * major + s * s * minor;
+    covariance[1] = c * s * (major - minor);
+    covariance[4] = covariance[1];
+    covariance[5] = s * s * major + c * c * minor;
+    covariance[10] = 1e-4;
+    covariance[15] = 1e-4;
+    MapCorner {
+        corner: Corner {
+            x: truth.x,
+            y: truth.y,
+            heading: truth.heading,
+            angle: truth.angle,
+            covariance,
+        },
+        observations: 5,
+        reserved: 0,
+    }
+}
+
+fn map_of(seq: u64, stamp_ns: u64, corners: &[MapCorner]) -> MapMessage {
+    let mut map = MapSnapshot::boxed_zeroed();
+    map.header = header(seq, stamp_ns, "map");
+    map.set(corners).unwrap();
+    MapMessage::new(&map)
+}
+
+/// `[x, y]` of a JSON `Vector3` on the z = 0 plane.
+fn xy(point: &Value) -> [f64; 2] {
+    assert_eq!(point["z"], 0.0);
+    [point["x"].as_f64().unwrap(), point["y"].as_f64().unwrap()]
+}
+
+fn near(a: [f64; 2], b: [f64; 2], tolerance: f64) -> bool {
+    (a[0] - b[0]).hypot(a[1] - b[1]) <= tolerance
+}
+
+#[test]
+fn a_map_is_a_foxglove_scene_update_of_one_entity_per_corner() {
+    let turn = 0.5;
+    let corners = [
+        // Walls along +x and +y from (1, 2): a room's corner, position known to 2 cm by 1 cm
+        // along axes turned by 0.5 rad.
+        map_corner(
+            (1.0, 2.0),
+            0.0,
+            std::f64::consts::FRAC_PI_2,
+            (0.02, 0.01),
+            turn,
+        ),
+        map_corner((-3.0, 0.5), 2.0, 3.5, (0.004, 0.004), 0.0),
+        map_corner((4.0, -1.0), -1.0, 1.0, (0.01, 0.005), -1.0),
+    ];
+    let mut scenes = MapScenes::default();
+    let json = check(&scenes.scene(&map_of(20, 4_000_000_001, &corners)));
+    assert_eq!(json["deletions"], serde_json::json!([]));
+    let entities = json["entities"].as_array().unwrap();
+    assert_eq!(entities.len(), 3);
+    for (index, entity) in entities.iter().enumerate() {
+        assert_eq!(entity["id"], format!("corner {index}"));
+        assert_eq!(entity["frame_id"], "map");
+        assert_eq!(entity["timestamp"]["sec"], 4);
+        assert_eq!(entity["timestamp"]["nsec"], 1);
+        // Shown until a later snapshot replaces or deletes it, where the map had it.
+        assert_eq!(entity["lifetime"], serde_json::json!({"sec": 0, "nsec": 0}));
+        assert_eq!(entity["frame_locked"], false);
+        // The arms: from the end of one wall's arm through the tip to the other's.
+        let corner = corners[index].corner;
+        let strip = &entity["lines"][0];
+        assert_eq!(strip["type"], 0, "a line strip");
+        let points: Vec<[f64; 2]> = strip["points"].as_array().unwrap().iter().map(xy).collect();
+        assert_eq!(points.len(), 3);
+        assert!(near(points[1], [corner.x, corner.y], 1e-3), "{points:?}");
+        for end in [points[0], points[2]] {
+            let length = (end[0] - corner.x).hypot(end[1] - corner.y);
+            assert!((length - ARM_LENGTH).abs() < 2e-3, "{length}");
+        }
+    }
+    // The first corner's walls run along +x and +y: its arms end there.
+    let strip = &entities[0]["lines"][0]["points"];
+    let ends = [xy(&strip[0]), xy(&strip[2])];
+    let along_x = [1.0 + ARM_LENGTH, 2.0];
+    let along_y = [1.0, 2.0 + ARM_LENGTH];
+    assert!(
+        (near(ends[0], along_x, 1e-3) && near(ends[1], along_y, 1e-3))
+            || (near(ends[0], along_y, 1e-3) && near(ends[1], along_x, 1e-3)),
+        "{ends:?}"
+    );
+    // Its ellipse: 2 sigma each way (8 cm by 4 cm across), the long axis turned by 0.5 rad,
+    // flat, see-through.
+    let sphere = &entities[0]["spheres"][0];
+    assert_eq!(sphere["size"]["x"], 0.08);
+    assert_eq!(sphere["size"]["y"], 0.04);
+    assert!(sphere["size"]["z"].as_f64().unwrap() < 0.01);
+    let q = &sphere["pose"]["orientation"];
+    assert!((q["z"].as_f64().unwrap() - (0.5 * turn).sin()).abs() < 1e-4);
+    assert!((q["w"].as_f64().unwrap() - (0.5 * turn).cos()).abs() < 1e-4);
+    assert_eq!(xy(&sphere["pose"]["position"]), [1.0, 2.0]);
+    assert!(sphere["color"]["a"].as_f64().unwrap() < 1.0);
+
+    // The next snapshot has one corner: the two shown before and gone are deleted, as of
+    // the new snapshot's stamp (Foxglove deletes only what is older).
+    let json = check(&scenes.scene(&map_of(21, 6_000_000_000, &corners[..1])));
+    assert_eq!(json["entities"].as_array().unwrap().len(), 1);
+    assert_eq!(
+        json["deletions"],
+        serde_json::json!([
+            {"timestamp": {"sec": 6, "nsec": 0}, "type": 0, "id": "corner 1"},
+            {"timestamp": {"sec": 6, "nsec": 0}, "type": 0, "id": "corner 2"}
+        ])
+    );
+    // A corner that is not finite is not drawn and what was shown in its place goes; the
+    // scene stays valid JSON for Foxglove (no nulls).
+    let mut broken = corners[..2].to_vec();
+    broken[0].corner.x = f64::NAN;
+    let json = check(&scenes.scene(&map_of(22, 8_000_000_000, &broken)));
+    let ids: Vec<&Value> = json["entities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| &e["id"])
+        .collect();
+    assert_eq!(ids, ["corner 1"]);
+    assert_eq!(json["deletions"][0]["id"], "corner 0");
+    assert_eq!(json["deletions"].as_array().unwrap().len(), 1);
+}
+
+fn features_of(stamp_ns: u64) -> Box<Features> {
+    let mut features = Features::boxed_zeroed();
+    features.header = header(9, stamp_ns, "laser");
+    let line = |start: [f64; 2], end: [f64; 2]| Line {
+        rho: 0.0,
+        theta: 0.0,
+        covariance: [1e-4, 0.0, 0.0, 1e-4],
+        start,
+        end,
+        point_count: 30,
+        reserved: 0,
+    };
+    let lines = [
+        line([2.000_4, -1.234_56], [2.0, 1.0]),
+        line([2.0, 1.0], [-0.5, 1.0]),
+        line([f64::NAN, 0.0], [1.0, 1.0]),
+    ];
+    let corner = map_corner(
+        (2.0, 1.0),
+        -std::f64::consts::FRAC_PI_2,
+        std::f64::consts::PI,
+        (0.03, 0.01),
+        0.2,
+    )
+    .corner;
+    let mut hidden = corner;
+    hidden.angle = f64::INFINITY;
+    features.set(&lines, &[corner, hidden]).unwrap();
+    features
+}
+
+#[test]
+fn a_scans_features_are_a_foxglove_scene_update_in_the_scans_frame() {
+    let json = check(&features_scene(&features_of(12_500_000_000)));
+    assert_eq!(json["deletions"], serde_json::json!([]));
+    let entities = json["entities"].as_array().unwrap();
+    let ids: Vec<&Value> = entities.iter().map(|e| &e["id"]).collect();
+    assert_eq!(ids, ["lines", "corners"]);
+    for entity in entities {
+        // Drawn where the sensor was at the scan, and kept there.
+        assert_eq!(entity["frame_id"], "laser");
+        assert_eq!(entity["frame_locked"], false);
+        assert_eq!(entity["timestamp"]["sec"], 12);
+        assert_eq!(entity["timestamp"]["nsec"], 500_000_000);
+    }
+    // The lines as segments between their ends, to the millimetre; the one that is not
+    // finite is left out.
+    let segments = &entities[0]["lines"][0];
+    assert_eq!(segments["type"], 2, "a line list");
+    let points: Vec<[f64; 2]> = segments["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(xy)
+        .collect();
+    assert_eq!(points, [[2.0, -1.235], [2.0, 1.0], [2.0, 1.0], [-0.5, 1.0]]);
+    // The finite corner: its arms as two segments from the tip, and its ellipse.
+    let corners = &entities[1];
+    let arms: Vec<[f64; 2]> = corners["lines"][0]["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(xy)
+        .collect();
+    assert_eq!(arms.len(), 4);
+    assert_eq!(arms[1], [2.0, 1.0]);
+    assert_eq!(arms[2], [2.0, 1.0]);
+    let spheres = corners["spheres"].as_array().unwrap();
+    assert_eq!(spheres.len(), 1);
+    assert_eq!(spheres[0]["size"]["x"], 0.12);
+    assert_eq!(spheres[0]["size"]["y"], 0.04);
+}
+
+#[test]
+fn features_are_drawn_at_most_once_a_period() {
+    // A second of 40 Hz scans: one scene per period, from the first scan on.
+    let mut scenes = FeaturesScenes::default();
+    let drawn: Vec<u64> = (0..40)
+        .map(|i| 25_000_000 * i)
+        .filter(|&stamp| scenes.scene(&features_of(stamp)).is_some())
+        .collect();
+    let expected: Vec<u64> = (0..1_000_000_000)
+        .step_by(FEATURES_SCENE_PERIOD_NS as usize)
+        .collect();
+    assert_eq!(drawn, expected);
+}
+
+#[test]
+fn foxglove_refuses_a_scene_it_would_not_read() {
+    // The scene checks mean something only if Foxglove's published schema refuses a bad
+    // scene: a deletion of an unknown kind, a primitive kind left out, a null coordinate.
+    let foxglove = jsonschema::validator_for(&foxglove_schemas::scene_update()).unwrap();
+    let map = map_of(1, 5, &[map_corner((1.0, 1.0), 0.0, 1.0, (0.01, 0.01), 0.0)]);
+    let mut scenes = MapScenes::default();
+    scenes.scene(&map);
+    let good = serde_json::to_value(scenes.scene(&map_of(2, 6, &[]))).unwrap();
+    assert!(foxglove.is_valid(&good));
+    let mut bad = good.clone();
+    *bad.pointer_mut("/deletions/0/type").unwrap() = serde_json::json!(2);
+    assert!(!foxglove.is_valid(&bad));
+    let good = serde_json::to_value(scenes.scene(&map)).unwrap();
+    assert!(foxglove.is_valid(&good));
+    let mut bad = good.clone();
+    bad.pointer_mut("/entities/0")
+        .unwrap()
+        .as_object_mut()
+        .unwrap()
+        .remove("models");
+    assert!(!foxglove.is_valid(&bad));
+    let mut bad = good.clone();
+    *bad.pointer_mut("/entities/0/lines/0/points/1/x").unwrap() = Value::Null;
+    assert!(!foxglove.is_valid(&bad));
 }

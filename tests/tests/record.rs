@@ -76,6 +76,8 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         ("/sim/ground_truth", "foxglove.PoseInFrame"),
         ("/perception/features", "slam.Features"),
         ("/slam/map", "slam.MapSnapshot"),
+        ("/slam/map_scene", "foxglove.SceneUpdate"),
+        ("/perception/scene", "foxglove.SceneUpdate"),
         ("/sim/world_corners", "slam.WorldCorners"),
         ("/robot/odometry", "slam.Odometry"),
         ("/slam/particles", "foxglove.PosesInFrame"),
@@ -128,6 +130,10 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     // A map every 20 scans (0.5 s), recorded at most every 2 s of data, and the last.
     let maps = count("/slam/map");
     assert!((2..FRAMES / 20).contains(&maps), "{maps} maps");
+    // Each drawn as a scene; the features drawn four times a second of data (every tenth
+    // scan at 40 Hz).
+    assert_eq!(count("/slam/map_scene"), maps);
+    assert_eq!(count("/perception/scene"), FRAMES.div_ceil(10));
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(tf_children.get("base_link"), Some(&processed));
     assert_eq!(tf_children.get("laser"), Some(&1));
@@ -171,11 +177,23 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         Some(trajectory.len())
     );
 
-    // The last map is the map map-sink wrote.
+    // The last map is the map map-sink wrote, and its scene draws each of its corners.
     let map = topics["/slam/map"].last.as_ref().expect("a map");
     assert_eq!(
         map["corners"].as_array().map(|c| c.len() as u64),
         Some(map_corners)
+    );
+    let scene = topics["/slam/map_scene"]
+        .last
+        .as_ref()
+        .expect("a map scene");
+    assert_eq!(
+        scene["entities"].as_array().map(|e| e.len() as u64),
+        Some(map_corners)
+    );
+    assert_eq!(
+        topics["/slam/map_scene"].last_log_time,
+        topics["/slam/map"].last_log_time
     );
     // A scan holds its beams.
     let scan = scans.last.as_ref().expect("a scan");

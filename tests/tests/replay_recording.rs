@@ -167,6 +167,8 @@ fn check_recording_of(out: &Path, odometry: bool) {
         ("/slam/path", "foxglove.PosesInFrame"),
         ("/perception/features", "slam.Features"),
         ("/slam/map", "slam.MapSnapshot"),
+        ("/slam/map_scene", "foxglove.SceneUpdate"),
+        ("/perception/scene", "foxglove.SceneUpdate"),
     ];
     if odometry {
         expected.push(("/robot/odometry", "slam.Odometry"));

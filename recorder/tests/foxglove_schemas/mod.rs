@@ -2,9 +2,11 @@
 //! (foxglove.LaserScan, foxglove.FrameTransform, foxglove.PoseInFrame,
 //! foxglove.PosesInFrame, foxglove.Grid): required fields, their types and the bounds of
 //! `time` (foxglove.Grid from foxglove/schemas' `schemas/jsonschema/Grid.json`: its bounds
-//! and `NumericType`'s values too). The
-//! recorder's messages must validate against these, not only against the schemas the
-//! recorder derives from its own structs.
+//! and `NumericType`'s values too); and foxglove.SceneUpdate as Foxglove publishes it
+//! (`SceneUpdate.json`, unchanged from github.com/foxglove/foxglove-sdk,
+//! `schemas/jsonschema/SceneUpdate.json` at commit 9ed45b16aac79dcd9a541d45d5baf7a9c45e36d7),
+//! too deep to write out by hand without mistakes. The recorder's messages must validate
+//! against these, not only against the schemas the recorder derives from its own structs.
 
 use serde_json::{Value, json};
 
@@ -149,7 +151,11 @@ pub fn grid() -> Value {
     })
 }
 
-/// Foxglove's schema of that name, if it is one of the five.
+pub fn scene_update() -> Value {
+    serde_json::from_str(include_str!("SceneUpdate.json")).expect("Foxglove's schema is JSON")
+}
+
+/// Foxglove's schema of that name, if it is one of the six.
 pub fn by_name(name: &str) -> Option<Value> {
     match name {
         "foxglove.Grid" => Some(grid()),
@@ -157,6 +163,7 @@ pub fn by_name(name: &str) -> Option<Value> {
         "foxglove.FrameTransform" => Some(frame_transform()),
         "foxglove.PoseInFrame" => Some(pose_in_frame()),
         "foxglove.PosesInFrame" => Some(poses_in_frame()),
+        "foxglove.SceneUpdate" => Some(scene_update()),
         _ => None,
     }
 }
