@@ -1,15 +1,18 @@
 //! Extraction time of one real 1081-beam scan (seed-hall), with the default configuration.
 
+#[path = "../tests/common/recorded.rs"]
+mod recorded;
+
 use criterion::{Criterion, criterion_group, criterion_main};
-use feature_proc::{Extractor, FeatureConfig, seed_hall};
+use feature_proc::{Extractor, FeatureConfig};
+use recorded::scan_input;
+use test_data::seed_hall_scans;
 
 fn extract(c: &mut Criterion) {
-    let path = seed_hall::default_path();
-    let scans = seed_hall::load(&path).unwrap_or_else(|e| panic!("seed-hall recording: {e}"));
+    let scans = seed_hall_scans();
     let mut extractor = Extractor::new(FeatureConfig::default());
     // A scan with a typical number of lines and corners.
-    let ranges = &scans[200];
-    let scan = seed_hall::scan_input(ranges);
+    let scan = scan_input(&scans[200]);
     c.bench_function("extract seed-hall scan 200", |b| {
         b.iter(|| {
             let found = extractor.extract(std::hint::black_box(&scan));
@@ -20,7 +23,7 @@ fn extract(c: &mut Criterion) {
     c.bench_function("extract seed-hall, all scans in turn", |b| {
         b.iter(|| {
             next = (next + 1) % scans.len();
-            let scan = seed_hall::scan_input(&scans[next]);
+            let scan = scan_input(&scans[next]);
             let found = extractor.extract(std::hint::black_box(&scan));
             std::hint::black_box(found.map(|f| f.corners.len()).unwrap_or(0))
         })

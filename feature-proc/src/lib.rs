@@ -16,8 +16,7 @@
 //!
 //! Conventions (frames, corner heading and angle) are those of docs/CONVENTIONS.md; every
 //! threshold is in [`FeatureConfig`]. The process pairs each scan with the odometry at its
-//! stamp (`stage_kit::odometry_buffer`), so the features carry it downstream. [`seed_hall`]
-//! loads the shared real recording.
+//! stamp (`stage_kit::odometry_buffer`), so the features carry it downstream.
 
 #![forbid(unsafe_code)]
 
@@ -27,7 +26,6 @@ mod extractor;
 mod features;
 mod line_fit;
 mod scan;
-pub mod seed_hall;
 mod segment;
 mod split_merge;
 

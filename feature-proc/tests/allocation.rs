@@ -3,7 +3,11 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use feature_proc::{Extractor, FeatureConfig, seed_hall};
+mod common;
+
+use common::recorded::scan_input;
+use feature_proc::{Extractor, FeatureConfig};
+use test_data::seed_hall_scans;
 
 /// Counts every allocation of this test binary (it holds one test, so nothing else runs).
 struct Counting;
@@ -35,20 +39,19 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn the_hot_path_does_not_allocate() {
-    let path = seed_hall::default_path();
-    let scans = seed_hall::load(&path).unwrap_or_else(|e| panic!("seed-hall recording: {e}"));
+    let scans = seed_hall_scans();
     let mut extractor = Extractor::new(FeatureConfig::default());
     let mut corners = 0;
     // The first pass grows the buffers to the largest scan.
-    for ranges in &scans {
+    for scan in &scans {
         corners += extractor
-            .extract(&seed_hall::scan_input(ranges))
+            .extract(&scan_input(scan))
             .map_or(0, |f| f.corners.len());
     }
     let before = ALLOCATIONS.load(Ordering::Relaxed);
-    for ranges in &scans {
+    for scan in &scans {
         corners += extractor
-            .extract(&seed_hall::scan_input(ranges))
+            .extract(&scan_input(scan))
             .map_or(0, |f| f.corners.len());
     }
     let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;

@@ -4,14 +4,9 @@
 mod common;
 
 use common::eval::{MatchParams, estimate_motion, redetected};
-use feature_proc::{Corner, Extractor, FeatureConfig, seed_hall};
-
-/// The recording, or a failure naming where it was looked for: these tests must not pass
-/// silently without their data.
-fn load() -> Vec<Vec<f32>> {
-    let path = seed_hall::default_path();
-    seed_hall::load(&path).unwrap_or_else(|e| panic!("seed-hall recording missing: {e}"))
-}
+use common::recorded::scan_input;
+use feature_proc::{Corner, Extractor, FeatureConfig};
+use test_data::{ScanRecord, seed_hall_scans};
 
 struct Stats {
     corners_per_scan: f64,
@@ -19,12 +14,12 @@ struct Stats {
     mean_step: f64,
 }
 
-fn run(scans: &[Vec<f32>], config: FeatureConfig) -> Stats {
+fn run(scans: &[ScanRecord], config: FeatureConfig) -> Stats {
     let mut extractor = Extractor::new(config);
     let corners: Vec<Vec<Corner>> = scans
         .iter()
-        .map(|ranges| {
-            let found = extractor.extract(&seed_hall::scan_input(ranges));
+        .map(|scan| {
+            let found = extractor.extract(&scan_input(scan));
             found.map(|f| f.corners.clone()).unwrap_or_default()
         })
         .collect();
@@ -48,7 +43,8 @@ fn run(scans: &[Vec<f32>], config: FeatureConfig) -> Stats {
 
 #[test]
 fn corners_are_as_many_as_the_courses_and_recur_in_the_next_scan() {
-    let scans = load();
+    // Without the recording this fails, naming where it was looked for.
+    let scans = seed_hall_scans();
     assert_eq!(scans.len(), 400);
     let default_cap = FeatureConfig::default().max_range;
     // The course's counts with its 15 m (SLAM) and 35 m (motion estimate) caps.
@@ -78,11 +74,4 @@ fn corners_are_as_many_as_the_courses_and_recur_in_the_next_scan() {
             stats.mean_step
         );
     }
-}
-
-#[test]
-fn the_loader_names_a_missing_file() {
-    let error = seed_hall::load(std::path::Path::new("/nonexistent/scans.csv")).unwrap_err();
-    let text = error.to_string();
-    assert!(text.contains("/nonexistent/scans.csv") && text.contains("SLAM_DATA_DIR"));
 }

@@ -240,7 +240,7 @@ fn a_window_with_clusters_and_intensities() {
 fn the_emulator_binary_serves_a_sensor_client() {
     let mut emulator = Command::new(env!("CARGO_BIN_EXE_hokuyo-emulator"))
         .args(["--port", "0", "--rpm", "6000", "--file"])
-        .arg(seed_hall_file())
+        .arg(seed_hall_csv())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

@@ -1,26 +1,9 @@
 //! The shared real recordings read completely and correctly.
 
-use std::path::PathBuf;
-
 use lidar_replay::{
     LogFormat, LogRecord, OdometryRecord, Records, ReorderConfig, ReorderCounts, ScanRecord,
     open_log,
 };
-
-/// `$SLAM_DATA_DIR`, else `../shared/data` beside the workspace (docs/CONVENTIONS.md).
-fn data_file(relative: &str) -> PathBuf {
-    let dir = std::env::var_os("SLAM_DATA_DIR").map_or_else(
-        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data")),
-        PathBuf::from,
-    );
-    let path = dir.join(relative);
-    assert!(
-        path.is_file(),
-        "shared recording {} is missing: set SLAM_DATA_DIR to the shared data directory",
-        path.display()
-    );
-    path
-}
 
 /// What a log yields: scans, odometry, the stamps of every record in order and the
 /// reordering window's counts (zero for seed-csv).
@@ -39,7 +22,7 @@ fn read_all(format: LogFormat, relative: &str) -> (Vec<ScanRecord>, Vec<Odometry
 }
 
 fn read_log(format: LogFormat, relative: &str) -> Read {
-    let path = data_file(relative);
+    let path = test_data::recording(relative);
     let mut log =
         open_log(format, &path, ReorderConfig::default()).unwrap_or_else(|e| panic!("{e}"));
     let mut read = Read {

@@ -74,7 +74,7 @@ fn bench_log(
 }
 
 fn front_end(c: &mut Criterion) {
-    let dir = logs::data_dir();
+    let dir = test_data::data_dir();
     bench_log(
         c,
         "mit-csail 361 beams, odometry",

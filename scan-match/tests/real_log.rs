@@ -11,13 +11,7 @@ use slam_eval::{Trajectory, from_xyz_rpy, read_relations, score};
 const SCANS: usize = 300;
 
 fn run(with_odometry: bool) -> (slam_eval::Score, scan_match::FrontEndStats) {
-    let dir = logs::data_dir().join("carmen");
-    let log = dir.join("mit-csail.clf");
-    assert!(
-        log.exists(),
-        "the mit-csail log is missing: {} does not exist; set SLAM_DATA_DIR to the shared data directory",
-        log.display()
-    );
+    let log = test_data::carmen_log("mit-csail");
     let scans = logs::load(&log, LogFormat::Carmen, SCANS).unwrap();
     assert_eq!(scans.len(), SCANS);
     let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
@@ -28,7 +22,7 @@ fn run(with_odometry: bool) -> (slam_eval::Score, scan_match::FrontEndStats) {
         poses.push((out.stamp_ns, from_xyz_rpy([p.x, p.y, 0.0], 0.0, 0.0, p.yaw)));
     }
     let trajectory = Trajectory::new(poses).unwrap();
-    let relations = read_relations(&dir.join("mit-csail.relations")).unwrap();
+    let relations = read_relations(&log.with_extension("relations")).unwrap();
     let last = scans[SCANS - 1].stamp_ns;
     let inside: Vec<_> = relations
         .into_iter()

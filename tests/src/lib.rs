@@ -281,21 +281,6 @@ pub fn shm_leftovers(domain: &str) -> Vec<String> {
         .unwrap_or_default()
 }
 
-/// The shared real recordings: `$SLAM_DATA_DIR`, or `../shared/data` beside the workspace.
-pub fn data_dir() -> PathBuf {
-    let dir = std::env::var_os("SLAM_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data"))
-        });
-    assert!(
-        dir.join("seed-hall/scans.csv").is_file(),
-        "the real recordings are missing: set SLAM_DATA_DIR or put them in {}",
-        dir.display()
-    );
-    dir
-}
-
 /// Map corners from a run's map_corners.csv: `(x, y, heading, angle)`.
 pub fn read_map_corners(out: &Path) -> Vec<[f64; 4]> {
     let text = std::fs::read_to_string(out.join("map_corners.csv")).expect("map_corners.csv");

@@ -7,7 +7,7 @@ use tests::*;
 
 #[test]
 fn slam_bench_runs_every_seed_and_writes_its_report() {
-    let carmen = data_dir().join("carmen");
+    let carmen = test_data::carmen_dir();
     let dir = scratch("bench");
     let logs = dir.join("logs");
     std::fs::create_dir_all(&logs).unwrap();

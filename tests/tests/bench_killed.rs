@@ -14,7 +14,7 @@ const LIMIT: Duration = Duration::from_secs(120);
 fn a_killed_slam_bench_takes_its_slam_launch_with_it() {
     // The orphans come to us, to be reaped and their statuses read.
     become_subreaper();
-    let carmen = data_dir().join("carmen");
+    let carmen = test_data::carmen_dir();
     let dir = scratch("bench-killed");
     let logs = dir.join("logs");
     std::fs::create_dir_all(&logs).expect("logs");

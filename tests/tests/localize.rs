@@ -231,7 +231,7 @@ fn a_damaged_map_is_refused_before_anything_starts() {
 
 #[test]
 fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
-    let log = data_dir().join("carmen/aces.clf");
+    let log = test_data::carmen_log("aces");
     let map = replayed("aces-map", &log, &["--rate", "0", "--seed", "1"]).out;
     for start in ["1000", "3000", "5000"] {
         let out = replayed(

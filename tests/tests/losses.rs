@@ -39,7 +39,7 @@ fn a_run_that_lost_nothing_says_so() {
 fn lines_a_replay_dropped_are_counted_on_the_console() {
     // The first 600 lines of aces, with a malformed scan line in the middle and the first
     // scan again at the end, far later than the reordering window: dropped as late.
-    let log = std::fs::read_to_string(data_dir().join("carmen/aces.clf")).expect("aces.clf");
+    let log = std::fs::read_to_string(test_data::carmen_log("aces")).expect("aces.clf");
     let lines: Vec<&str> = log.lines().take(600).collect();
     let first_scan = lines
         .iter()

@@ -5,7 +5,7 @@ use tests::*;
 
 #[test]
 fn seed_hall_replay_maps_the_hall_without_duplicate_corners() {
-    let log = data_dir().join("seed-hall/scans.csv");
+    let log = test_data::seed_hall_csv();
     let run = replayed(
         "seed-hall",
         &log,
@@ -26,7 +26,7 @@ fn seed_hall_replay_maps_the_hall_without_duplicate_corners() {
 
 #[test]
 fn emulated_hokuyo_gives_the_same_map_as_the_replayed_log() {
-    let log = data_dir().join("seed-hall/scans.csv");
+    let log = test_data::seed_hall_csv();
     let (mut emulator, addr) = start_hokuyo_emulator(&log);
 
     let live_out = scratch("hokuyo-live");

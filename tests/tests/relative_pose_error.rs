@@ -24,7 +24,7 @@ fn mean(stats: Option<slam_eval::ErrorStats>) -> f64 {
 
 #[test]
 fn mit_csail_is_scored_against_the_relations_beside_it() {
-    let log = data_dir().join("carmen/mit-csail.clf");
+    let log = test_data::carmen_log("mit-csail");
     let relations = log.with_extension("relations");
     // No --relations: slam-launch finds mit-csail.relations beside the log.
     let Run {
@@ -85,7 +85,7 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
 fn aces_closes_its_overlapping_loops_together() {
     // The best particle closes several loops whose stretches overlap; the final path meets
     // them all at once. Lockstep, so the figure is the same on a busy machine.
-    let log = data_dir().join("carmen/aces.clf");
+    let log = test_data::carmen_log("aces");
     let Run {
         domain,
         out,
@@ -115,7 +115,7 @@ fn aces_closes_its_overlapping_loops_together() {
 
 #[test]
 fn a_bad_relations_file_stops_the_run_before_it_starts() {
-    let log = data_dir().join("carmen/mit-csail.clf");
+    let log = test_data::carmen_log("mit-csail");
     let dir = scratch("bad-relations");
     let bad = dir.join("bad.relations");
     std::fs::write(&bad, "1.0 2.0 1 0 0 0 0 0\n1.0 2.0 1 0 0 0 0\n").unwrap();

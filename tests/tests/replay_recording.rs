@@ -215,7 +215,7 @@ fn check_recording_of(out: &Path, odometry: bool) {
 
 #[test]
 fn recordings_of_a_real_log_and_a_live_hokuyo_read_back_with_the_runs_counts() {
-    let log = data_dir().join("seed-hall/scans.csv");
+    let log = test_data::seed_hall_csv();
     let replay_out = replayed(
         "record-seed-hall",
         &log,
@@ -357,7 +357,7 @@ fn a_damaged_or_foreign_recording_is_refused_by_name() {
     let mut flipped = bytes.clone();
     flipped[10_000] ^= 0x55;
     std::fs::write(&damaged, &flipped).expect("write");
-    let csv = data_dir().join("seed-hall/scans.csv");
+    let csv = test_data::seed_hall_csv();
 
     for (file, format, reason) in [
         (&foreign, None, "is not an MCAP file"),

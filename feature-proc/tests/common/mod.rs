@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod eval;
+pub mod recorded;
 
 use eval::{ScanGeometry, World};
 use feature_proc::ScanInput;

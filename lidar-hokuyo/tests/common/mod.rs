@@ -3,7 +3,6 @@
 
 #![allow(dead_code)]
 
-use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -11,30 +10,15 @@ use std::time::{Duration, Instant};
 use ipc_types::prelude::*;
 use lidar_hokuyo::emulator::load_scans;
 
-/// The shared recordings: `$SLAM_DATA_DIR`, or `../shared/data` beside the workspace.
-pub fn data_dir() -> PathBuf {
-    std::env::var_os("SLAM_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data")))
-}
+pub use test_data::seed_hall_csv;
 
-/// The seed-hall recording's file.
-pub fn seed_hall_file() -> PathBuf {
-    let path = data_dir().join("seed-hall/scans.csv");
-    assert!(
-        path.is_file(),
-        "the seed-hall recording is missing: {} does not exist; set SLAM_DATA_DIR to the \
-         directory that holds seed-hall/scans.csv",
-        path.display()
-    );
-    path
-}
-
-/// The 400 seed-hall scans, 1081 values each, in millimetres.
+/// The 400 seed-hall scans, 1081 values each, in millimetres, read by the emulator's own
+/// reader: the emulator serves these raw codes, and the tests check the driver's REP 117
+/// conversion of them (lidar-replay's reader gives ranges, converted by the log's rules).
 pub fn seed_hall() -> &'static [Vec<u32>] {
     static SCANS: OnceLock<Vec<Vec<u32>>> = OnceLock::new();
     SCANS.get_or_init(|| {
-        let scans = load_scans(&seed_hall_file()).unwrap();
+        let scans = load_scans(&seed_hall_csv()).unwrap();
         assert_eq!(scans.len(), 400);
         assert!(scans.iter().all(|s| s.len() == 1081));
         scans

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Context, Result};
 use lidar_replay::{
@@ -32,14 +32,6 @@ impl LoggedScan {
             odometry: if with_odometry { self.odometry } else { None },
         }
     }
-}
-
-/// The shared data directory: `$SLAM_DATA_DIR`, else `../shared/data` beside the workspace.
-pub fn data_dir() -> PathBuf {
-    std::env::var_os("SLAM_DATA_DIR").map_or_else(
-        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data")),
-        PathBuf::from,
-    )
 }
 
 /// Reads at most `limit` scans of a log, each with the odometry at its stamp and that

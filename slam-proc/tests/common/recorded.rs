@@ -1,7 +1,7 @@
 //! The real recording (shared data, seed-hall) as the filter sees it: each scan's corners
-//! and wall lines from the feature extractor.
+//! and wall lines from the feature extractor, the scans as `lidar-replay` publishes them.
 
-use feature_proc::{Extractor, FeatureConfig, seed_hall};
+use feature_proc::{Extractor, FeatureConfig, ScanInput};
 use slam_proc::{LineObservation, Observation};
 
 /// One scan's features, in the filter's types.
@@ -14,18 +14,15 @@ pub struct ScanFeatures {
 /// Every scan's features, extracted with `config`. Panics without the recording: the
 /// tests and the bench that call this are about it.
 pub fn seed_hall_features(config: FeatureConfig) -> Vec<ScanFeatures> {
-    let path = seed_hall::default_path();
-    let scans = seed_hall::load(&path).unwrap_or_else(|e| {
-        panic!(
-            "the seed-hall recording is required at {} ({e})",
-            path.display()
-        )
-    });
     let mut extractor = Extractor::new(config);
-    scans
+    test_data::seed_hall_scans()
         .iter()
-        .map(|ranges| {
-            let Ok(features) = extractor.extract(&seed_hall::scan_input(ranges)) else {
+        .map(|scan| {
+            let input = ScanInput {
+                geometry: scan.geometry,
+                ranges: &scan.ranges,
+            };
+            let Ok(features) = extractor.extract(&input) else {
                 return ScanFeatures::default();
             };
             ScanFeatures {
