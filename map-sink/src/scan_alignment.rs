@@ -16,6 +16,12 @@ pub struct ScanAlignmentConfig {
     pub inlier_distance_m: f64,
     /// Scale of the Cauchy loss, metres: a return this far off counts half.
     pub loss_scale_m: f64,
+    /// The first steps pull on returns this far from the map (metres), with the loss
+    /// widened as much, so that a scan a few degrees off finds its walls before the
+    /// steps that only pull on returns within `inlier_distance_m`.
+    pub coarse_distance_m: f64,
+    /// Gauss-Newton steps at the coarse distance.
+    pub coarse_iterations: usize,
     /// Returns the alignment needs near the map, at the least.
     pub min_inliers: usize,
     /// Share of the scan's returns that must end near the map.
@@ -33,6 +39,8 @@ impl Default for ScanAlignmentConfig {
             iterations: 10,
             inlier_distance_m: 0.3,
             loss_scale_m: 0.05,
+            coarse_distance_m: 1.0,
+            coarse_iterations: 5,
             min_inliers: 20,
             min_inlier_share: 0.7,
             max_mean_distance_m: 0.12,
@@ -63,23 +71,36 @@ pub(crate) fn align_scan(
     }
     let mut pose = guess;
     let mut information = None;
-    for _ in 0..config.iterations {
+    for iteration in 0..config.iterations + config.coarse_iterations {
+        let coarse = iteration < config.coarse_iterations;
+        let (distance, scale) = if coarse {
+            let widen = config.coarse_distance_m / config.inlier_distance_m;
+            (config.coarse_distance_m, config.loss_scale_m * widen)
+        } else {
+            (config.inlier_distance_m, config.loss_scale_m)
+        };
         let (s, c) = pose.yaw.sin_cos();
         let mut h = Matrix3::zeros();
         let mut g = Vector3::zeros();
         let mut inliers = 0;
         for &[lx, ly] in ends {
             let point = [pose.x + c * lx - s * ly, pose.y + s * lx + c * ly];
-            let Some(wall) = walls.distance(point) else {
+            let from = [pose.x, pose.y];
+            let wall = if coarse {
+                walls.far_distance(point, from)
+            } else {
+                walls.distance(point, from)
+            };
+            let Some(wall) = wall else {
                 continue;
             };
-            if wall.residual.abs() >= config.inlier_distance_m {
+            if wall.residual.abs() >= distance {
                 continue;
             }
             inliers += 1;
             let [gx, gy] = wall.gradient;
             let jacobian = Vector3::new(gx, gy, gx * (-s * lx - c * ly) + gy * (c * lx - s * ly));
-            let weight = 1.0 / (1.0 + (wall.residual / config.loss_scale_m).powi(2));
+            let weight = 1.0 / (1.0 + (wall.residual / scale).powi(2));
             h += weight * jacobian * jacobian.transpose();
             g += weight * wall.residual * jacobian;
         }
@@ -92,7 +113,7 @@ pub(crate) fn align_scan(
         let step = h.cholesky()?.solve(&(-g));
         pose = Pose2::new(pose.x + step.x, pose.y + step.y, pose.yaw + step.z);
         information = Some(h);
-        if step.amax() < 1e-4 {
+        if step.amax() < 1e-4 && iteration >= config.coarse_iterations {
             break;
         }
     }
@@ -101,7 +122,10 @@ pub(crate) fn align_scan(
     let (mut near, mut total) = (0_usize, 0.0);
     for &[lx, ly] in ends {
         let d = walls
-            .distance([pose.x + c * lx - s * ly, pose.y + s * lx + c * ly])
+            .distance(
+                [pose.x + c * lx - s * ly, pose.y + s * lx + c * ly],
+                [pose.x, pose.y],
+            )
             .map_or(config.inlier_distance_m, |w| w.residual.abs());
         near += usize::from(d < config.inlier_distance_m);
         total += d.min(config.inlier_distance_m);
@@ -118,6 +142,7 @@ mod tests {
     use crate::compact_scan::CompactScan;
     use crate::occupancy_grid::{GridConfig, OccupancyGrid};
     use crate::test_room::{room_returns, scan_of};
+    use crate::wall_field::SeenReturn;
 
     fn room_walls() -> WallField {
         let returns = room_returns(Pose2::new(0.0, 0.0, 0.0));
@@ -127,7 +152,15 @@ mod tests {
         let grid = OccupancyGrid::build(&GridConfig::default(), &scans)
             .expect("the grid fits")
             .expect("beams");
-        WallField::new(&grid, &returns, 0.3).expect("walls")
+        // The room seen from the origin: the sensor and world frames are one.
+        let seen: Vec<SeenReturn> = returns
+            .iter()
+            .map(|&at| SeenReturn {
+                at,
+                from: [0.0, 0.0],
+            })
+            .collect();
+        WallField::new(&grid, &seen, 0.3, 1.0).expect("walls")
     }
 
     #[test]

@@ -9,8 +9,16 @@ use std::collections::HashMap;
 
 use crate::occupancy_grid::{CellState, OccupancyGrid};
 
+/// A return in the world frame and where the sensor was that saw it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SeenReturn {
+    pub at: [f64; 2],
+    pub from: [f64; 2],
+}
+
 /// A wall piece: the mean of the returns in one occupied cell, and the wall's normal there
-/// when the neighbouring pieces line up (`None` at an isolated piece: a post, a leg).
+/// when the neighbouring pieces line up (`None` at an isolated piece: a post, a leg),
+/// turned towards the side its returns were seen from.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct WallPiece {
     point: [f64; 2],
@@ -26,17 +34,152 @@ pub(crate) struct WallDistance {
     pub gradient: [f64; 2],
 }
 
-/// The wall pieces of a grid and, for every cell within reach of one, the nearest.
+/// A rectangle of a grid's cells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct CellWindow {
+    col: usize,
+    row: usize,
+    width: usize,
+    height: usize,
+}
+
+impl CellWindow {
+    /// Every cell of `grid`.
+    pub fn whole(grid: &OccupancyGrid) -> Self {
+        Self {
+            col: 0,
+            row: 0,
+            width: grid.width(),
+            height: grid.height(),
+        }
+    }
+
+    /// The cells of `grid` that overlap the world rectangle from `min` to `max`; `None`
+    /// when it lies off the grid.
+    pub fn around(grid: &OccupancyGrid, min: [f64; 2], max: [f64; 2]) -> Option<Self> {
+        let origin = grid.origin();
+        let resolution = grid.resolution_m();
+        let cell = |v: f64, o: f64, size: usize| -> f64 {
+            ((v - o) / resolution).floor().clamp(0.0, size as f64)
+        };
+        let (col, row) = (
+            cell(min[0], origin[0], grid.width()),
+            cell(min[1], origin[1], grid.height()),
+        );
+        let (end_col, end_row) = (
+            cell(max[0], origin[0], grid.width() - 1) + 1.0,
+            cell(max[1], origin[1], grid.height() - 1) + 1.0,
+        );
+        (end_col > col && end_row > row).then_some(Self {
+            col: col as usize,
+            row: row as usize,
+            width: (end_col - col) as usize,
+            height: (end_row - row) as usize,
+        })
+    }
+}
+
+/// The wall pieces of a grid and, for every cell within the far reach of one, the nearest
+/// and how far it is.
 #[derive(Debug, Clone)]
 pub(crate) struct WallField {
     origin: [f64; 2],
     resolution: f64,
-    width: usize,
-    height: usize,
-    /// Index into `pieces` of the nearest piece, `u32::MAX` beyond reach.
-    nearest: Vec<u32>,
+    nearest: NearestPieces,
+    /// The reaches, as squared distances in cells.
+    near_cells2: u32,
+    far_cells2: u32,
     pieces: Vec<WallPiece>,
 }
+
+/// For every cell within reach of a wall piece, the nearest and its squared distance in
+/// cells (between the cells' centres).
+#[derive(Debug, Clone)]
+struct NearestPieces {
+    width: usize,
+    height: usize,
+    /// One more than the index of the nearest piece; 0 (a table zeroed when allocated,
+    /// which costs nothing where it is never written) beyond reach.
+    nearest: Vec<u32>,
+    /// One more than the squared distance to it, 0 beyond reach.
+    distance2: Vec<u32>,
+}
+
+impl NearestPieces {
+    /// The table over a field `width` x `height` cells with pieces in `cells` (row-major
+    /// indices into the field), `reach` cells out. The pieces' reach spreads outwards from
+    /// them ring by ring, each cell passing its nearest piece on to its neighbours: a cell
+    /// is visited a few times, rather than once for every piece within reach of it.
+    fn new(width: usize, height: usize, cells: &[usize], reach: usize) -> Self {
+        let mut nearest = vec![0_u32; width * height];
+        let mut distance2 = vec![0_u32; width * height];
+        let limit = (reach * reach) as u32;
+        // Cells by the squared distance they were reached at.
+        let mut rings: Vec<Vec<u32>> = vec![Vec::new(); limit as usize + 1];
+        for (k, &i) in cells.iter().enumerate() {
+            nearest[i] = k as u32 + 1;
+            distance2[i] = 1;
+            rings[0].push(i as u32);
+        }
+        for ring in 0..=limit {
+            let mut next = 0;
+            while next < rings[ring as usize].len() {
+                let i = rings[ring as usize][next] as usize;
+                next += 1;
+                if distance2[i] != ring + 1 {
+                    // Reached nearer since.
+                    continue;
+                }
+                let piece = cells[nearest[i] as usize - 1];
+                let (piece_col, piece_row) = ((piece % width) as i64, (piece / width) as i64);
+                let (col, row) = ((i % width) as i64, (i / width) as i64);
+                for (dc, dr) in NEIGHBOURS {
+                    let (c, r) = (col + dc, row + dr);
+                    if c < 0 || r < 0 || c >= width as i64 || r >= height as i64 {
+                        continue;
+                    }
+                    let d2 = ((c - piece_col).pow(2) + (r - piece_row).pow(2)) as u32;
+                    let j = r as usize * width + c as usize;
+                    if d2 > limit || (distance2[j] != 0 && distance2[j] <= d2 + 1) {
+                        continue;
+                    }
+                    nearest[j] = nearest[i];
+                    distance2[j] = d2 + 1;
+                    rings[d2.max(ring) as usize].push(j as u32);
+                }
+            }
+        }
+        Self {
+            width,
+            height,
+            nearest,
+            distance2,
+        }
+    }
+
+    /// The index of the piece nearest the cell `col`, `row`, if it is within `reach2`
+    /// (squared, in cells).
+    fn nearest(&self, col: usize, row: usize, reach2: u32) -> Option<usize> {
+        if col >= self.width || row >= self.height {
+            return None;
+        }
+        let i = row * self.width + col;
+        let (k, d2) = (self.nearest[i], self.distance2[i]);
+        (k > 0 && d2 <= reach2 + 1).then(|| k as usize - 1)
+    }
+}
+
+/// The eight cells around a cell.
+const NEIGHBOURS: [(i64, i64); 8] = [
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+    (-1, 0),
+    (1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
 
 /// Cells around a piece whose pieces decide its normal (a 5 x 5 block).
 const NORMAL_RADIUS_CELLS: i64 = 2;
@@ -44,29 +187,56 @@ const NORMAL_RADIUS_CELLS: i64 = 2;
 const MIN_NORMAL_PIECES: usize = 3;
 /// The spread across the line must be this much smaller than along it for a wall.
 const MAX_FLATNESS: f64 = 0.2;
+
 impl WallField {
     /// The walls of `grid`, from the returns `ends` (world frame) that built it; cells
-    /// farther than `reach_m` from every wall get none. `None` when no cell is occupied.
-    pub fn new(grid: &OccupancyGrid, ends: &[[f64; 2]], reach_m: f64) -> Option<Self> {
-        let (width, height) = (grid.width(), grid.height());
+    /// farther than `reach_m` from every wall get none, and blocks of cells farther than
+    /// `far_reach_m` none either. `None` when no cell is occupied.
+    pub fn new(
+        grid: &OccupancyGrid,
+        ends: &[SeenReturn],
+        reach_m: f64,
+        far_reach_m: f64,
+    ) -> Option<Self> {
+        Self::within(grid, CellWindow::whole(grid), ends, reach_m, far_reach_m)
+    }
+
+    /// [`new`](Self::new) over the cells of `window` only, from the returns `ends` among
+    /// those that built the grid: a wall piece is an occupied cell some of `ends` fell in.
+    pub fn within(
+        grid: &OccupancyGrid,
+        window: CellWindow,
+        ends: &[SeenReturn],
+        reach_m: f64,
+        far_reach_m: f64,
+    ) -> Option<Self> {
+        let (width, height) = (window.width, window.height);
         let resolution = grid.resolution_m();
-        let origin = grid.origin();
+        let origin = [
+            grid.origin()[0] + window.col as f64 * resolution,
+            grid.origin()[1] + window.row as f64 * resolution,
+        ];
         let cell_of = |p: [f64; 2]| -> Option<usize> {
             let col = ((p[0] - origin[0]) / resolution).floor();
             let row = ((p[1] - origin[1]) / resolution).floor();
             (col >= 0.0 && row >= 0.0 && col < width as f64 && row < height as f64)
                 .then(|| row as usize * width + col as usize)
         };
-        let mut sums: HashMap<usize, ([f64; 2], f64)> = HashMap::new();
-        for &p in ends {
+        // Per occupied cell: the sum of its returns, of the vectors from them back to their
+        // sensors (only the side they add up to matters), and their count.
+        let mut sums: HashMap<usize, ([f64; 2], [f64; 2], f64)> = HashMap::new();
+        for seen in ends {
+            let p = seen.at;
             let Some(i) = cell_of(p) else { continue };
-            if grid.state(i % width, i / width) != CellState::Occupied {
+            if grid.state(window.col + i % width, window.row + i / width) != CellState::Occupied {
                 continue;
             }
-            let entry = sums.entry(i).or_insert(([0.0, 0.0], 0.0));
+            let entry = sums.entry(i).or_insert(([0.0, 0.0], [0.0, 0.0], 0.0));
             entry.0[0] += p[0];
             entry.0[1] += p[1];
-            entry.1 += 1.0;
+            entry.1[0] += seen.from[0] - p[0];
+            entry.1[1] += seen.from[1] - p[1];
+            entry.2 += 1.0;
         }
         if sums.is_empty() {
             return None;
@@ -75,7 +245,7 @@ impl WallField {
         cells.sort_unstable();
         let means: HashMap<usize, [f64; 2]> = sums
             .iter()
-            .map(|(&i, &(sum, n))| (i, [sum[0] / n, sum[1] / n]))
+            .map(|(&i, &(sum, _, n))| (i, [sum[0] / n, sum[1] / n]))
             .collect();
         let pieces: Vec<WallPiece> = cells
             .iter()
@@ -94,57 +264,59 @@ impl WallField {
                         }
                     }
                 }
-                WallPiece {
-                    point,
-                    normal: line_normal(&around),
-                }
+                let seen_from = sums[&i].1;
+                let normal = line_normal(&around).map(|n| {
+                    if n[0] * seen_from[0] + n[1] * seen_from[1] < 0.0 {
+                        [-n[0], -n[1]]
+                    } else {
+                        n
+                    }
+                });
+                WallPiece { point, normal }
             })
             .collect();
 
-        let reach = (reach_m / resolution).ceil() as i64;
-        let mut nearest = vec![u32::MAX; width * height];
-        let mut best = vec![f64::INFINITY; width * height];
-        for (k, &i) in cells.iter().enumerate() {
-            let (col, row) = ((i % width) as i64, (i / width) as i64);
-            for dr in -reach..=reach {
-                for dc in -reach..=reach {
-                    let (c, r) = (col + dc, row + dr);
-                    if c < 0 || r < 0 || c >= width as i64 || r >= height as i64 {
-                        continue;
-                    }
-                    let d2 = (dc * dc + dr * dr) as f64;
-                    if d2 > (reach * reach) as f64 {
-                        continue;
-                    }
-                    let j = r as usize * width + c as usize;
-                    if d2 < best[j] {
-                        best[j] = d2;
-                        nearest[j] = k as u32;
-                    }
-                }
-            }
-        }
+        let cells2 = |reach_m: f64| (reach_m / resolution).ceil().powi(2) as u32;
+        let (near_cells2, far_cells2) = (cells2(reach_m), cells2(far_reach_m.max(reach_m)));
+        let reach = (far_cells2 as f64).sqrt().round() as usize;
         Some(Self {
             origin,
             resolution,
-            width,
-            height,
-            nearest,
+            nearest: NearestPieces::new(width, height, &cells, reach),
+            near_cells2,
+            far_cells2,
             pieces,
         })
     }
 
-    /// The distance from `point` (world frame) to the wall nearest its cell; `None` beyond
-    /// reach of every wall or off the grid.
-    pub fn distance(&self, point: [f64; 2]) -> Option<WallDistance> {
+    /// The distance from `point` (world frame), a return seen from `from`, to the wall
+    /// nearest its cell; `None` beyond reach of every wall, off the grid, or when that
+    /// wall faces away from `from`: the far side of a wall that other scans saw from the
+    /// other side is not where this one's return ended.
+    pub fn distance(&self, point: [f64; 2], from: [f64; 2]) -> Option<WallDistance> {
+        self.distance_by(self.near_cells2, point, from)
+    }
+
+    /// [`distance`](Self::distance) for a point up to the far reach from the walls: for the
+    /// first steps of an alignment that starts farther off.
+    pub fn far_distance(&self, point: [f64; 2], from: [f64; 2]) -> Option<WallDistance> {
+        self.distance_by(self.far_cells2, point, from)
+    }
+
+    fn distance_by(&self, reach2: u32, point: [f64; 2], from: [f64; 2]) -> Option<WallDistance> {
         let col = ((point[0] - self.origin[0]) / self.resolution).floor();
         let row = ((point[1] - self.origin[1]) / self.resolution).floor();
-        if !(col >= 0.0 && row >= 0.0 && col < self.width as f64 && row < self.height as f64) {
+        if col < 0.0 || row < 0.0 {
             return None;
         }
-        let k = self.nearest[row as usize * self.width + col as usize];
-        let piece = self.pieces.get(k as usize)?;
+        let piece = &self.pieces[self.nearest.nearest(col as usize, row as usize, reach2)?];
         let d = [point[0] - piece.point[0], point[1] - piece.point[1]];
+        if let Some(n) = piece.normal {
+            let sensor = [from[0] - piece.point[0], from[1] - piece.point[1]];
+            if n[0] * sensor[0] + n[1] * sensor[1] <= 0.0 {
+                return None;
+            }
+        }
         Some(match piece.normal {
             Some(n) => WallDistance {
                 residual: n[0] * d[0] + n[1] * d[1],
@@ -210,7 +382,7 @@ mod tests {
 
     /// A wall along x = 2.013 (off the cells' centres), seen from the origin, and the
     /// returns in the world frame.
-    fn wall() -> (OccupancyGrid, Vec<[f64; 2]>) {
+    fn wall() -> (OccupancyGrid, Vec<SeenReturn>) {
         let beams = 181;
         let increment = std::f64::consts::PI / 2.0 / (beams - 1) as f64;
         let angle_min = -std::f64::consts::PI / 4.0;
@@ -227,7 +399,10 @@ mod tests {
             .enumerate()
             .map(|(i, r)| {
                 let a = angle_min + i as f64 * increment;
-                [f64::from(*r) * a.cos(), f64::from(*r) * a.sin()]
+                SeenReturn {
+                    at: [f64::from(*r) * a.cos(), f64::from(*r) * a.sin()],
+                    from: [0.0, 0.0],
+                }
             })
             .collect();
         (grid, ends)
@@ -236,9 +411,9 @@ mod tests {
     #[test]
     fn the_distance_is_to_the_wall_itself_not_to_its_cells() {
         let (grid, ends) = wall();
-        let field = WallField::new(&grid, &ends, 0.3).expect("a wall");
+        let field = WallField::new(&grid, &ends, 0.3, 1.0).expect("a wall");
         for y in [-1.0, -0.33, 0.0, 0.52, 1.4] {
-            let near = field.distance([1.9, y]).expect("within reach");
+            let near = field.distance([1.9, y], [0.5, 0.0]).expect("within reach");
             assert!((near.residual.abs() - 0.113).abs() < 0.003, "{y}: {near:?}");
             assert!(near.gradient[0].abs() > 0.999, "{y}: {near:?}");
         }
@@ -247,9 +422,37 @@ mod tests {
     #[test]
     fn nothing_is_near_beyond_reach_or_off_the_grid() {
         let (grid, ends) = wall();
-        let field = WallField::new(&grid, &ends, 0.3).expect("a wall");
-        assert_eq!(field.distance([1.0, 0.0]), None);
-        assert_eq!(field.distance([100.0, 0.0]), None);
+        let field = WallField::new(&grid, &ends, 0.3, 1.0).expect("a wall");
+        assert_eq!(field.distance([1.0, 0.0], [0.0, 0.0]), None);
+        assert_eq!(field.distance([100.0, 0.0], [0.0, 0.0]), None);
+    }
+
+    #[test]
+    fn a_wall_is_only_where_returns_seen_from_its_own_side_end() {
+        let (grid, ends) = wall();
+        let field = WallField::new(&grid, &ends, 0.3, 1.0).expect("a wall");
+        // Its face towards the origin, where its returns were seen from.
+        let near = field.distance([1.95, 0.4], [1.0, 0.0]).expect("its face");
+        assert!((near.residual - 0.063).abs() < 0.003, "{near:?}");
+        // A sensor behind it sees its far side, which no return here drew.
+        assert_eq!(field.distance([1.95, 0.4], [3.0, 0.0]), None);
+    }
+
+    #[test]
+    fn a_window_holds_the_walls_of_the_whole_grid_within_it() {
+        let (grid, ends) = wall();
+        let whole = WallField::new(&grid, &ends, 0.3, 1.0).expect("a wall");
+        let window = CellWindow::around(&grid, [1.5, -0.5], [2.5, 0.5]).expect("on the grid");
+        let part = WallField::within(&grid, window, &ends, 0.3, 1.0).expect("a wall in it");
+        for y in [-0.4, 0.0, 0.33] {
+            assert_eq!(
+                part.distance([1.95, y], [0.0, 0.0]),
+                whole.distance([1.95, y], [0.0, 0.0])
+            );
+        }
+        assert!(whole.distance([1.95, 1.2], [0.0, 0.0]).is_some());
+        assert_eq!(part.distance([1.95, 1.2], [0.0, 0.0]), None);
+        assert_eq!(CellWindow::around(&grid, [50.0, 50.0], [51.0, 51.0]), None);
     }
 
     #[test]
