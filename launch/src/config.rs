@@ -187,7 +187,7 @@ impl Default for SlamSection {
         Self {
             seed: 1,
             map_every: 20,
-            particle_cloud_every: 20,
+            particle_cloud_every: 40,
             filter: slam_proc::SlamConfig::default(),
         }
     }

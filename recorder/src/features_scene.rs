@@ -8,13 +8,13 @@ use crate::scene::{
     Color, LINE_LIST, LinePrimitive, Scene, SceneEntity, SceneTopic, SceneUpdate, point,
 };
 
-/// A features scene is recorded at most once per this much data time (every tenth scan of
-/// a 40 Hz sensor): the features are recorded whole on `/perception/features` at every
+/// A features scene is recorded at most once per this much data time (every twentieth scan
+/// of a 40 Hz sensor): the features are recorded whole on `/perception/features` at every
 /// scan, and the scene is for the eye. A scene takes about 0.6 KB of the file (its numbers
 /// mixed with the scans' in a chunk compress less than alone): at every scan of the
 /// simulated office that added 7 % to a recording already near the 200 MB that ten minutes
-/// may take, four a second add under 1 %.
-pub const FEATURES_SCENE_PERIOD_NS: u64 = 250_000_000;
+/// may take, two a second add under 0.5 %.
+pub const FEATURES_SCENE_PERIOD_NS: u64 = 500_000_000;
 
 /// The fitted lines: green.
 pub const LINE_COLOR: Color = Color::rgb(0.1, 0.8, 0.1);

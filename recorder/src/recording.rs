@@ -8,8 +8,8 @@ use ipc_types::{
 };
 
 use crate::error::RecordError;
-use crate::grid::{GridMessage, GridPieces};
 use crate::features_scene::FeaturesScenes;
+use crate::grid::{GridMessage, GridPieces};
 use crate::ground_truth::GroundTruthMessage;
 use crate::map_scene::MapScenes;
 use crate::mcap_file::{ChannelCount, McapFile};
@@ -27,8 +27,8 @@ pub const RECORDING_FILE: &str = "run.mcap";
 /// A map snapshot (and its scene) is recorded at most once per this much data time, and the
 /// last one at the end: each holds the whole map, so a run's recording would otherwise grow
 /// with the square of its length (a 40 Hz run sends one every half second), and one every
-/// two seconds is plenty to watch the map grow.
-pub const MAP_PERIOD_NS: u64 = 2_000_000_000;
+/// four seconds is plenty to watch the map grow.
+pub const MAP_PERIOD_NS: u64 = 4_000_000_000;
 
 /// What a finished recording holds.
 #[derive(Debug, Clone, PartialEq, Eq)]

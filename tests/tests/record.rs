@@ -8,6 +8,9 @@ use std::collections::BTreeMap;
 use tests::*;
 
 const FRAMES: u64 = 200;
+/// `[slam] particle_cloud_every`'s default: a recorded run's particle cloud every this many
+/// scans.
+const CLOUD_EVERY: u64 = 40;
 
 /// What one topic of the file holds.
 #[derive(Debug, Default)]
@@ -125,15 +128,15 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(count("/slam/path"), 1);
     assert_eq!(count("/map/path"), 1);
     assert_eq!(count("/map/grid"), 1);
-    assert_eq!(count("/slam/particles"), processed / 20);
+    assert_eq!(count("/slam/particles"), processed / CLOUD_EVERY);
     assert!(count("/robot/odometry") > 0);
-    // A map every 20 scans (0.5 s), recorded at most every 2 s of data, and the last.
+    // A map every 20 scans (0.5 s), recorded at most every 4 s of data, and the last.
     let maps = count("/slam/map");
     assert!((2..FRAMES / 20).contains(&maps), "{maps} maps");
-    // Each drawn as a scene; the features drawn four times a second of data (every tenth
+    // Each drawn as a scene; the features drawn twice a second of data (every twentieth
     // scan at 40 Hz).
     assert_eq!(count("/slam/map_scene"), maps);
-    assert_eq!(count("/perception/scene"), FRAMES.div_ceil(10));
+    assert_eq!(count("/perception/scene"), FRAMES.div_ceil(20));
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(tf_children.get("base_link"), Some(&processed));
     assert_eq!(tf_children.get("laser"), Some(&1));
@@ -311,7 +314,8 @@ fn a_recording_holds_the_grid_and_refined_path_map_sink_wrote_and_the_particle_c
     }
 
     // map-sink's path is trajectory.tum's, pose for pose (to the last bit or two: this
-    // crate's JSON parser may be an ulp off); the filter's differs from it.
+    // crate's JSON parser may be an ulp off). (A run this short comes back nowhere, so
+    // the refinement leaves the filter's path as it was: both paths are the same here.)
     let trajectory = read_tum(&out.join("trajectory.tum"));
     let paths = messages_on(&bytes, "/map/path");
     assert_eq!(paths.len(), 1);
@@ -332,14 +336,16 @@ fn a_recording_holds_the_grid_and_refined_path_map_sink_wrote_and_the_particle_c
         let yaw = pose["yaw"].as_f64().unwrap();
         assert!((yaw - tum.yaw()).abs() < 1e-9, "{yaw} {}", tum.yaw());
     }
-    let filter_path = messages_on(&bytes, "/slam/path");
-    assert_ne!(filter_path[0]["planar"], paths[0]["planar"], "refined");
 
-    // A particle cloud every 20 scans (the default), each of every particle.
+    // A particle cloud every CLOUD_EVERY scans, each of every particle.
     let clouds = messages_on(&bytes, "/slam/particles");
-    assert_eq!(clouds.len() as u64, FRAMES / 20);
+    assert_eq!(clouds.len() as u64, FRAMES / CLOUD_EVERY);
     for (k, cloud) in clouds.iter().enumerate() {
-        assert_eq!(cloud["seq"], 20 * (k as u64 + 1) - 1, "the 20th scan's");
+        assert_eq!(
+            cloud["seq"],
+            CLOUD_EVERY * (k as u64 + 1) - 1,
+            "the last scan's of each CLOUD_EVERY"
+        );
         assert_eq!(cloud["frame_id"], "map");
         assert_eq!(cloud["poses"].as_array().map(Vec::len), Some(100));
         let total: f64 = cloud["weights"]

@@ -173,7 +173,8 @@ fn check_recording_of(out: &Path, odometry: bool) {
     if odometry {
         expected.push(("/robot/odometry", "slam.Odometry"));
     }
-    // map-sink's path, its grid when it traced one, and a particle cloud every 20 scans.
+    // map-sink's path, its grid when it traced one, and a particle cloud every 40 scans
+    // (`[slam] particle_cloud_every`'s default).
     let metrics = metrics(out);
     let processed = metrics.frames_processed;
     let grid = out.join("map.pgm").exists();
@@ -204,7 +205,7 @@ fn check_recording_of(out: &Path, odometry: bool) {
     assert_eq!(topics["/map/path"].messages, 1);
     let count = |topic: &str| topics.get(topic).map_or(0, |t| t.messages);
     assert_eq!(count("/map/grid"), u64::from(grid));
-    assert_eq!(count("/slam/particles"), processed / 20);
+    assert_eq!(count("/slam/particles"), processed / 40);
     // The front end's pose at every scan: the scans' first and last stamps.
     let (first, last) = first_and_last_stamps(&out.join("dead_reckoning.tum"));
     for topic in ["/lidar/scan", "/slam/pose", "/perception/features"] {
