@@ -206,6 +206,11 @@ fn distance_travelled(
 /// Side of the tiles the returns are indexed by, metres.
 const TILE_M: f64 = 1.0;
 
+/// The most returns a block's wall field is built from (before its own pass's are left
+/// out), so that the cost of a pass grows with the path's length, not with the square of
+/// the times it went round.
+const MAX_OTHER_RETURNS: usize = 200_000;
+
 /// Aligns each scan (`sensor_ends` from `guesses`; `world_ends` the returns placed at the
 /// guesses) to the walls that the scans of other passes drew, block by block of the path.
 fn align_to_other_passes(
@@ -280,9 +285,14 @@ fn align_to_other_passes(
         // In order, so that each wall piece sums its returns in the same order every run.
         near.sort_unstable();
         near.dedup();
+        // Where the robot went round the same rooms many times, each block would gather
+        // every return of every other lap: past `MAX_OTHER_RETURNS` it takes an evenly
+        // spread share of them, plenty for the mean of each wall piece.
+        let candidates: usize = near.iter().filter_map(|t| tiles.get(t)).map(Vec::len).sum();
+        let stride = candidates.div_ceil(MAX_OTHER_RETURNS).max(1);
         let mut others = Vec::new();
         for t in &near {
-            for &(k, j) in tiles.get(t).into_iter().flatten() {
+            for &(k, j) in tiles.get(t).into_iter().flatten().step_by(stride) {
                 let (k, j) = (k as usize, j as usize);
                 if block_of[k].abs_diff(block) > 2 {
                     others.push(world_ends[k][j]);
