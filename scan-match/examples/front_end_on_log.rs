@@ -3,8 +3,8 @@
 //!
 //!     cargo run --release -p scan-match --example front_end_on_log -- \
 //!         ../shared/data/carmen/mit-csail.clf [--relations FILE] [--out FILE.tum] \
-//!         [--no-odometry] [--format carmen|seed-csv] [--limit N] [--config FILE.toml] \
-//!         [--debug FILE]
+//!         [--no-odometry] [--format carmen|seed-csv] [--start N] [--limit N] \
+//!         [--config FILE.toml] [--debug FILE]
 //!
 //! `--debug` writes one line per scan: stamp, the front end's increment (x y yaw), the
 //! odometry's, points, inliers, iterations, keyframe, microseconds, status, odometry status.
@@ -32,6 +32,7 @@ struct Args {
     out: PathBuf,
     odometry: bool,
     format: LogFormat,
+    start: usize,
     limit: usize,
     config: Option<PathBuf>,
     debug: Option<PathBuf>,
@@ -45,6 +46,7 @@ fn parse_args() -> Result<Args> {
         out: PathBuf::from("front_end.tum"),
         odometry: true,
         format: LogFormat::Carmen,
+        start: 0,
         limit: usize::MAX,
         config: None,
         debug: None,
@@ -57,6 +59,7 @@ fn parse_args() -> Result<Args> {
             "--out" => parsed.out = value()?.into(),
             "--no-odometry" => parsed.odometry = false,
             "--format" => parsed.format = value()?.parse().map_err(anyhow::Error::msg)?,
+            "--start" => parsed.start = value()?.parse()?,
             "--limit" => parsed.limit = value()?.parse()?,
             "--config" => parsed.config = Some(value()?.into()),
             "--debug" => parsed.debug = Some(value()?.into()),
@@ -64,7 +67,7 @@ fn parse_args() -> Result<Args> {
             other => log = Some(PathBuf::from(other)),
         }
     }
-    parsed.log = log.context("usage: front_end_on_log LOG [--relations FILE] [--out FILE] [--no-odometry] [--format F] [--limit N] [--config FILE]")?;
+    parsed.log = log.context("usage: front_end_on_log LOG [--relations FILE] [--out FILE] [--no-odometry] [--format F] [--start N] [--limit N] [--config FILE] [--debug FILE]")?;
     if parsed.relations.is_none() {
         let beside = parsed.log.with_extension("relations");
         if beside.exists() {
@@ -80,7 +83,13 @@ fn main() -> Result<()> {
         Some(path) => toml::from_str(&std::fs::read_to_string(path)?)?,
         None => FrontEndConfig::default(),
     };
-    let scans = logs::load(&args.log, args.format, args.limit)?;
+    let scans = logs::load(
+        &args.log,
+        args.format,
+        args.start.saturating_add(args.limit),
+    )?;
+    // The front end starts cold at `--start`, as a run replayed from there does.
+    let scans = scans.get(args.start..).unwrap_or_default();
     let mut front_end = FrontEnd::new(config)?;
     let mut tum = String::new();
     let mut last_stamp = None;
@@ -88,7 +97,7 @@ fn main() -> Result<()> {
     let mut previous_odometry = None;
     let mut times_us: Vec<f64> = Vec::with_capacity(scans.len());
     let wall = Instant::now();
-    for scan in &scans {
+    for scan in scans {
         let out = front_end.process(&scan.input(args.odometry))?;
         times_us.push(out.elapsed.as_secs_f64() * 1e6);
         if args.debug.is_some() {

@@ -65,6 +65,12 @@ pub struct LocalizeConfig {
     pub converged_sigma_xy: f64,
     /// ... and their yaw spread under this, radians.
     pub converged_sigma_yaw: f64,
+    /// Once converged, the particles count as lost only when their spread exceeds this
+    /// many times `converged_sigma_xy` or `converged_sigma_yaw`: a cloud that widens for a
+    /// moment (the front end's step was off, a corridor says little along itself) keeps
+    /// tracking on the sharp field instead of falling back to the global search, whose
+    /// smooth field and wide hill-climbing steps can carry it to another place.
+    pub lost_sigma_factor: f64,
 }
 
 impl Default for LocalizeConfig {
@@ -95,6 +101,7 @@ impl Default for LocalizeConfig {
             initial_sigma_yaw: 0.05,
             converged_sigma_xy: 0.15,
             converged_sigma_yaw: 0.05,
+            lost_sigma_factor: 2.0,
         }
     }
 }
@@ -119,6 +126,12 @@ impl LocalizeConfig {
             "localize.beams",
             self.beams as f64,
             self.beams >= 1,
+            "must be at least 1",
+        )?;
+        check(
+            "localize.lost_sigma_factor",
+            self.lost_sigma_factor,
+            self.lost_sigma_factor >= 1.0,
             "must be at least 1",
         )?;
         check(

@@ -106,7 +106,7 @@ pub struct ScanRanges<'a> {
 pub struct Localization {
     pub estimate: Estimate,
     /// The weighted particles' spread is under `converged_sigma_xy` and
-    /// `converged_sigma_yaw`.
+    /// `converged_sigma_yaw` (once converged, under `lost_sigma_factor` times them).
     pub converged: bool,
 }
 
@@ -485,12 +485,21 @@ impl Localizer {
         self.stats.peak_particles = self.stats.peak_particles.max(self.poses.len());
     }
 
+    /// Whether the cloud `covariance` describes has converged: its spread under the
+    /// configured thresholds, or, if it had converged already, under `lost_sigma_factor`
+    /// times them.
     fn is_converged(&self, covariance: &Matrix3<f64>) -> bool {
+        let c = &self.config;
+        let scale = if self.converged {
+            c.lost_sigma_factor
+        } else {
+            1.0
+        };
         let (a, b, d) = (covariance[(0, 0)], covariance[(0, 1)], covariance[(1, 1)]);
         // The larger eigenvalue of the x-y block.
         let largest = 0.5 * (a + d) + (0.25 * (a - d).powi(2) + b * b).sqrt();
-        largest.sqrt() < self.config.converged_sigma_xy
-            && covariance[(2, 2)].sqrt() < self.config.converged_sigma_yaw
+        largest.sqrt() < scale * c.converged_sigma_xy
+            && covariance[(2, 2)].sqrt() < scale * c.converged_sigma_yaw
     }
 }
 
@@ -564,33 +573,50 @@ mod tests {
         }
     }
 
-    /// Drives `steps` steps of 5 cm along a loop through the room, returning the final
-    /// error and the first step at which the localizer said it had converged.
-    fn drive(localizer: &mut Localizer, grid: &GridMap, steps: usize) -> (f64, Option<usize>) {
-        // Round the room: 3 m along x, a quarter turn, and so on, starting at (2, 1.2).
+    /// The true pose after `k` steps of 5 cm along a loop through the room (3 m along x,
+    /// a quarter turn, and so on, from (2, 1.2)), and the step that led there.
+    fn loop_pose(k: usize) -> (Pose2, Pose2) {
         let mut truth = Pose2::new(2.0, 1.2, 0.0);
-        let mut converged = None;
-        let mut error = f64::INFINITY;
-        for k in 0..steps {
-            let increment = if k == 0 {
-                Pose2::IDENTITY
-            } else if k % 80 == 0 {
+        let mut increment = Pose2::IDENTITY;
+        for j in 1..=k {
+            increment = if j % 80 == 0 {
                 Pose2::new(0.0, 0.0, 0.5 * PI)
             } else {
                 Pose2::new(0.05, 0.0, 0.0)
             };
             truth = truth.compose(&increment);
-            let beams = scan(grid, truth);
-            let motion = MeasuredMotion {
-                increment,
-                covariance: Matrix3::identity() * 1e-6,
-            };
-            let located = localizer.step(&motion, Some(&ranges(&beams)));
-            if located.converged && converged.is_none() {
+        }
+        (truth, increment)
+    }
+
+    /// Step `k` of the loop (0: standing at its start): the localizer's error after it
+    /// and whether it said it had converged.
+    fn drive_step(localizer: &mut Localizer, grid: &GridMap, k: usize) -> (f64, bool) {
+        let (truth, increment) = loop_pose(k);
+        let beams = scan(grid, truth);
+        let motion = MeasuredMotion {
+            increment,
+            covariance: Matrix3::identity() * 1e-6,
+        };
+        let located = localizer.step(&motion, Some(&ranges(&beams)));
+        let mean = located.estimate.mean;
+        (
+            (mean.x - truth.x).hypot(mean.y - truth.y),
+            located.converged,
+        )
+    }
+
+    /// Drives `steps` steps of the loop, returning the final error and the first step at
+    /// which the localizer said it had converged.
+    fn drive(localizer: &mut Localizer, grid: &GridMap, steps: usize) -> (f64, Option<usize>) {
+        let mut converged = None;
+        let mut error = f64::INFINITY;
+        for k in 0..steps {
+            let (e, c) = drive_step(localizer, grid, k);
+            if c && converged.is_none() {
                 converged = Some(k);
             }
-            let mean = located.estimate.mean;
-            error = (mean.x - truth.x).hypot(mean.y - truth.y);
+            error = e;
         }
         (error, converged)
     }
@@ -607,6 +633,51 @@ mod tests {
         assert!(converged.is_some());
         // Converged, KLD keeps the fewest particles allowed or near it.
         assert!(localizer.particle_poses().len() < 1000);
+    }
+
+    /// Times the localizer went from converged to not over `steps` of [`drive`]'s loop.
+    fn losses_while_driving(config: LocalizeConfig, steps: usize) -> (usize, f64) {
+        let grid = room();
+        let start = Start::Known(Pose2::new(2.0, 1.2, 0.0));
+        let mut localizer = Localizer::new(config, &grid, start, 5, 0).unwrap();
+        let mut losses = 0;
+        let mut was_converged = false;
+        let mut worst: f64 = 0.0;
+        for k in 1..=steps {
+            let (error, converged) = drive_step(&mut localizer, &grid, k);
+            if was_converged && !converged {
+                losses += 1;
+            }
+            if was_converged {
+                worst = worst.max(error);
+            }
+            was_converged = converged;
+        }
+        (losses, worst)
+    }
+
+    #[test]
+    fn a_cloud_that_widens_for_a_moment_keeps_tracking() {
+        // Drift eight times the default: between weightings the cloud widens past the
+        // converged thresholds now and then.
+        let noisy = LocalizeConfig {
+            xy_variance_per_metre: 0.04,
+            xy_variance_per_radian: 0.04,
+            yaw_variance_per_metre: 0.016,
+            yaw_variance_per_radian: 0.08,
+            ..LocalizeConfig::default()
+        };
+        let (losses, _) = losses_while_driving(
+            LocalizeConfig {
+                lost_sigma_factor: 1.0,
+                ..noisy.clone()
+            },
+            400,
+        );
+        assert!(losses > 0, "the thresholds alone never lose this cloud");
+        let (losses, worst) = losses_while_driving(noisy, 400);
+        assert_eq!(losses, 0);
+        assert!(worst < 0.2, "{worst}");
     }
 
     #[test]
