@@ -5,8 +5,6 @@
 //! than rounded to a cell: aligning scans to cell centres would bend a path that is already
 //! right to within a cell.
 
-use std::collections::HashMap;
-
 use crate::occupancy_grid::{CellState, OccupancyGrid};
 
 /// A return in the world frame and where the sensor was that saw it.
@@ -23,6 +21,17 @@ pub(crate) struct SeenReturn {
 struct WallPiece {
     point: [f64; 2],
     normal: Option<[f64; 2]>,
+}
+
+/// What the returns that fell in one occupied cell add up to.
+#[derive(Debug, Clone, Copy)]
+struct CellSums {
+    /// Row-major index of the cell in the field's window.
+    cell: usize,
+    returns: [f64; 2],
+    /// The vectors from the returns back to the sensors that saw them.
+    to_sensors: [f64; 2],
+    count: f64,
 }
 
 /// The signed distance of a point to the nearest wall piece and its gradient.
@@ -223,48 +232,65 @@ impl WallField {
                 .then(|| row as usize * width + col as usize)
         };
         // Per occupied cell: the sum of its returns, of the vectors from them back to their
-        // sensors (only the side they add up to matters), and their count.
-        let mut sums: HashMap<usize, ([f64; 2], [f64; 2], f64)> = HashMap::new();
+        // sensors (only the side they add up to matters), and their count. `slot` maps a
+        // cell of the window to its sums (one more than their index; 0: none).
+        let mut slot = vec![0_u32; width * height];
+        let mut sums: Vec<CellSums> = Vec::new();
         for seen in ends {
             let p = seen.at;
             let Some(i) = cell_of(p) else { continue };
-            if grid.state(window.col + i % width, window.row + i / width) != CellState::Occupied {
-                continue;
+            if slot[i] == 0 {
+                if grid.state(window.col + i % width, window.row + i / width) != CellState::Occupied
+                {
+                    continue;
+                }
+                sums.push(CellSums {
+                    cell: i,
+                    returns: [0.0, 0.0],
+                    to_sensors: [0.0, 0.0],
+                    count: 0.0,
+                });
+                slot[i] = sums.len() as u32;
             }
-            let entry = sums.entry(i).or_insert(([0.0, 0.0], [0.0, 0.0], 0.0));
-            entry.0[0] += p[0];
-            entry.0[1] += p[1];
-            entry.1[0] += seen.from[0] - p[0];
-            entry.1[1] += seen.from[1] - p[1];
-            entry.2 += 1.0;
+            let entry = &mut sums[slot[i] as usize - 1];
+            entry.returns[0] += p[0];
+            entry.returns[1] += p[1];
+            entry.to_sensors[0] += seen.from[0] - p[0];
+            entry.to_sensors[1] += seen.from[1] - p[1];
+            entry.count += 1.0;
         }
         if sums.is_empty() {
             return None;
         }
-        let mut cells: Vec<usize> = sums.keys().copied().collect();
-        cells.sort_unstable();
-        let means: HashMap<usize, [f64; 2]> = sums
+        // Pieces in the order of their cells, so that which of two equally near pieces a
+        // cell takes does not depend on the order the returns came in.
+        sums.sort_unstable_by_key(|c| c.cell);
+        for (k, c) in sums.iter().enumerate() {
+            slot[c.cell] = k as u32 + 1;
+        }
+        let means: Vec<[f64; 2]> = sums
             .iter()
-            .map(|(&i, &(sum, _, n))| (i, [sum[0] / n, sum[1] / n]))
+            .map(|c| [c.returns[0] / c.count, c.returns[1] / c.count])
             .collect();
-        let pieces: Vec<WallPiece> = cells
+        let mut around = Vec::new();
+        let pieces: Vec<WallPiece> = sums
             .iter()
-            .map(|&i| {
-                let point = means[&i];
-                let (col, row) = ((i % width) as i64, (i / width) as i64);
-                let mut around = Vec::new();
+            .zip(&means)
+            .map(|(c, &point)| {
+                let (col, row) = ((c.cell % width) as i64, (c.cell / width) as i64);
+                around.clear();
                 for dr in -NORMAL_RADIUS_CELLS..=NORMAL_RADIUS_CELLS {
                     for dc in -NORMAL_RADIUS_CELLS..=NORMAL_RADIUS_CELLS {
                         let (c, r) = (col + dc, row + dr);
                         if c < 0 || r < 0 || c >= width as i64 || r >= height as i64 {
                             continue;
                         }
-                        if let Some(m) = means.get(&(r as usize * width + c as usize)) {
-                            around.push(*m);
+                        if let Some(k) = slot[r as usize * width + c as usize].checked_sub(1) {
+                            around.push(means[k as usize]);
                         }
                     }
                 }
-                let seen_from = sums[&i].1;
+                let seen_from = c.to_sensors;
                 let normal = line_normal(&around).map(|n| {
                     if n[0] * seen_from[0] + n[1] * seen_from[1] < 0.0 {
                         [-n[0], -n[1]]
@@ -275,6 +301,7 @@ impl WallField {
                 WallPiece { point, normal }
             })
             .collect();
+        let cells: Vec<usize> = sums.iter().map(|c| c.cell).collect();
 
         let cells2 = |reach_m: f64| (reach_m / resolution).ceil().powi(2) as u32;
         let (near_cells2, far_cells2) = (cells2(reach_m), cells2(far_reach_m.max(reach_m)));
