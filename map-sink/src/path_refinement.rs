@@ -48,7 +48,7 @@ pub struct PathRefinementConfig {
 impl Default for PathRefinementConfig {
     fn default() -> Self {
         Self {
-            passes: 3,
+            passes: 5,
             step_xy_variance_per_m: 0.01,
             step_yaw_variance_per_m: 0.002,
             step_yaw_variance_per_rad: 0.002,
