@@ -15,6 +15,7 @@
 use std::collections::HashMap;
 
 use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
 use slam_geom::{Pose2, StampedPose};
 
 use crate::compact_scan::{Beam, CompactScan};
@@ -222,12 +223,6 @@ fn align_to_other_passes(
     refinement: &PathRefinementConfig,
 ) -> Vec<Option<ScanAlignment>> {
     let config = &refinement.alignment;
-    let tile = |p: [f64; 2]| {
-        (
-            (p[0] / TILE_M).floor() as i64,
-            (p[1] / TILE_M).floor() as i64,
-        )
-    };
     // Scan and return indices, as u32: the index holds every return of the run.
     let mut tiles: HashMap<(i64, i64), Vec<(u32, u32)>> = HashMap::new();
     for (k, ends) in world_ends.iter().enumerate() {
@@ -250,15 +245,57 @@ fn align_to_other_passes(
     for (k, &block) in block_of.iter().enumerate() {
         blocks[block].push(k);
     }
-    let pad = config.inlier_distance_m.max(config.coarse_distance_m) + config.max_shift_m;
+    let pass = OtherPasses {
+        grid,
+        sensor_ends,
+        world_ends,
+        guesses,
+        tiles: &tiles,
+        block_of: &block_of,
+        config,
+    };
+    // Each block's field and alignments depend on nothing another block computes: the
+    // blocks go to all cores, their results are put together in order.
+    let aligned: Vec<Vec<(usize, Option<ScanAlignment>)>> = blocks
+        .into_par_iter()
+        .enumerate()
+        .map(|(block, members)| pass.align_block(block, members))
+        .collect();
     let mut alignments = vec![None; world_ends.len()];
-    for (block, members) in blocks.into_iter().enumerate() {
+    for (k, alignment) in aligned.into_iter().flatten() {
+        alignments[k] = alignment;
+    }
+    alignments
+}
+
+/// One pass of the path over its grid, indexed for [`OtherPasses::align_block`].
+struct OtherPasses<'a> {
+    grid: &'a OccupancyGrid,
+    sensor_ends: &'a [&'a [[f64; 2]]],
+    world_ends: &'a [Vec<SeenReturn>],
+    guesses: &'a [Pose2],
+    /// The scan and return indices of the returns in each tile.
+    tiles: &'a HashMap<(i64, i64), Vec<(u32, u32)>>,
+    block_of: &'a [usize],
+    config: &'a ScanAlignmentConfig,
+}
+
+impl OtherPasses<'_> {
+    /// The alignments of the scans `members` of `block` to the walls the other passes drew
+    /// around them.
+    fn align_block(
+        &self,
+        block: usize,
+        members: Vec<usize>,
+    ) -> Vec<(usize, Option<ScanAlignment>)> {
+        let (config, world_ends) = (self.config, self.world_ends);
         if members.is_empty() {
-            continue;
+            return Vec::new();
         }
+        let pad = config.inlier_distance_m.max(config.coarse_distance_m) + config.max_shift_m;
         let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for &k in &members {
-            let at: [f64; 2] = guesses[k].position().into();
+            let at: [f64; 2] = self.guesses[k].position().into();
             for p in world_ends[k].iter().map(|seen| &seen.at).chain([&at]) {
                 for d in 0..2 {
                     min[d] = min[d].min(p[d] - pad);
@@ -288,34 +325,49 @@ fn align_to_other_passes(
         // Where the robot went round the same rooms many times, each block would gather
         // every return of every other lap: past `MAX_OTHER_RETURNS` it takes an evenly
         // spread share of them, plenty for the mean of each wall piece.
-        let candidates: usize = near.iter().filter_map(|t| tiles.get(t)).map(Vec::len).sum();
+        let candidates: usize = near
+            .iter()
+            .filter_map(|t| self.tiles.get(t))
+            .map(Vec::len)
+            .sum();
         let stride = candidates.div_ceil(MAX_OTHER_RETURNS).max(1);
         let mut others = Vec::new();
         for t in &near {
-            for &(k, j) in tiles.get(t).into_iter().flatten().step_by(stride) {
+            for &(k, j) in self.tiles.get(t).into_iter().flatten().step_by(stride) {
                 let (k, j) = (k as usize, j as usize);
-                if block_of[k].abs_diff(block) > 2 {
+                if self.block_of[k].abs_diff(block) > 2 {
                     others.push(world_ends[k][j]);
                 }
             }
         }
-        let Some(window) = CellWindow::around(grid, min, max) else {
-            continue;
+        let Some(window) = CellWindow::around(self.grid, min, max) else {
+            return Vec::new();
         };
         let Some(walls) = WallField::within(
-            grid,
+            self.grid,
             window,
             &others,
             config.inlier_distance_m,
             config.coarse_distance_m,
         ) else {
-            continue;
+            return Vec::new();
         };
-        for k in members {
-            alignments[k] = align_scan(&walls, sensor_ends[k], guesses[k], config);
-        }
+        members
+            .into_iter()
+            .map(|k| {
+                let aligned = align_scan(&walls, self.sensor_ends[k], self.guesses[k], config);
+                (k, aligned)
+            })
+            .collect()
     }
-    alignments
+}
+
+/// The 1 m tile `p` lies in.
+fn tile(p: [f64; 2]) -> (i64, i64) {
+    (
+        (p[0] / TILE_M).floor() as i64,
+        (p[1] / TILE_M).floor() as i64,
+    )
 }
 
 /// The information of one of the filter's steps: its variances grow with the motion, from
