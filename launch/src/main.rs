@@ -44,13 +44,13 @@ fn run() -> Result<ExitCode> {
             "refusing to start: cannot localize on the map in {}: it has no occupancy grid",
             dir.display()
         );
-        let yaw = saved.grid.as_ref().map_or(0.0, |g| g.yaml.origin[2]);
-        anyhow::ensure!(
-            !config.localize || yaw == 0.0,
-            "refusing to start: cannot localize on the map in {}: its grid is rotated \
-             (origin yaw {yaw}), which is not supported",
-            dir.display()
-        );
+        // Mapping on it, map-sink starts its grid from the saved one (a localizing run's
+        // slam-proc needs the same of it): the check map-sink makes, made now.
+        if let Some(grid) = &saved.grid {
+            map_sink::prior_grid(grid, config.grid.resolution).with_context(|| {
+                format!("refusing to start: cannot use the map in {}", dir.display())
+            })?;
+        }
     }
     // An address that names nothing would be retried for ever by lidar-hokuyo.
     if config.source == SourceKind::Hokuyo {
@@ -251,6 +251,11 @@ fn plan(
             for (option, subscribers) in topology::waits_for_subscribers(stage, &run) {
                 args.extend([option.to_owned(), subscribers.to_string()]);
             }
+            if let Some(dir) = &config.map
+                && topology::takes_saved_map(stage, &run)
+            {
+                args.extend(["--map".to_owned(), dir.display().to_string()]);
+            }
             args.extend(settings_args(stage.role, config, out, config_dir)?);
             Ok(StagePlan {
                 name: stage.binary.into(),
@@ -325,7 +330,6 @@ fn settings_args(
                 ),
                 ("--seed", Some(config.slam.seed.to_string())),
                 ("--map-every", Some(config.slam.map_every.to_string())),
-                ("--map", config.map.as_deref().map(path)),
             ]);
             if config.localize {
                 args.push("--localize".into());

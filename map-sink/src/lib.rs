@@ -62,6 +62,7 @@ mod path_assembly;
 mod path_refinement;
 mod pgm;
 mod pose_chain;
+mod prior_grid;
 mod recorder;
 mod saved_map;
 mod scan_alignment;
@@ -97,6 +98,7 @@ pub use path_assembly::{ChunkError, PathAssembly};
 pub use path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
 pub use pgm::{Pgm, PgmError, encode_pgm};
 pub use pose_chain::{PosePrior, solve_pose_chain};
+pub use prior_grid::{PRIOR_FREE_LOG_ODDS, PRIOR_OCCUPIED_LOG_ODDS, PriorGridError, prior_grid};
 pub use recorder::{
     FinishedRun, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions,
 };

@@ -13,6 +13,8 @@ use crate::error::SinkError;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
 use crate::path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
+use crate::prior_grid::prior_grid;
+use crate::saved_map::GridMap;
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
@@ -45,6 +47,9 @@ pub struct RecorderOptions {
     pub relations_tolerance_ns: u64,
     /// How the filter's final path is refined against its own grid before it is written.
     pub refinement: PathRefinementConfig,
+    /// Mapping on a saved map: its grid, which the run's grid starts from (the run's
+    /// scans add to it: [`crate::prior_grid`]).
+    pub prior_grid: Option<GridMap>,
 }
 
 impl Default for RecorderOptions {
@@ -55,6 +60,7 @@ impl Default for RecorderOptions {
             relations: None,
             relations_tolerance_ns: slam_eval::DEFAULT_TOLERANCE_NS,
             refinement: PathRefinementConfig::default(),
+            prior_grid: None,
         }
     }
 }
@@ -131,6 +137,8 @@ pub struct Recorder {
     truth_by_stamp: BTreeMap<u64, Pose2>,
     final_path: Option<Vec<StampedPose>>,
     scans: ScanKeeper,
+    /// [`RecorderOptions::prior_grid`] on this run's cells.
+    prior: Option<OccupancyGrid>,
     latencies_ns: Vec<u64>,
     map: Vec<MapCorner>,
     true_corners: Vec<[f64; 2]>,
@@ -151,6 +159,10 @@ impl Recorder {
     pub fn create(dir: &Path, options: RecorderOptions) -> Result<Self, SinkError> {
         options.grid.validate().map_err(SinkError::InvalidOption)?;
         let resolution = options.grid.resolution_m;
+        let prior = match &options.prior_grid {
+            Some(saved) => prior_grid(saved, resolution)?,
+            None => None,
+        };
         fs::create_dir_all(dir).map_err(|e| SinkError::io("create directory", dir, e))?;
         for stale in [
             GROUND_TRUTH_FILE,
@@ -176,6 +188,7 @@ impl Recorder {
         Ok(Self {
             dir: dir.to_path_buf(),
             scans: ScanKeeper::new(resolution),
+            prior,
             options,
             online,
             ground_truth: TumStream::lazy(&dir.join(GROUND_TRUTH_FILE)),
@@ -456,7 +469,7 @@ impl Recorder {
             .iter()
             .filter_map(|(stamp, scan)| Some((*poses.get(stamp)?, scan)))
             .collect();
-        let grid = OccupancyGrid::build(&self.options.grid, &scans)?;
+        let grid = OccupancyGrid::build_on(&self.options.grid, self.prior.as_ref(), &scans)?;
         Ok(grid.map(|g| (g, scans.len())))
     }
 
