@@ -456,6 +456,7 @@ impl Recorder {
             &scans,
             &self.options.grid,
             &self.options.refinement,
+            self.prior.as_ref(),
         )?)
     }
 
