@@ -121,11 +121,12 @@ impl OccupancyGrid {
         Self::build_on(config, None, scans)
     }
 
-    /// [`build`](Self::build) on top of `prior` (a saved map's grid as evidence, at the same
-    /// resolution: [`crate::prior_grid`]): the grid covers both, starts from the prior's
-    /// log-odds and adds the scans' hits and passes to them. `None` when there is neither a
-    /// prior nor a scan with a beam to trace.
-    pub fn build_on(
+    /// [`build`](Self::build) on top of `prior` (a saved map's grid as evidence, made by
+    /// [`crate::prior_grid`] at `config`'s resolution, which is why only the crate calls
+    /// this): the grid covers both, starts from the prior's log-odds and adds the scans'
+    /// hits and passes to them. `None` when there is neither a prior nor a scan with a beam
+    /// to trace.
+    pub(crate) fn build_on(
         config: &GridConfig,
         prior: Option<&OccupancyGrid>,
         scans: &[(Pose2, &CompactScan)],
