@@ -95,6 +95,17 @@ fn run() -> Result<ExitCode> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs").join(&label));
+    // The run clears its directory's map files as it starts, while slam-proc and map-sink
+    // read the saved map: it would be gone before they had it.
+    if let Some(map) = &config.map {
+        let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(a), Ok(b)) if a == b);
+        anyhow::ensure!(
+            !same(map, &out),
+            "refusing to start: --out {} is the saved map's directory (--map), which the run \
+             would clear while reading it; write the extended map to another directory",
+            out.display()
+        );
+    }
     let config_dir = out.join("config");
     let log_dir = out.join("logs");
     for dir in [&out, &config_dir, &log_dir] {

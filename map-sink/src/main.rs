@@ -103,6 +103,8 @@ fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(RelationsFile::read)
         .transpose()?;
+    // Read before the recorder clears the output directory, which may be the map's own.
+    let saved = saved_grid(args.map.as_deref())?;
     let mut recorder = Recorder::create(
         &args.out,
         RecorderOptions {
@@ -116,10 +118,13 @@ fn run(args: Args) -> Result<()> {
                 passes: args.refine_passes,
                 ..PathRefinementConfig::default()
             },
-            prior_grid: saved_grid(args.map.as_deref())?,
             ..RecorderOptions::default()
         },
     )?;
+
+    if let Some(saved) = &saved {
+        recorder.map_on(saved)?;
+    }
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("map-sink")?;

@@ -47,9 +47,6 @@ pub struct RecorderOptions {
     pub relations_tolerance_ns: u64,
     /// How the filter's final path is refined against its own grid before it is written.
     pub refinement: PathRefinementConfig,
-    /// Mapping on a saved map: its grid, which the run's grid starts from (the run's
-    /// scans add to it: [`crate::prior_grid`]).
-    pub prior_grid: Option<GridMap>,
 }
 
 impl Default for RecorderOptions {
@@ -60,7 +57,6 @@ impl Default for RecorderOptions {
             relations: None,
             relations_tolerance_ns: slam_eval::DEFAULT_TOLERANCE_NS,
             refinement: PathRefinementConfig::default(),
-            prior_grid: None,
         }
     }
 }
@@ -137,7 +133,7 @@ pub struct Recorder {
     truth_by_stamp: BTreeMap<u64, Pose2>,
     final_path: Option<Vec<StampedPose>>,
     scans: ScanKeeper,
-    /// [`RecorderOptions::prior_grid`] on this run's cells.
+    /// Mapping on a saved map: its grid on this run's cells ([`Self::map_on`]).
     prior: Option<OccupancyGrid>,
     latencies_ns: Vec<u64>,
     map: Vec<MapCorner>,
@@ -159,10 +155,6 @@ impl Recorder {
     pub fn create(dir: &Path, options: RecorderOptions) -> Result<Self, SinkError> {
         options.grid.validate().map_err(SinkError::InvalidOption)?;
         let resolution = options.grid.resolution_m;
-        let prior = match &options.prior_grid {
-            Some(saved) => prior_grid(saved, resolution)?,
-            None => None,
-        };
         fs::create_dir_all(dir).map_err(|e| SinkError::io("create directory", dir, e))?;
         for stale in [
             GROUND_TRUTH_FILE,
@@ -188,7 +180,7 @@ impl Recorder {
         Ok(Self {
             dir: dir.to_path_buf(),
             scans: ScanKeeper::new(resolution),
-            prior,
+            prior: None,
             options,
             online,
             ground_truth: TumStream::lazy(&dir.join(GROUND_TRUTH_FILE)),
@@ -288,6 +280,13 @@ impl Recorder {
         );
         let estimate = self.estimates.get(&seq).map(|e| (e.stamp_ns, e.pose));
         self.scans.add_scan(seq, scan, estimate);
+    }
+
+    /// Mapping on a saved map: the run's grid starts from `saved` (its scans add to it, and
+    /// the final path is refined against its walls too: [`crate::prior_grid`]).
+    pub fn map_on(&mut self, saved: &GridMap) -> Result<(), SinkError> {
+        self.prior = prior_grid(saved, self.options.grid.resolution_m)?;
+        Ok(())
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).

@@ -435,6 +435,17 @@ fn a_run_on_a_saved_map_keeps_the_saved_grid_s_walls() {
             && m[3] >= s[3] - slack,
         "saved {s:?}, merged {m:?}"
     );
+    // Extending a map in place is refused before anything starts: the run would clear the
+    // map's files while its stages read them.
+    let in_place = launch(
+        &domain("grid-in-place"),
+        &first,
+        &["--world", "office", "--frames", "10", "--map", saved_dir],
+    );
+    let stderr = String::from_utf8_lossy(&in_place.stderr);
+    assert_eq!(in_place.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("is the saved map's directory"), "{stderr}");
+    assert!(first.join("landmarks.json").is_file() && first.join("map.pgm").is_file());
     for out in [first, alone, on_top] {
         let _ = std::fs::remove_dir_all(&out);
     }
