@@ -44,13 +44,13 @@ fn run() -> Result<ExitCode> {
             "refusing to start: cannot localize on the map in {}: it has no occupancy grid",
             dir.display()
         );
-        let yaw = saved.grid.as_ref().map_or(0.0, |g| g.yaml.origin[2]);
-        anyhow::ensure!(
-            !config.localize || yaw == 0.0,
-            "refusing to start: cannot localize on the map in {}: its grid is rotated \
-             (origin yaw {yaw}), which is not supported",
-            dir.display()
-        );
+        // Mapping on it, map-sink starts its grid from the saved one (a localizing run's
+        // slam-proc needs the same of it): the check map-sink makes, made now.
+        if let Some(grid) = &saved.grid {
+            map_sink::prior_grid(grid, config.grid.resolution).with_context(|| {
+                format!("refusing to start: cannot use the map in {}", dir.display())
+            })?;
+        }
     }
     // An address that names nothing would be retried for ever by lidar-hokuyo.
     if config.source == SourceKind::Hokuyo {
@@ -95,6 +95,17 @@ fn run() -> Result<ExitCode> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs").join(&label));
+    // The run clears its directory's map files as it starts, while slam-proc and map-sink
+    // read the saved map: it would be gone before they had it.
+    if let Some(map) = &config.map {
+        let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(a), Ok(b)) if a == b);
+        anyhow::ensure!(
+            !same(map, &out),
+            "refusing to start: --out {} is the saved map's directory (--map), which the run \
+             would clear while reading it; write the extended map to another directory",
+            out.display()
+        );
+    }
     let config_dir = out.join("config");
     let log_dir = out.join("logs");
     for dir in [&out, &config_dir, &log_dir] {
@@ -251,6 +262,11 @@ fn plan(
             for (option, subscribers) in topology::waits_for_subscribers(stage, &run) {
                 args.extend([option.to_owned(), subscribers.to_string()]);
             }
+            if let Some(dir) = &config.map
+                && topology::takes_saved_map(stage, &run)
+            {
+                args.extend(["--map".to_owned(), dir.display().to_string()]);
+            }
             args.extend(settings_args(stage.role, config, out, config_dir)?);
             Ok(StagePlan {
                 name: stage.binary.into(),
@@ -325,7 +341,6 @@ fn settings_args(
                 ),
                 ("--seed", Some(config.slam.seed.to_string())),
                 ("--map-every", Some(config.slam.map_every.to_string())),
-                ("--map", config.map.as_deref().map(path)),
             ]);
             if config.localize {
                 args.push("--localize".into());

@@ -47,6 +47,8 @@ pub enum When {
     Odometry,
     /// slam-proc localizes on a saved map.
     Localize,
+    /// slam-proc maps (on a saved map or not): the run does not `--localize`.
+    Mapping,
     /// The run is recorded.
     Recorded,
 }
@@ -58,6 +60,7 @@ impl When {
             When::Source(source) => run.source == source,
             When::Odometry => run.odometry,
             When::Localize => run.localize,
+            When::Mapping => !run.localize,
             When::Recorded => run.recorded,
         }
     }
@@ -108,6 +111,9 @@ pub struct Stage {
     /// The topics whose subscribers the stage waits for before it publishes on them, each
     /// with the option that gives it their count.
     pub waits_for: &'static [Wait],
+    /// When the run has a saved map (`--map DIR`), whether the stage is given it (as
+    /// `--map DIR`): `None` never.
+    pub saved_map: Option<When>,
 }
 
 /// A topic whose readers a stage waits for before it publishes on it, so that none of them
@@ -207,6 +213,7 @@ pub const STAGES: &[Stage] = &[
             reads(MAP_GRID),
         ],
         waits_for: &[],
+        saved_map: None,
     },
     Stage {
         binary: "map-sink",
@@ -223,6 +230,7 @@ pub const STAGES: &[Stage] = &[
             reads(PATH),
         ],
         waits_for: &[],
+        saved_map: Some(When::Mapping),
     },
     Stage {
         binary: "slam-proc",
@@ -244,6 +252,7 @@ pub const STAGES: &[Stage] = &[
             },
         ],
         waits_for: &[waits(POSE)],
+        saved_map: Some(When::Always),
     },
     Stage {
         binary: "feature-proc",
@@ -252,6 +261,7 @@ pub const STAGES: &[Stage] = &[
         publishes: &[publishes(FEATURES)],
         reads: &[reads(SCAN), reads_if_published(ODOMETRY)],
         waits_for: &[waits(FEATURES)],
+        saved_map: None,
     },
     Stage {
         binary: "lidar-sim",
@@ -265,6 +275,7 @@ pub const STAGES: &[Stage] = &[
         ],
         reads: &[],
         waits_for: SOURCE_WAITS,
+        saved_map: None,
     },
     Stage {
         binary: "lidar-replay",
@@ -273,6 +284,7 @@ pub const STAGES: &[Stage] = &[
         publishes: &[publishes(SCAN), SOURCE_ODOMETRY],
         reads: &[],
         waits_for: SOURCE_WAITS,
+        saved_map: None,
     },
     Stage {
         binary: "lidar-hokuyo",
@@ -281,6 +293,7 @@ pub const STAGES: &[Stage] = &[
         publishes: &[publishes(SCAN)],
         reads: &[],
         waits_for: &[waits(SCAN)],
+        saved_map: None,
     },
 ];
 
@@ -351,6 +364,13 @@ pub fn waits_for_subscribers(stage: &Stage, run: &RunKind) -> Vec<(&'static str,
         .collect()
 }
 
+/// Whether `stage` is given the run's saved map (`--map DIR`), when it has one: slam-proc
+/// starts from its landmarks or localizes on it, map-sink starts its grid from the saved
+/// grid when mapping on it.
+pub fn takes_saved_map(stage: &Stage, run: &RunKind) -> bool {
+    stage.saved_map.is_some_and(|when| when.holds(run))
+}
+
 /// The stages of every kind of run that read `topic`, as `binary` or `binary (condition)`,
 /// for the documentation's table.
 pub fn readers_text(topic: &str) -> Vec<String> {
@@ -406,6 +426,7 @@ fn condition_text(when: When) -> Option<&'static str> {
         When::Always | When::Source(_) => None,
         When::Odometry => Some("with odometry"),
         When::Localize => Some("--localize"),
+        When::Mapping => Some("without --localize"),
         When::Recorded => Some("--record"),
     }
 }
@@ -668,6 +689,22 @@ mod tests {
             services(&run).iter().map(|s| s.0).collect::<Vec<_>>(),
             [SCAN, FEATURES, POSE, MAP, PATH]
         );
+    }
+
+    #[test]
+    fn the_saved_map_goes_to_the_filter_and_when_mapping_to_the_sink() {
+        for run in every_run() {
+            let given: Vec<&str> = stages(&run)
+                .filter(|s| takes_saved_map(s, &run))
+                .map(|s| s.binary)
+                .collect();
+            let expected: &[&str] = if run.localize {
+                &["slam-proc"]
+            } else {
+                &["map-sink", "slam-proc"]
+            };
+            assert_eq!(given, expected, "{run:?}");
+        }
     }
 
     #[test]

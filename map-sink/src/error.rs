@@ -25,6 +25,9 @@ pub enum SinkError {
     /// The occupancy grid could not be built.
     #[error(transparent)]
     Grid(#[from] crate::occupancy_grid::GridError),
+    /// The saved map's grid cannot be the start of this run's.
+    #[error("cannot map on the saved map: {0}")]
+    PriorGrid(#[from] crate::prior_grid::PriorGridError),
     /// The grid's PNG could not be encoded.
     #[error("cannot encode the grid as PNG: {0}")]
     Png(String),

@@ -21,7 +21,9 @@
 //!   ([`OccupancyGrid`]), so the scans are kept until then, compactly ([`CompactScan`],
 //!   [`ScanKeeper`]). Before that, the filter's final path is refined against the grid its
 //!   own scans trace ([`refine_path`]), so that a stretch that came back off the map it
-//!   revisits does not draw its walls twice.
+//!   revisits does not draw its walls twice. Mapping on a saved map, the grid starts from
+//!   the saved one as prior evidence ([`prior_grid`]), whose walls the path is refined
+//!   against too.
 //! * Given ground-truth relations ([`RecorderOptions::relations`]), the trajectory files are
 //!   scored with the relative-pose error of Kuemmerle et al. 2009 through slam-eval
 //!   ([`slam_eval::score_run`]; why here and not in slam-launch is said there).
@@ -62,6 +64,7 @@ mod path_assembly;
 mod path_refinement;
 mod pgm;
 mod pose_chain;
+mod prior_grid;
 mod recorder;
 mod saved_map;
 mod scan_alignment;
@@ -97,6 +100,7 @@ pub use path_assembly::{ChunkError, PathAssembly};
 pub use path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
 pub use pgm::{Pgm, PgmError, encode_pgm};
 pub use pose_chain::{PosePrior, solve_pose_chain};
+pub use prior_grid::{PRIOR_FREE_LOG_ODDS, PRIOR_OCCUPIED_LOG_ODDS, PriorGridError, prior_grid};
 pub use recorder::{
     FinishedRun, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions,
 };

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
@@ -50,6 +50,10 @@ struct Args {
     /// recording).
     #[arg(long)]
     publish_final: bool,
+    /// Mapping on a saved map (a run's output directory): the grid starts from its grid,
+    /// and this run's scans add to it.
+    #[arg(long, value_name = "DIR")]
+    map: Option<PathBuf>,
 }
 
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
@@ -99,6 +103,8 @@ fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(RelationsFile::read)
         .transpose()?;
+    // Read before the recorder clears the output directory, which may be the map's own.
+    let saved = saved_grid(args.map.as_deref())?;
     let mut recorder = Recorder::create(
         &args.out,
         RecorderOptions {
@@ -115,6 +121,10 @@ fn run(args: Args) -> Result<()> {
             ..RecorderOptions::default()
         },
     )?;
+
+    if let Some(saved) = &saved {
+        recorder.map_on(saved)?;
+    }
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("map-sink")?;
@@ -401,6 +411,14 @@ fn drain_scans(
 
 fn map_corners(snapshot: &MapSnapshot) -> Vec<map_sink::MapCorner> {
     snapshot.corners().iter().map(|&c| c.into()).collect()
+}
+
+/// The grid of the saved map in `dir`, if there is one and it has a grid.
+fn saved_grid(dir: Option<&std::path::Path>) -> Result<Option<map_sink::GridMap>> {
+    let Some(dir) = dir else { return Ok(None) };
+    let saved = map_sink::SavedMap::load(dir)
+        .with_context(|| format!("cannot use the map in {}", dir.display()))?;
+    Ok(saved.grid)
 }
 
 /// This process's peak resident memory (Linux `VmHWM`), kilobytes; `None` elsewhere.

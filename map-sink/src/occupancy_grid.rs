@@ -11,10 +11,10 @@ use crate::compact_scan::{Beam, CompactScan};
 use slam_geom::Pose2;
 
 /// Log-odds added by a return: `ln(0.7 / 0.3)`, a hit makes a cell 70 % likely occupied.
-const HIT_LOG_ODDS: f32 = 0.847;
+pub(crate) const HIT_LOG_ODDS: f32 = 0.847;
 /// Log-odds added by a pass: `ln(0.4 / 0.6)`. Weaker than a hit, because a beam passing a
 /// wall at a shallow angle crosses the corner of a wall cell that other beams hit.
-const MISS_LOG_ODDS: f32 = -0.405;
+pub(crate) const MISS_LOG_ODDS: f32 = -0.405;
 /// Clamps: a cell never becomes so certain that a changed world (a door opened, a person who
 /// stood still) could not be corrected by a few dozen later scans.
 const MIN_LOG_ODDS: f32 = -2.0;
@@ -26,7 +26,7 @@ pub const OCCUPIED_PROBABILITY: f64 = 0.65;
 pub const FREE_PROBABILITY: f64 = 0.25;
 /// More cells than this are refused: at 8 bytes a cell (log-odds and a per-scan mark) this
 /// is 800 MB; such an area wants a coarser resolution.
-const MAX_CELLS: usize = 100_000_000;
+pub(crate) const MAX_CELLS: usize = 100_000_000;
 
 /// How the grid is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -118,6 +118,19 @@ impl OccupancyGrid {
         config: &GridConfig,
         scans: &[(Pose2, &CompactScan)],
     ) -> Result<Option<Self>, GridError> {
+        Self::build_on(config, None, scans)
+    }
+
+    /// [`build`](Self::build) on top of `prior` (a saved map's grid as evidence, made by
+    /// [`crate::prior_grid`] at `config`'s resolution, which is why only the crate calls
+    /// this): the grid covers both, starts from the prior's log-odds and adds the scans'
+    /// hits and passes to them. `None` when there is neither a prior nor a scan with a beam
+    /// to trace.
+    pub(crate) fn build_on(
+        config: &GridConfig,
+        prior: Option<&OccupancyGrid>,
+        scans: &[(Pose2, &CompactScan)],
+    ) -> Result<Option<Self>, GridError> {
         let res = config.resolution_m;
         let ends = |pose: &Pose2, scan| beam_ends(*pose, scan, config.no_return_reach_m);
         let cell = |p: [f64; 2]| [(p[0] / res).floor() as i64, (p[1] / res).floor() as i64];
@@ -131,6 +144,11 @@ impl OccupancyGrid {
                 max[a] = max[a].max(c[a]);
             }
         };
+        if let Some(prior) = prior {
+            let [x, y] = prior.min_index;
+            include([x, y]);
+            include([x + prior.width as i64 - 1, y + prior.height as i64 - 1]);
+        }
         for (pose, scan) in scans {
             if scan.is_empty() || !finite(pose.position().into()) || !pose.yaw.is_finite() {
                 continue;
@@ -161,6 +179,14 @@ impl OccupancyGrid {
             height,
             log_odds: vec![0.0; width * height],
         };
+        if let Some(prior) = prior {
+            for row in 0..prior.height {
+                let from = row * prior.width;
+                let to = grid.offset([prior.min_index[0], prior.min_index[1] + row as i64]);
+                grid.log_odds[to..to + prior.width]
+                    .copy_from_slice(&prior.log_odds[from..from + prior.width]);
+            }
+        }
         // The scan that last changed each cell (its number + 1), so a scan changes it once.
         let mut mark = vec![0_u32; width * height];
         for (number, (pose, scan)) in scans.iter().enumerate() {
@@ -190,6 +216,27 @@ impl OccupancyGrid {
             }
         }
         Ok(Some(grid))
+    }
+
+    /// A grid of the given log-odds, row by row from the lowest y, whose cell `(0, 0)` is
+    /// the global cell `min_index`. Refused past the size [`build`](Self::build) refuses.
+    pub(crate) fn from_log_odds(
+        resolution_m: f64,
+        min_index: [i64; 2],
+        width: usize,
+        log_odds: Vec<f32>,
+    ) -> Result<Self, GridError> {
+        let height = log_odds.len().checked_div(width).unwrap_or(0);
+        if log_odds.len() > MAX_CELLS {
+            return Err(GridError::TooLarge { width, height });
+        }
+        Ok(Self {
+            resolution_m,
+            min_index,
+            width,
+            height,
+            log_odds,
+        })
     }
 
     pub fn resolution_m(&self) -> f64 {

