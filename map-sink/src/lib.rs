@@ -51,6 +51,7 @@
 
 mod atomic;
 mod compact_scan;
+mod corner_shift;
 mod corners_csv;
 mod error;
 mod grid_image;

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use crate::atomic::write_atomic;
 use crate::compact_scan::CompactScan;
+use crate::corner_shift::follow_refined_path;
 use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
@@ -362,6 +363,12 @@ impl Recorder {
                 None,
             ),
         };
+        // The corners were placed from the filter's path: they go where it was moved.
+        if let (Some(_), Some(filter_path)) = (&refinement, &self.final_path)
+            && let Some(moved) = follow_refined_path(&self.map, filter_path, &final_path)
+        {
+            self.map = moved;
+        }
         let text: String = final_path
             .iter()
             .map(|p| format_tum_line(p.stamp_ns, &p.pose))

@@ -1,0 +1,181 @@
+//! The map's corners carried along when the refinement moves the path: the filter placed
+//! each corner from the poses that saw it, so where the refinement moved those poses the
+//! corner moves with them. `landmarks.json` and `map_corners.csv` then lie in the frame of
+//! the grid, which is traced from the refined path; a run mapping on the saved map starts
+//! from corners and walls that agree.
+
+use nalgebra::Matrix4;
+use slam_geom::{MapCorner, Point2, StampedPose, wrap_angle};
+
+/// Poses of the path within this distance of a corner decide how it moves, metres: about
+/// the range at which the front end finds corners, so mostly the poses that saw it.
+const NEAR_POSES_M: f64 = 3.0;
+
+/// `corners` (in the frame of `filter`, the filter's path) moved as the refinement moved
+/// the path to `refined` (the same stamps, in the same order). Each corner moves as the
+/// poses within [`NEAR_POSES_M`] of it moved, on average (the nearest pose when none is that
+/// near): its position and heading by their rigid motions, its covariance turned with them.
+/// `None` when the two paths do not hold the same stamps.
+pub(crate) fn follow_refined_path(
+    corners: &[MapCorner],
+    filter: &[StampedPose],
+    refined: &[StampedPose],
+) -> Option<Vec<MapCorner>> {
+    if filter.len() != refined.len()
+        || filter
+            .iter()
+            .zip(refined)
+            .any(|(a, b)| a.stamp_ns != b.stamp_ns)
+    {
+        return None;
+    }
+    Some(
+        corners
+            .iter()
+            .map(|corner| follow(corner, filter, refined))
+            .collect(),
+    )
+}
+
+fn follow(corner: &MapCorner, filter: &[StampedPose], refined: &[StampedPose]) -> MapCorner {
+    let at = Point2::new(corner.x, corner.y);
+    let distance2 = |p: &StampedPose| (p.pose.position() - at).norm_squared();
+    let near: Vec<usize> = (0..filter.len())
+        .filter(|&i| distance2(&filter[i]) <= NEAR_POSES_M * NEAR_POSES_M)
+        .collect();
+    let near = if near.is_empty() {
+        (0..filter.len())
+            .min_by(|&a, &b| distance2(&filter[a]).total_cmp(&distance2(&filter[b])))
+            .into_iter()
+            .collect()
+    } else {
+        near
+    };
+    if near.is_empty() {
+        return *corner;
+    }
+    let (mut moved, mut turn) = (Point2::zeros(), 0.0);
+    for &i in &near {
+        let (before, after) = (&filter[i].pose, &refined[i].pose);
+        // Where the corner is in the frame of the pose, put back at the pose's new place.
+        moved += after.transform(before.inverse().transform(at));
+        turn += wrap_angle(after.yaw - before.yaw);
+    }
+    let n = near.len() as f64;
+    let turn = turn / n;
+    let (s, c) = turn.sin_cos();
+    // Position turns with the path; the heading's and opening's variances do not change.
+    let rotation = Matrix4::new(
+        c, -s, 0.0, 0.0, //
+        s, c, 0.0, 0.0, //
+        0.0, 0.0, 1.0, 0.0, //
+        0.0, 0.0, 0.0, 1.0,
+    );
+    let covariance = rotation * corner.covariance * rotation.transpose();
+    MapCorner {
+        x: moved.x / n,
+        y: moved.y / n,
+        heading: wrap_angle(corner.heading + turn),
+        covariance: 0.5 * (covariance + covariance.transpose()),
+        ..*corner
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use slam_geom::Pose2;
+
+    fn corner(x: f64, y: f64) -> MapCorner {
+        MapCorner {
+            x,
+            y,
+            heading: 0.3,
+            angle: 1.5,
+            covariance: Matrix4::from_diagonal(&nalgebra::Vector4::new(0.04, 0.01, 0.02, 0.03)),
+            observations: 5,
+        }
+    }
+
+    /// A straight path along x, 0.1 m a pose, from x = 0 to 20.
+    fn path() -> Vec<StampedPose> {
+        (0..=200)
+            .map(|i| StampedPose {
+                stamp_ns: i,
+                pose: Pose2::new(0.1 * i as f64, 0.0, 0.0),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn corners_move_as_the_poses_near_them_moved() {
+        let filter = path();
+        // The first half stays, the second half is moved 0.2 m sideways.
+        let refined: Vec<StampedPose> = filter
+            .iter()
+            .map(|p| StampedPose {
+                stamp_ns: p.stamp_ns,
+                pose: if p.pose.x < 10.0 {
+                    p.pose
+                } else {
+                    Pose2::new(p.pose.x, 0.2, 0.0)
+                },
+            })
+            .collect();
+        let corners = [corner(2.0, 1.0), corner(18.0, 1.0)];
+        let moved = follow_refined_path(&corners, &filter, &refined).unwrap();
+        assert!((moved[0].x - 2.0).abs() < 1e-12 && (moved[0].y - 1.0).abs() < 1e-12);
+        assert_eq!(moved[0].covariance, corners[0].covariance);
+        assert!((moved[1].x - 18.0).abs() < 1e-9, "{:?}", moved[1]);
+        assert!((moved[1].y - 1.2).abs() < 1e-9, "{:?}", moved[1]);
+        assert!((moved[1].heading - 0.3).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_turned_path_turns_its_corners_and_their_covariance() {
+        let filter = path();
+        // The whole path turned 0.1 rad about the origin.
+        let turn = Pose2::new(0.0, 0.0, 0.1);
+        let refined: Vec<StampedPose> = filter
+            .iter()
+            .map(|p| StampedPose {
+                stamp_ns: p.stamp_ns,
+                pose: turn.compose(&p.pose),
+            })
+            .collect();
+        let c = corner(5.0, 1.0);
+        let moved = follow_refined_path(&[c], &filter, &refined).unwrap()[0];
+        let expected = turn.transform(Point2::new(5.0, 1.0));
+        assert!((moved.x - expected.x).abs() < 1e-9 && (moved.y - expected.y).abs() < 1e-9);
+        assert!((moved.heading - 0.4).abs() < 1e-9);
+        // The x-y block turned: its trace is kept and it gains a cross term.
+        let xy = moved.covariance.fixed_view::<2, 2>(0, 0);
+        assert!((xy.trace() - 0.05).abs() < 1e-12);
+        assert!(xy[(0, 1)].abs() > 1e-4);
+        assert_eq!(moved.covariance[(2, 2)], 0.02);
+        assert_eq!(moved.covariance[(3, 3)], 0.03);
+        assert_eq!(moved.covariance, moved.covariance.transpose());
+    }
+
+    #[test]
+    fn a_corner_far_from_the_path_follows_the_nearest_pose() {
+        let filter = path();
+        let refined: Vec<StampedPose> = filter
+            .iter()
+            .map(|p| StampedPose {
+                stamp_ns: p.stamp_ns,
+                pose: Pose2::new(p.pose.x + 0.01 * p.pose.x, 0.0, 0.0),
+            })
+            .collect();
+        let moved = follow_refined_path(&[corner(30.0, 0.0)], &filter, &refined).unwrap()[0];
+        // The last pose, at x = 20, moved 0.2 m along x.
+        assert!((moved.x - 30.2).abs() < 1e-9, "{moved:?}");
+    }
+
+    #[test]
+    fn paths_of_other_stamps_are_refused() {
+        let filter = path();
+        let refined = &filter[1..];
+        assert!(follow_refined_path(&[corner(1.0, 1.0)], &filter, refined).is_none());
+    }
+}
