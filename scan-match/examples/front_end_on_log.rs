@@ -90,6 +90,14 @@ fn main() -> Result<()> {
     )?;
     // The front end starts cold at `--start`, as a run replayed from there does.
     let scans = scans.get(args.start..).unwrap_or_default();
+    if scans.is_empty() {
+        bail!(
+            "{} has no scans from --start {} (with --limit {})",
+            args.log.display(),
+            args.start,
+            args.limit
+        );
+    }
     let mut front_end = FrontEnd::new(config)?;
     let mut tum = String::new();
     let mut last_stamp = None;
