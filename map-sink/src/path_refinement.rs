@@ -184,6 +184,22 @@ pub fn refine_path(
             None => break,
         }
     }
+    // The solve is free to move the whole path; the run's frame is where it started (the
+    // origin, or `--initial-pose` on a saved map), so without a saved map's walls to hold it
+    // the refined path is put back to start where the filter's did. A run that later maps
+    // on this map then starts at the origin of the frame its walls and corners are in.
+    if prior.is_none()
+        && let (Some(start), Some(refined_start)) =
+            (filter_poses.first().copied(), poses.first().copied())
+        && start != refined_start
+    {
+        let back = start.compose(&refined_start.inverse());
+        for pose in &mut poses {
+            *pose = back.compose(pose);
+        }
+        // Exactly, not to within rounding.
+        poses[0] = start;
+    }
     report.largest_move_m = poses
         .iter()
         .zip(&filter_poses)
@@ -491,6 +507,10 @@ mod tests {
             report.aligned_per_pass.len(),
             PathRefinementConfig::default().passes
         );
+        // The run's frame is where it started: the refined path starts there too.
+        let (start, refined_start) = (filter[0].pose, refined[0].pose);
+        assert!((start.position() - refined_start.position()).norm() < 1e-9);
+        assert!((start.yaw - refined_start.yaw).abs() < 1e-9);
         let off = |path: &[StampedPose]| {
             path[off_from..]
                 .iter()
