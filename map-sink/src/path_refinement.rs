@@ -65,8 +65,11 @@ const MIN_STEP_VARIANCE: f64 = 1e-8;
 /// What refining did, for the run's log.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RefinementReport {
-    /// Scans aligned (and trusted) in each pass, of `scans` on the path.
+    /// Scans aligned (and trusted) in each pass done, of `scans` on the path.
     pub aligned_per_pass: Vec<usize>,
+    /// True when time ran out before every pass asked for was done: the path is the one
+    /// after the passes in `aligned_per_pass`, the pass under way abandoned.
+    pub cut_short: bool,
     pub scans: usize,
     /// The farthest any pose moved from the filter's path, metres.
     pub largest_move_m: f64,
@@ -80,6 +83,20 @@ pub fn refine_path(
     scans: &[(u64, &CompactScan)],
     grid: &GridConfig,
     config: &PathRefinementConfig,
+) -> Result<(Vec<StampedPose>, RefinementReport), GridError> {
+    refine_path_within(path, scans, grid, config, &|| true)
+}
+
+/// [`refine_path`] for as long as `has_time` says there is time: it is asked before each
+/// pass and between the blocks of a pass, and once it says no, the pass under way is
+/// abandoned and the path after the passes done returned (the report says it was cut
+/// short). Whether it is cut short depends on the clock; what each pass does does not.
+pub fn refine_path_within(
+    path: &[StampedPose],
+    scans: &[(u64, &CompactScan)],
+    grid: &GridConfig,
+    config: &PathRefinementConfig,
+    has_time: &dyn Fn() -> bool,
 ) -> Result<(Vec<StampedPose>, RefinementReport), GridError> {
     let index: HashMap<u64, usize> = path
         .iter()
@@ -106,6 +123,10 @@ pub fn refine_path(
         .map(|step| step_information(step, config))
         .collect();
     for _ in 0..config.passes {
+        if !has_time() {
+            report.cut_short = true;
+            break;
+        }
         let traced: Vec<(Pose2, &CompactScan)> = on_path
             .iter()
             .map(|(i, scan, _)| (poses[*i], *scan))
@@ -130,14 +151,19 @@ pub fn refine_path(
         let sensor_ends: Vec<&[[f64; 2]]> =
             on_path.iter().map(|(_, _, ends)| ends.as_slice()).collect();
         let alignments = if config.own_pass_m > 0.0 {
-            align_to_other_passes(
+            let Some(alignments) = align_to_other_passes(
                 &grid,
                 &sensor_ends,
                 &world_ends,
                 &guesses,
                 &travelled,
                 config,
-            )
+                has_time,
+            ) else {
+                report.cut_short = true;
+                break;
+            };
+            alignments
         } else {
             let Some(walls) = WallField::new(
                 &grid,
@@ -212,7 +238,8 @@ const TILE_M: f64 = 1.0;
 const MAX_OTHER_RETURNS: usize = 200_000;
 
 /// Aligns each scan (`sensor_ends` from `guesses`; `world_ends` the returns placed at the
-/// guesses) to the walls that the scans of other passes drew, block by block of the path.
+/// guesses) to the walls that the scans of other passes drew, block by block of the path;
+/// `None` when `has_time` said no before a block.
 fn align_to_other_passes(
     grid: &OccupancyGrid,
     sensor_ends: &[&[[f64; 2]]],
@@ -220,7 +247,8 @@ fn align_to_other_passes(
     guesses: &[Pose2],
     travelled: &[f64],
     refinement: &PathRefinementConfig,
-) -> Vec<Option<ScanAlignment>> {
+    has_time: &dyn Fn() -> bool,
+) -> Option<Vec<Option<ScanAlignment>>> {
     let config = &refinement.alignment;
     let tile = |p: [f64; 2]| {
         (
@@ -255,6 +283,9 @@ fn align_to_other_passes(
     for (block, members) in blocks.into_iter().enumerate() {
         if members.is_empty() {
             continue;
+        }
+        if !has_time() {
+            return None;
         }
         let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for &k in &members {
@@ -315,7 +346,7 @@ fn align_to_other_passes(
             alignments[k] = align_scan(&walls, sensor_ends[k], guesses[k], config);
         }
     }
-    alignments
+    Some(alignments)
 }
 
 /// The information of one of the filter's steps: its variances grow with the motion, from
@@ -346,6 +377,26 @@ fn returns(scan: &CompactScan) -> Vec<[f64; 2]> {
 mod tests {
     use super::*;
     use crate::test_room::{room_returns, scan_of};
+    use std::cell::Cell;
+
+    /// [`refine_path_within`] with the default settings, the scans stamped by index.
+    fn refine_by_default(
+        path: &[StampedPose],
+        scans: &[CompactScan],
+        has_time: &dyn Fn() -> bool,
+    ) -> (Vec<StampedPose>, RefinementReport) {
+        let (grid, config) = (GridConfig::default(), PathRefinementConfig::default());
+        refine_path_within(path, &stamped(scans), &grid, &config, has_time).expect("fits")
+    }
+
+    /// The scans stamped with their index, as the refinement takes them.
+    fn stamped(scans: &[CompactScan]) -> Vec<(u64, &CompactScan)> {
+        scans
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (i as u64, s))
+            .collect()
+    }
 
     /// A lap of a circle in the room, `n` poses, facing along it.
     fn lap(n: usize) -> Vec<Pose2> {
@@ -382,11 +433,7 @@ mod tests {
             })
             .collect();
         let scans: Vec<CompactScan> = truth.iter().map(|p| scan_of(&room_returns(*p))).collect();
-        let by_stamp: Vec<(u64, &CompactScan)> = scans
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (i as u64, s))
-            .collect();
+        let by_stamp = stamped(&scans);
 
         let (refined, report) = refine_path(
             &filter,
@@ -444,6 +491,69 @@ mod tests {
         assert_last_lap_pulled(Pose2::new(0.16, -0.12, 0.08), 0.08);
     }
 
+    /// Three laps of the room, the last one drifting off: the filter's path, and the
+    /// scans taken along the true one.
+    fn drifting_laps() -> (Vec<StampedPose>, Vec<CompactScan>) {
+        let truth: Vec<Pose2> = (0..3).flat_map(|_| lap(40)).collect();
+        let path = truth
+            .iter()
+            .enumerate()
+            .map(|(i, pose)| StampedPose {
+                stamp_ns: i as u64,
+                pose: if i >= 80 {
+                    let f = (i - 79) as f64 / 40.0;
+                    Pose2::new(0.06 * f, -0.04 * f, 0.02 * f).compose(pose)
+                } else {
+                    *pose
+                },
+            })
+            .collect();
+        let scans = truth.iter().map(|p| scan_of(&room_returns(*p))).collect();
+        (path, scans)
+    }
+
+    #[test]
+    fn with_no_time_the_path_is_left_as_it_was_and_said_cut_short() {
+        let (path, scans) = drifting_laps();
+        let (refined, report) = refine_by_default(&path, &scans, &|| false);
+        assert_eq!(refined, path);
+        assert!(report.cut_short);
+        assert!(report.aligned_per_pass.is_empty());
+    }
+
+    #[test]
+    fn time_running_out_mid_pass_keeps_the_passes_done_as_they_were() {
+        let (path, scans) = drifting_laps();
+        let config = PathRefinementConfig::default();
+        // How often a whole refinement asks, and how often one pass does.
+        let asked = Cell::new(0);
+        let count = || {
+            asked.set(asked.get() + 1);
+            true
+        };
+        let (whole, report) = refine_by_default(&path, &scans, &count);
+        assert!(!report.cut_short);
+        let per_pass = asked.get() / config.passes;
+        assert!(per_pass >= 2, "asked {} times", asked.get());
+        // Time runs out halfway through the second pass.
+        let left = Cell::new(per_pass + per_pass / 2);
+        let has_time = || {
+            left.set(left.get().saturating_sub(1));
+            left.get() > 0
+        };
+        let (cut, report) = refine_by_default(&path, &scans, &has_time);
+        assert!(report.cut_short);
+        assert_eq!(report.aligned_per_pass.len(), 1);
+        let one_pass = PathRefinementConfig {
+            passes: 1,
+            ..config
+        };
+        let grid = GridConfig::default();
+        let (expected, _) = refine_path(&path, &stamped(&scans), &grid, &one_pass).expect("fits");
+        assert_eq!(cut, expected, "the first pass's path, bit for bit");
+        assert_ne!(cut, whole);
+    }
+
     #[test]
     fn no_passes_leave_the_path_as_it_was() {
         let path: Vec<StampedPose> = lap(20)
@@ -458,11 +568,7 @@ mod tests {
             .iter()
             .map(|p| scan_of(&room_returns(p.pose)))
             .collect();
-        let by_stamp: Vec<(u64, &CompactScan)> = scans
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (i as u64, s))
-            .collect();
+        let by_stamp = stamped(&scans);
         let config = PathRefinementConfig {
             passes: 0,
             ..PathRefinementConfig::default()
