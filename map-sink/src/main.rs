@@ -293,6 +293,12 @@ fn run(args: Args) -> Result<()> {
             g.build_s,
             g.grid_bytes as f64 / 1e6
         ));
+        if g.revisits_left_out > 0 {
+            say_err(&format!(
+                "map-sink: {} scans left out of the grid: taken where kept scans had been, once {} beams were kept",
+                g.revisits_left_out, g.beams_kept
+            ));
+        }
         if let Some(r) = g
             .refinement
             .as_ref()

@@ -72,6 +72,9 @@ pub struct GridReport {
     /// Beams kept over the whole run, and the bytes the kept scans held until the end.
     pub beams_kept: usize,
     pub scan_bytes: usize,
+    /// Scans left out because a kept scan had their viewpoint (a long run going round the
+    /// same places, past [`ScanKeeper`]'s cap).
+    pub revisits_left_out: usize,
     /// Bytes of the grid's log-odds (as much again was used while tracing).
     pub grid_bytes: usize,
     /// Refining the final path, tracing and thresholding, seconds.
@@ -395,6 +398,7 @@ impl Recorder {
                 scans_traced: traced,
                 beams_kept: self.scans.beams(),
                 scan_bytes: self.scans.bytes(),
+                revisits_left_out: self.scans.revisits(),
                 grid_bytes,
                 build_s: started.elapsed().as_secs_f64(),
                 refinement: run.refinement,
