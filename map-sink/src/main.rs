@@ -295,8 +295,8 @@ fn run(args: Args) -> Result<()> {
         ));
         if g.revisits_left_out > 0 {
             say_err(&format!(
-                "map-sink: {} scans left out of the grid: taken where kept scans had been, once {} beams were kept",
-                g.revisits_left_out, g.beams_kept
+                "map-sink: {} scans left out of the grid: taken where kept scans had been, past the cap on the beams kept",
+                g.revisits_left_out
             ));
         }
         if let Some(r) = g
