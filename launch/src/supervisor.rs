@@ -17,7 +17,10 @@ use crate::status::Progress;
 /// How long every stage has to print `ready`.
 const READY_TIMEOUT: Duration = Duration::from_secs(60);
 /// How long stopped stages have to finish writing before they are killed.
-const STOP_GRACE: Duration = Duration::from_secs(30);
+pub const STOP_GRACE: Duration = Duration::from_secs(30);
+/// What is kept of [`STOP_GRACE`] beyond map-sink's own budget (`[grid] stop_budget`): the
+/// stop reaching it and it noticing, and its exit after the last file.
+pub const STOP_MARGIN: Duration = Duration::from_secs(5);
 const POLL: Duration = Duration::from_millis(50);
 
 /// A process to start.

@@ -53,6 +53,7 @@ mod atomic;
 mod compact_scan;
 mod corner_shift;
 mod corners_csv;
+mod end_clock;
 mod error;
 mod grid_image;
 mod landmarks;
@@ -77,9 +78,10 @@ mod tum;
 mod tum_stream;
 mod wall_field;
 
-pub use atomic::{tmp_path, write_atomic};
+pub use atomic::{StagedFile, tmp_path, write_atomic};
 pub use compact_scan::{Beam, CompactScan};
 pub use corners_csv::{corners_csv, corners_csv_header};
+pub use end_clock::EndClock;
 pub use error::SinkError;
 pub use grid_image::{encode_png, grid_pixels};
 pub use landmarks::{
@@ -88,7 +90,9 @@ pub use landmarks::{
 };
 pub use line_file::LineFile;
 pub use map_load_error::MapLoadError;
-pub use map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
+pub use map_writer::{
+    LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, map_files, write_map,
+};
 pub use map_yaml::{
     FREE_PIXEL, FREE_THRESH, MapMode, MapYaml, OCCUPIED_PIXEL, OCCUPIED_THRESH, UNKNOWN_PIXEL,
     YamlError, trinary_pixel,
@@ -98,7 +102,9 @@ pub use occupancy_grid::{
     OccupancyGrid, RESOLUTION_RANGE_M,
 };
 pub use path_assembly::{ChunkError, PathAssembly};
-pub use path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
+pub use path_refinement::{
+    PathRefinementConfig, RefinementReport, refine_path, refine_path_within,
+};
 pub use pgm::{Pgm, PgmError, encode_pgm};
 pub use pose_chain::{PosePrior, solve_pose_chain};
 pub use prior_grid::{PRIOR_FREE_LOG_ODDS, PRIOR_OCCUPIED_LOG_ODDS, PriorGridError, prior_grid};

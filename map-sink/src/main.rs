@@ -9,11 +9,11 @@ use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use map_sink::{
-    FinishedRun, GridConfig, OccupancyGrid, PathAssembly, PathRefinementConfig, Recorder,
+    EndClock, FinishedRun, GridConfig, OccupancyGrid, PathAssembly, PathRefinementConfig, Recorder,
     RecorderOptions, StampedPose, trinary_pixel,
 };
-use slam_eval::{FrameCounts, METRICS_FILE, RelationsFile};
-use stage_kit::{say, say_err};
+use slam_eval::{FrameCounts, METRICS_FILE, RefinementState, RelationsFile};
+use stage_kit::{say, say_err, shutdown};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
 /// trajectory.tum, ground_truth.tum, map_corners.csv, the saved map (map.yaml, map.pgm,
@@ -54,7 +54,27 @@ struct Args {
     /// and this run's scans add to it.
     #[arg(long, value_name = "DIR")]
     map: Option<PathBuf>,
+    /// Once stopped (SIGINT, SIGTERM), the seconds from the stop to having written the
+    /// results: the refinement of the path stops in time to write what it reached (the
+    /// filter's path at worst, written first). Without it the end takes what it needs.
+    /// slam-launch gives what is left of its grace period after a margin.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
+    stop_budget: Option<Duration>,
 }
+
+/// A budget in seconds, finite and not negative.
+fn parse_budget(text: &str) -> Result<Duration, String> {
+    let seconds: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    Duration::try_from_secs_f64(seconds)
+        .map_err(|_| format!("{seconds} is not a number of seconds from 0 up"))
+}
+
+/// How long a stopped run waits for slam-proc's final path, which it sends as it stops:
+/// without it the online estimate would stand in and nothing could be refined.
+const PATH_WAIT_ON_STOP: Duration = Duration::from_secs(2);
+/// How often that wait looks for the path (the wait on the inlets ends at once once a stop
+/// was asked for).
+const PATH_POLL: Duration = Duration::from_millis(20);
 
 const STATUS_PERIOD: Duration = Duration::from_millis(500);
 
@@ -165,9 +185,18 @@ fn run(args: Args) -> Result<()> {
     let mut published = None;
     let mut last_status = Instant::now();
     let mut finished = false;
+    let mut stop_seen = None;
+    let mut path_complete = false;
     while !finished {
         if wait_any(&wakeables, Duration::from_millis(100))? == Wake::Shutdown {
-            break;
+            let stopped = *stop_seen.get_or_insert_with(Instant::now);
+            // slam-proc sends the best particle's path as it stops: take it, unless the
+            // run localizes on a saved map (no path comes) or never started.
+            let mapping = progress.poses > 0 && progress.localization == PoseEstimate::MAPPING;
+            if !mapping || path_complete || stopped.elapsed() >= PATH_WAIT_ON_STOP {
+                break;
+            }
+            std::thread::sleep(PATH_POLL);
         }
         if let Some(world) = &world {
             while let Some(sample) = world.receive()? {
@@ -186,7 +215,7 @@ fn run(args: Args) -> Result<()> {
         while let Some(sample) = maps.receive()? {
             recorder.set_map(map_corners(&sample));
         }
-        drain_path(&path, &mut assembly, &mut recorder)?;
+        path_complete |= drain_path(&path, &mut assembly, &mut recorder)?;
         while let Some(sample) = poses.receive()? {
             if sample.header.is_end_of_stream() {
                 finished = true;
@@ -237,7 +266,12 @@ fn run(args: Args) -> Result<()> {
         });
     }
     tell_incomplete(&recorder, &mut told);
-    let finished = recorder.finish_run()?;
+    let stopped = shutdown::requested;
+    let clock = EndClock::new(args.stop_budget, &stopped);
+    if let Some(at) = stop_seen {
+        clock.stop_seen_at(at);
+    }
+    let finished = recorder.finish_run_within(&clock)?;
     if let Some((path_outlet, grid_outlet)) = &final_outlets {
         // The run's results are written; what cannot be passed on is said, not fatal.
         if let Err(e) = publish_final(path_outlet, grid_outlet, &finished) {
@@ -269,7 +303,17 @@ fn run(args: Args) -> Result<()> {
             g.build_s,
             g.grid_bytes as f64 / 1e6
         ));
-        if let Some(r) = &g.refinement {
+        if g.revisits_left_out > 0 {
+            say_err(&format!(
+                "map-sink: {} scans left out of the grid: taken where kept scans had been, past the cap on the beams kept",
+                g.revisits_left_out
+            ));
+        }
+        if let Some(r) = g
+            .refinement
+            .as_ref()
+            .filter(|r| !r.aligned_per_pass.is_empty())
+        {
             let aligned: Vec<String> = r.aligned_per_pass.iter().map(|n| n.to_string()).collect();
             say_err(&format!(
                 "map-sink: final path refined against its grid in {} passes ({} of {} scans aligned), poses moved up to {:.2} m",
@@ -278,6 +322,21 @@ fn run(args: Args) -> Result<()> {
                 r.scans,
                 r.largest_move_m
             ));
+        }
+    }
+    if let Some(refinement) = &metrics.refinement {
+        match refinement.state {
+            RefinementState::CutShort => say_err(&format!(
+                "map-sink: the run was stopped and its time to write ran out: the refinement \
+                 of the final path was cut short after {} of {} passes; trajectory.tum and \
+                 the map hold the path after {} (metrics.json: refinement)",
+                refinement.passes_done, refinement.passes_asked, refinement.passes_done
+            )),
+            RefinementState::NotDone => say_err(
+                "map-sink: the final path was not refined; trajectory.tum and the map hold \
+                 the filter's path (metrics.json: refinement)",
+            ),
+            _ => {}
         }
     }
     if let Some(peak) = peak_memory_kb() {
@@ -362,13 +421,15 @@ fn tell_incomplete(recorder: &Recorder, told: &mut usize) {
     *told = recorder.incomplete_outputs().len();
 }
 
-/// Takes the final path's chunks; a complete path goes to the recorder. A chunk that does
-/// not fit is reported and the path left incomplete (the online estimate stands in).
+/// Takes the final path's chunks; a complete path goes to the recorder (true when one
+/// did). A chunk that does not fit is reported and the path left incomplete (the online
+/// estimate stands in).
 fn drain_path(
     inlet: &Inlet<PathChunk>,
     assembly: &mut PathAssembly,
     recorder: &mut Recorder,
-) -> Result<()> {
+) -> Result<bool> {
+    let mut completed = false;
     while let Some(chunk) = inlet.receive()? {
         let poses: Vec<StampedPose> = chunk
             .poses()
@@ -381,9 +442,10 @@ fn drain_path(
         }
         if let Some(path) = assembly.complete() {
             recorder.set_final_path(path);
+            completed = true;
         }
     }
-    Ok(())
+    Ok(completed)
 }
 
 fn drain_scans(

@@ -21,24 +21,35 @@ pub const MAP_PNG_FILE: &str = "map.png";
 /// The landmark map, which names the grid files.
 pub const LANDMARKS_FILE: &str = "landmarks.json";
 
-/// Writes the map files into `dir`: the image before the description that names it, and
-/// `landmarks.json`, which names both, last, so whoever finds a file finds what it names.
+/// Writes the map files into `dir` ([`map_files`]), each atomically, in their order; the
+/// first failure ends them.
 pub fn write_map(
     dir: &Path,
     grid: Option<&OccupancyGrid>,
     corners: &[MapCorner],
 ) -> Result<(), SinkError> {
+    for (name, contents) in map_files(grid, corners)? {
+        write_atomic(&dir.join(name), &contents)?;
+    }
+    Ok(())
+}
+
+/// The map's files by name, in the order they are to be written: the image before the
+/// description that names it, and `landmarks.json`, which names both, last, so whoever
+/// finds a file finds what it names.
+pub fn map_files(
+    grid: Option<&OccupancyGrid>,
+    corners: &[MapCorner],
+) -> Result<Vec<(&'static str, Vec<u8>)>, SinkError> {
+    let mut files = Vec::with_capacity(4);
     let reference = match grid {
         Some(grid) => {
             let (width, height) = (grid.width(), grid.height());
             let pixels = grid_pixels(grid);
-            write_atomic(&dir.join(MAP_PGM_FILE), &encode_pgm(width, height, &pixels))?;
-            write_atomic(
-                &dir.join(MAP_PNG_FILE),
-                &encode_png(width, height, &pixels)?,
-            )?;
+            files.push((MAP_PGM_FILE, encode_pgm(width, height, &pixels)));
+            files.push((MAP_PNG_FILE, encode_png(width, height, &pixels)?));
             let yaml = MapYaml::trinary(MAP_PGM_FILE, grid.resolution_m(), grid.origin());
-            write_atomic(&dir.join(MAP_YAML_FILE), yaml.to_text().as_bytes())?;
+            files.push((MAP_YAML_FILE, yaml.to_text().into_bytes()));
             Some(GridReference {
                 yaml: MAP_YAML_FILE.to_owned(),
                 image: MAP_PGM_FILE.to_owned(),
@@ -50,5 +61,6 @@ pub fn write_map(
         None => None,
     };
     let json = Landmarks::new(corners, reference).to_json()?;
-    write_atomic(&dir.join(LANDMARKS_FILE), json.as_bytes())
+    files.push((LANDMARKS_FILE, json.into_bytes()));
+    Ok(files)
 }

@@ -73,8 +73,11 @@ const MIN_STEP_VARIANCE: f64 = 1e-8;
 /// What refining did, for the run's log.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RefinementReport {
-    /// Scans aligned (and trusted) in each pass, of `scans` on the path.
+    /// Scans aligned (and trusted) in each pass done, of `scans` on the path.
     pub aligned_per_pass: Vec<usize>,
+    /// True when time ran out before every pass asked for was done: the path is the one
+    /// after the passes in `aligned_per_pass`, the pass under way abandoned.
+    pub cut_short: bool,
     pub scans: usize,
     /// The farthest any pose moved from the filter's path, metres.
     pub largest_move_m: f64,
@@ -91,6 +94,21 @@ pub fn refine_path(
     grid: &GridConfig,
     config: &PathRefinementConfig,
     prior: Option<&OccupancyGrid>,
+) -> Result<(Vec<StampedPose>, RefinementReport), GridError> {
+    refine_path_within(path, scans, grid, config, prior, &|| true)
+}
+
+/// [`refine_path`] for as long as `has_time` says there is time: it is asked before each
+/// pass and between the blocks of a pass, and once it says no, the pass under way is
+/// abandoned and the path after the passes done returned (the report says it was cut
+/// short). Whether it is cut short depends on the clock; what each pass does does not.
+pub fn refine_path_within(
+    path: &[StampedPose],
+    scans: &[(u64, &CompactScan)],
+    grid: &GridConfig,
+    config: &PathRefinementConfig,
+    prior: Option<&OccupancyGrid>,
+    has_time: &(dyn Fn() -> bool + Sync),
 ) -> Result<(Vec<StampedPose>, RefinementReport), GridError> {
     let saved = prior.map(saved_walls).unwrap_or_default();
     let index: HashMap<u64, usize> = path
@@ -118,6 +136,10 @@ pub fn refine_path(
         .map(|step| step_information(step, config))
         .collect();
     for _ in 0..config.passes {
+        if !has_time() {
+            report.cut_short = true;
+            break;
+        }
         let traced: Vec<(Pose2, &CompactScan)> = on_path
             .iter()
             .map(|(i, scan, _)| (poses[*i], *scan))
@@ -138,31 +160,32 @@ pub fn refine_path(
                     .collect()
             })
             .collect();
-        let guesses: Vec<Pose2> = on_path.iter().map(|(i, _, _)| poses[*i]).collect();
-        let sensor_ends: Vec<&[[f64; 2]]> =
-            on_path.iter().map(|(_, _, ends)| ends.as_slice()).collect();
+        let pass_scans = PassScans {
+            sensor_ends: on_path.iter().map(|(_, _, ends)| ends.as_slice()).collect(),
+            world_ends,
+            guesses: on_path.iter().map(|(i, _, _)| poses[*i]).collect(),
+        };
         let alignments = if config.own_pass_m > 0.0 {
-            align_to_other_passes(
-                &grid,
-                &sensor_ends,
-                &world_ends,
-                &guesses,
-                &travelled,
-                config,
-                &saved,
-            )
+            let Some(alignments) =
+                align_to_other_passes(&grid, &pass_scans, &travelled, config, &saved, has_time)
+            else {
+                report.cut_short = true;
+                break;
+            };
+            alignments
         } else {
             let Some(walls) = WallField::new(
                 &grid,
-                &[world_ends.concat(), saved.clone()].concat(),
+                &[pass_scans.world_ends.concat(), saved.clone()].concat(),
                 config.alignment.inlier_distance_m,
                 config.alignment.coarse_distance_m,
             ) else {
                 break;
             };
-            sensor_ends
+            pass_scans
+                .sensor_ends
                 .iter()
-                .zip(&guesses)
+                .zip(&pass_scans.guesses)
                 .map(|(ends, guess)| align_scan(&walls, ends, *guess, &config.alignment))
                 .collect()
         };
@@ -241,17 +264,18 @@ const TILE_M: f64 = 1.0;
 const MAX_OTHER_RETURNS: usize = 200_000;
 
 /// Aligns each scan (`sensor_ends` from `guesses`; `world_ends` the returns placed at the
-/// guesses) to the walls that the scans of other passes drew, block by block of the path.
+/// guesses) to the walls that the scans of other passes drew, block by block of the path;
+/// `None` when `has_time` said no before a block.
 fn align_to_other_passes(
     grid: &OccupancyGrid,
-    sensor_ends: &[&[[f64; 2]]],
-    world_ends: &[Vec<SeenReturn>],
-    guesses: &[Pose2],
+    scans: &PassScans<'_>,
     travelled: &[f64],
     refinement: &PathRefinementConfig,
     saved: &[SeenReturn],
-) -> Vec<Option<ScanAlignment>> {
+    has_time: &(dyn Fn() -> bool + Sync),
+) -> Option<Vec<Option<ScanAlignment>>> {
     let config = &refinement.alignment;
+    let world_ends = &scans.world_ends;
     // Scan and return indices, as u32: the index holds every return of the run.
     let mut tiles: HashMap<(i64, i64), Vec<(u32, u32)>> = HashMap::new();
     for (k, ends) in world_ends.iter().enumerate() {
@@ -279,34 +303,49 @@ fn align_to_other_passes(
     }
     let pass = OtherPasses {
         grid,
-        sensor_ends,
-        world_ends,
-        guesses,
+        scans,
         tiles: &tiles,
         block_of: &block_of,
         saved,
         config,
     };
     // Each block's field and alignments depend on nothing another block computes: the
-    // blocks go to all cores, their results are put together in order.
-    let aligned: Vec<Vec<(usize, Option<ScanAlignment>)>> = blocks
+    // blocks go to all cores, their results are put together in order. A block that finds
+    // no time left abandons the pass.
+    let aligned: Option<Vec<BlockAlignments>> = blocks
         .into_par_iter()
         .enumerate()
-        .map(|(block, members)| pass.align_block(block, members))
+        .map(|(block, members)| {
+            if !has_time() {
+                return None;
+            }
+            Some(pass.align_block(block, members))
+        })
         .collect();
     let mut alignments = vec![None; world_ends.len()];
-    for (k, alignment) in aligned.into_iter().flatten() {
+    for (k, alignment) in aligned?.into_iter().flatten() {
         alignments[k] = alignment;
     }
-    alignments
+    Some(alignments)
 }
+
+/// The kept scans of one pass, at the path's poses as the pass found them.
+struct PassScans<'a> {
+    /// Each scan's returns in its sensor frame ...
+    sensor_ends: Vec<&'a [[f64; 2]]>,
+    /// ... and placed at its pose, with where they were seen from.
+    world_ends: Vec<Vec<SeenReturn>>,
+    /// Each scan's pose.
+    guesses: Vec<Pose2>,
+}
+
+/// The alignments of a block's scans, by scan.
+type BlockAlignments = Vec<(usize, Option<ScanAlignment>)>;
 
 /// One pass of the path over its grid, indexed for [`OtherPasses::align_block`].
 struct OtherPasses<'a> {
     grid: &'a OccupancyGrid,
-    sensor_ends: &'a [&'a [[f64; 2]]],
-    world_ends: &'a [Vec<SeenReturn>],
-    guesses: &'a [Pose2],
+    scans: &'a PassScans<'a>,
     /// The scan and return indices of the returns in each tile.
     tiles: &'a HashMap<(i64, i64), Vec<(u32, u32)>>,
     block_of: &'a [usize],
@@ -318,19 +357,15 @@ struct OtherPasses<'a> {
 impl OtherPasses<'_> {
     /// The alignments of the scans `members` of `block` to the walls the other passes drew
     /// around them.
-    fn align_block(
-        &self,
-        block: usize,
-        members: Vec<usize>,
-    ) -> Vec<(usize, Option<ScanAlignment>)> {
-        let (config, world_ends) = (self.config, self.world_ends);
+    fn align_block(&self, block: usize, members: Vec<usize>) -> BlockAlignments {
+        let (config, world_ends) = (self.config, &self.scans.world_ends);
         if members.is_empty() {
             return Vec::new();
         }
         let pad = config.inlier_distance_m.max(config.coarse_distance_m) + config.max_shift_m;
         let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for &k in &members {
-            let at: [f64; 2] = self.guesses[k].position().into();
+            let at: [f64; 2] = self.scans.guesses[k].position().into();
             for p in world_ends[k].iter().map(|seen| &seen.at).chain([&at]) {
                 for d in 0..2 {
                     min[d] = min[d].min(p[d] - pad);
@@ -394,7 +429,8 @@ impl OtherPasses<'_> {
         members
             .into_iter()
             .map(|k| {
-                let aligned = align_scan(&walls, self.sensor_ends[k], self.guesses[k], config);
+                let (ends, guess) = (self.scans.sensor_ends[k], self.scans.guesses[k]);
+                let aligned = align_scan(&walls, ends, guess, config);
                 (k, aligned)
             })
             .collect()
@@ -440,6 +476,26 @@ fn returns(scan: &CompactScan) -> Vec<[f64; 2]> {
 mod tests {
     use super::*;
     use crate::test_room::{room_returns, scan_of};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// [`refine_path_within`] with the default settings, the scans stamped by index.
+    fn refine_by_default(
+        path: &[StampedPose],
+        scans: &[CompactScan],
+        has_time: &(dyn Fn() -> bool + Sync),
+    ) -> (Vec<StampedPose>, RefinementReport) {
+        let (grid, config) = (GridConfig::default(), PathRefinementConfig::default());
+        refine_path_within(path, &stamped(scans), &grid, &config, None, has_time).expect("fits")
+    }
+
+    /// The scans stamped with their index, as the refinement takes them.
+    fn stamped(scans: &[CompactScan]) -> Vec<(u64, &CompactScan)> {
+        scans
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (i as u64, s))
+            .collect()
+    }
 
     /// A lap of a circle in the room, `n` poses, facing along it.
     fn lap(n: usize) -> Vec<Pose2> {
@@ -452,15 +508,6 @@ mod tests {
                     a + std::f64::consts::FRAC_PI_2,
                 )
             })
-            .collect()
-    }
-
-    /// Each scan stamped with its index.
-    fn by_index(scans: &[CompactScan]) -> Vec<(u64, &CompactScan)> {
-        scans
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (i as u64, s))
             .collect()
     }
 
@@ -485,7 +532,7 @@ mod tests {
             })
             .collect();
         let scans: Vec<CompactScan> = truth.iter().map(|p| scan_of(&room_returns(*p))).collect();
-        let by_stamp = by_index(&scans);
+        let by_stamp = stamped(&scans);
 
         let (refined, report) = refine_path(
             &filter,
@@ -548,6 +595,77 @@ mod tests {
         assert_last_lap_pulled(Pose2::new(0.16, -0.12, 0.08), 0.08);
     }
 
+    /// Three laps of the room, the last one drifting off: the filter's path, and the
+    /// scans taken along the true one.
+    fn drifting_laps() -> (Vec<StampedPose>, Vec<CompactScan>) {
+        let truth: Vec<Pose2> = (0..3).flat_map(|_| lap(40)).collect();
+        let path = truth
+            .iter()
+            .enumerate()
+            .map(|(i, pose)| StampedPose {
+                stamp_ns: i as u64,
+                pose: if i >= 80 {
+                    let f = (i - 79) as f64 / 40.0;
+                    Pose2::new(0.06 * f, -0.04 * f, 0.02 * f).compose(pose)
+                } else {
+                    *pose
+                },
+            })
+            .collect();
+        let scans = truth.iter().map(|p| scan_of(&room_returns(*p))).collect();
+        (path, scans)
+    }
+
+    #[test]
+    fn with_no_time_the_path_is_left_as_it_was_and_said_cut_short() {
+        let (path, scans) = drifting_laps();
+        let (refined, report) = refine_by_default(&path, &scans, &|| false);
+        assert_eq!(refined, path);
+        assert!(report.cut_short);
+        assert!(report.aligned_per_pass.is_empty());
+    }
+
+    #[test]
+    fn time_running_out_mid_pass_keeps_the_passes_done_as_they_were() {
+        let (path, scans) = drifting_laps();
+        let config = PathRefinementConfig::default();
+        // How often a whole refinement asks, and how often one pass does.
+        let asked = AtomicUsize::new(0);
+        let count = || {
+            asked.fetch_add(1, Ordering::Relaxed);
+            true
+        };
+        let (whole, report) = refine_by_default(&path, &scans, &count);
+        assert!(!report.cut_short);
+        let asked = asked.load(Ordering::Relaxed);
+        let per_pass = asked / config.passes;
+        assert!(per_pass >= 2, "asked {asked} times");
+        // Time runs out halfway through the second pass.
+        // The blocks of a pass ask from all cores: which block is told no first does not
+        // matter, the pass is abandoned either way.
+        let left = AtomicUsize::new(per_pass + per_pass / 2);
+        let has_time = || {
+            let before = left
+                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| {
+                    Some(n.saturating_sub(1))
+                })
+                .unwrap_or(0);
+            before > 1
+        };
+        let (cut, report) = refine_by_default(&path, &scans, &has_time);
+        assert!(report.cut_short);
+        assert_eq!(report.aligned_per_pass.len(), 1);
+        let one_pass = PathRefinementConfig {
+            passes: 1,
+            ..config
+        };
+        let grid = GridConfig::default();
+        let (expected, _) =
+            refine_path(&path, &stamped(&scans), &grid, &one_pass, None).expect("fits");
+        assert_eq!(cut, expected, "the first pass's path, bit for bit");
+        assert_ne!(cut, whole);
+    }
+
     #[test]
     fn a_single_pass_off_a_saved_map_is_pulled_onto_its_walls() {
         // The saved map: the room as one lap at the true poses traced it.
@@ -568,7 +686,7 @@ mod tests {
                 pose: offset.compose(pose),
             })
             .collect();
-        let by_stamp = by_index(&scans);
+        let by_stamp = stamped(&scans);
         let off = |path: &[StampedPose]| {
             path.iter()
                 .zip(&truth)
@@ -619,7 +737,7 @@ mod tests {
             .iter()
             .map(|p| scan_of(&room_returns(p.pose)))
             .collect();
-        let by_stamp = by_index(&scans);
+        let by_stamp = stamped(&scans);
         let config = PathRefinementConfig {
             passes: 0,
             ..PathRefinementConfig::default()

@@ -4,16 +4,17 @@ use std::collections::{BTreeMap, HashMap};
 use std::fs;
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-use crate::atomic::write_atomic;
+use crate::atomic::{StagedFile, write_atomic};
 use crate::compact_scan::CompactScan;
 use crate::corner_shift::follow_refined_path;
 use crate::corners_csv::corners_csv;
+use crate::end_clock::EndClock;
 use crate::error::SinkError;
-use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, write_map};
+use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, map_files};
 use crate::occupancy_grid::{GridConfig, OccupancyGrid};
-use crate::path_refinement::{PathRefinementConfig, RefinementReport, refine_path};
+use crate::path_refinement::{PathRefinementConfig, RefinementReport, refine_path_within};
 use crate::prior_grid::prior_grid;
 use crate::saved_map::GridMap;
 use crate::scan_keeper::ScanKeeper;
@@ -21,8 +22,8 @@ use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
 use slam_eval::{
     AteStats, DEAD_RECKONING_FILE, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput, METRICS_FILE,
-    Metrics, RelationsFile, RelativePoseErrors, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, ate,
-    distance, nearest_rmse, percentile, score_run,
+    Metrics, PathRefinement, RefinementState, RelationsFile, RelativePoseErrors, TRAJECTORY_FILE,
+    TRAJECTORY_ONLINE_FILE, ate, distance, nearest_rmse, percentile, score_run, score_tum_file,
 };
 use slam_geom::MapCorner;
 use slam_geom::Pose2;
@@ -74,6 +75,9 @@ pub struct GridReport {
     /// Beams kept over the whole run, and the bytes the kept scans held until the end.
     pub beams_kept: usize,
     pub scan_bytes: usize,
+    /// Scans left out because a kept scan had their viewpoint (a long run going round the
+    /// same places, past [`ScanKeeper`]'s cap).
+    pub revisits_left_out: usize,
     /// Bytes of the grid's log-odds (as much again was used while tracing).
     pub grid_bytes: usize,
     /// Refining the final path, tracing and thresholding, seconds.
@@ -340,18 +344,45 @@ impl Recorder {
 
     /// [`finish`](Self::finish), also handing on what the occupancy grid cost, the final
     /// path and the grid as they were written.
-    pub fn finish_run(mut self) -> Result<FinishedRun, SinkError> {
+    pub fn finish_run(self) -> Result<FinishedRun, SinkError> {
+        self.finish_run_within(&EndClock::unlimited())
+    }
+
+    /// [`finish_run`](Self::finish_run) within the time `clock` gives, in two steps so that
+    /// a kill at any moment leaves a whole, consistent map directory:
+    ///
+    /// 1. The results of the filter's path as it came, each file atomically:
+    ///    `trajectory.tum`, `map_corners.csv`, `landmarks.json` and `metrics.json` first
+    ///    (cheap), then the grid traced along that path (`map.pgm`, `map.png`, `map.yaml`,
+    ///    `landmarks.json` naming them), `map.svg` and `metrics.json` again, which says the
+    ///    refinement is pending.
+    /// 2. The refinement of the path, for as long as the clock leaves time to write what it
+    ///    reached; then every file the refined path changes, each written in full under its
+    ///    temporary name first and all renamed into place one right after the other, and
+    ///    `metrics.json` last, saying how many passes the files hold (all, or those done
+    ///    when time ran out).
+    ///
+    /// Without a stop the clock never runs out, and the files are the same on every run.
+    pub fn finish_run_within(mut self, clock: &EndClock) -> Result<FinishedRun, SinkError> {
         for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
             self.incomplete.extend(stream.sync());
         }
         let started = Instant::now();
-        let (final_path, refinement): (Vec<StampedPose>, _) = match &self.final_path {
-            // A path that cannot be refined (its grid would be too large) is written as the
-            // filter gave it; the grid's own tracing then says why there is no grid.
-            Some(path) => match self.refine(path) {
-                Ok((path, report)) => (path, Some(report)),
-                Err(_) => (path.clone(), None),
-            },
+        let asked = self.options.refinement.passes;
+        let (filter_path, refinement) = match &self.final_path {
+            Some(path) => (
+                path.clone(),
+                Some(PathRefinement {
+                    passes_asked: asked,
+                    passes_done: 0,
+                    state: if asked == 0 {
+                        RefinementState::Complete
+                    } else {
+                        RefinementState::Pending
+                    },
+                }),
+            ),
+            // Nothing to refine: the online estimate stands in.
             None => (
                 self.estimates
                     .values()
@@ -363,24 +394,317 @@ impl Recorder {
                 None,
             ),
         };
-        // The corners were placed from the filter's path: they go where it was moved.
-        if let (Some(_), Some(filter_path)) = (&refinement, &self.final_path)
-            && let Some(moved) = follow_refined_path(&self.map, filter_path, &final_path)
-        {
+        let first = self.write_results(&filter_path, refinement)?;
+        let first_took = started.elapsed();
+        let run = match refinement {
+            Some(refinement) if refinement.state == RefinementState::Pending => {
+                self.refine_and_rewrite(&filter_path, first, first_took, clock)?
+            }
+            _ => first.finished(None),
+        };
+        let report = run
+            .traced
+            .map(|(width, height, grid_bytes, traced)| GridReport {
+                width,
+                height,
+                resolution_m: self.options.grid.resolution_m,
+                scans_traced: traced,
+                beams_kept: self.scans.beams(),
+                scan_bytes: self.scans.bytes(),
+                revisits_left_out: self.scans.revisits(),
+                grid_bytes,
+                build_s: started.elapsed().as_secs_f64(),
+                refinement: run.refinement,
+            });
+        Ok(FinishedRun {
+            metrics: run.metrics,
+            report,
+            final_path: run.final_path,
+            grid: run.grid,
+        })
+    }
+
+    /// Step 1 of [`finish_run_within`](Self::finish_run_within): every result of `path`,
+    /// each file written atomically in turn.
+    fn write_results(
+        &mut self,
+        path: &[StampedPose],
+        refinement: Option<PathRefinement>,
+    ) -> Result<Written, SinkError> {
+        let unwritten = self.incomplete.len();
+        self.write_result(TRAJECTORY_FILE, tum_text(path).as_bytes());
+        let path_written = self.incomplete.len() == unwritten;
+        let relative_pose_error = self
+            .options
+            .relations
+            .as_ref()
+            .map(|truth| score_run(&self.dir, truth, self.options.relations_tolerance_ns))
+            .transpose()?;
+        let scored = self.scored(path, relative_pose_error, refinement);
+        self.write_result(MAP_CORNERS_FILE, corners_csv(&self.map).as_bytes());
+        // The landmarks and the metrics before the grid, which takes long on a long run: a
+        // run killed while tracing it keeps a landmark map (without a grid) and its numbers.
+        let landmarks = map_files(None, &self.map);
+        self.write_map_files(landmarks);
+        self.write_metrics(&scored.metrics);
+        let grid = self.grid(path)?;
+        let map_written =
+            self.write_map_files(map_files(grid.as_ref().map(|(grid, _)| grid), &self.map));
+        let svg = self.picture(
+            &scored.trajectory,
+            scored.stats,
+            &scored.metrics,
+            grid.as_ref().map(|(grid, _)| grid),
+        );
+        self.write_result(MAP_SVG_FILE, svg.as_bytes());
+        let metrics = self.write_metrics(&scored.metrics);
+        Ok(Written {
+            metrics,
+            path: path.to_vec(),
+            path_written,
+            grid,
+            map_written,
+        })
+    }
+
+    /// Step 2 of [`finish_run_within`](Self::finish_run_within): refines the filter's path
+    /// as far as `clock` allows and puts the files it changes in place of `first`'s. Writing
+    /// them takes about as long as step 1 did (`first_took`): the refinement stops while
+    /// twice that is left.
+    fn refine_and_rewrite(
+        &mut self,
+        filter_path: &[StampedPose],
+        first: Written,
+        first_took: Duration,
+        clock: &EndClock,
+    ) -> Result<Finished, SinkError> {
+        let asked = self.options.refinement.passes;
+        let reserve = first_took * 2 + WRITE_MARGIN;
+        let has_time = || clock.has(reserve);
+        let refined = self.refine(filter_path, &has_time);
+        let (path, report) = match refined {
+            Ok((path, report)) if !report.aligned_per_pass.is_empty() => (path, report),
+            Ok((_, report)) => {
+                // Cut short before a pass was done: the files of step 1 are the result.
+                let state = if report.cut_short {
+                    RefinementState::CutShort
+                } else {
+                    RefinementState::Complete
+                };
+                return Ok(self.restate(first, state, 0, Some(report)));
+            }
+            // A path whose grid cannot be traced cannot be refined either; step 1 said why
+            // there is no grid.
+            Err(_) => return Ok(self.restate(first, RefinementState::NotDone, 0, None)),
+        };
+        let done = report.aligned_per_pass.len();
+        let state = if report.cut_short {
+            RefinementState::CutShort
+        } else {
+            RefinementState::Complete
+        };
+        let refinement = PathRefinement {
+            passes_asked: asked,
+            passes_done: done,
+            state,
+        };
+        // The corners were placed from the filter's path: they go where it was moved (as
+        // step 1's files had them if the refined ones are not put in place).
+        let filter_corners = self.map.clone();
+        if let Some(moved) = follow_refined_path(&self.map, filter_path, &path) {
             self.map = moved;
         }
-        let text: String = final_path
-            .iter()
-            .map(|p| format_tum_line(p.stamp_ns, &p.pose))
-            .collect();
-        let unwritten = self.incomplete.len();
-        self.write_result(TRAJECTORY_FILE, text.as_bytes());
-        let path_written = self.incomplete.len() == unwritten;
-        let trajectory: Vec<[f64; 2]> = final_path
-            .iter()
-            .map(|p| p.pose.position().into())
-            .collect();
-        let stats = self.score_path(&final_path);
+        let staged = match self.stage_results(&path, &first, refinement) {
+            Ok(staged) => staged,
+            Err(e) => {
+                self.map = filter_corners;
+                self.incomplete.push(IncompleteOutput::new(
+                    REFINED_RESULTS,
+                    "not written; the files hold the filter's path",
+                    &e,
+                ));
+                return Ok(self.restate(first, RefinementState::NotDone, 0, Some(report)));
+            }
+        };
+        if !clock.has(SWAP_TIME) {
+            // Too late to put them in place before the kill: the staged files are dropped.
+            drop(staged);
+            self.map = filter_corners;
+            return Ok(self.restate(first, RefinementState::CutShort, 0, Some(report)));
+        }
+        let Staged {
+            files,
+            mut metrics,
+            grid,
+        } = staged;
+        metrics.refinement = Some(PathRefinement {
+            state: RefinementState::Replacing,
+            ..refinement
+        });
+        self.write_metrics(&metrics);
+        let mut replaced = Vec::with_capacity(files.len());
+        for (name, file) in files {
+            match file.commit() {
+                Ok(()) => replaced.push(name),
+                Err(e) => self.incomplete.push(IncompleteOutput::new(
+                    name,
+                    "refined version not written",
+                    &e,
+                )),
+            }
+        }
+        // What step 1 could not write is whole now, if its refined version was put in place.
+        let map_replaced = MAP_NAMES.iter().all(|name| replaced.contains(name));
+        let label = map_files_label();
+        self.incomplete.retain(|o| {
+            let now_whole =
+                replaced.contains(&o.file.as_str()) || (map_replaced && o.file == label);
+            !now_whole
+        });
+        metrics.refinement = Some(refinement);
+        let metrics = self.write_metrics(&metrics);
+        let path_written = replaced.contains(&TRAJECTORY_FILE) || first.path_written;
+        let traced = grid.as_ref().map(traced_counts);
+        Ok(Finished {
+            metrics,
+            final_path: path_written.then_some(path),
+            traced,
+            grid: grid.filter(|_| map_replaced).map(|(grid, _)| grid),
+            refinement: Some(report),
+        })
+    }
+
+    /// The results of the refined `path`, each file written in full under its temporary
+    /// name (`first` gave the relative-pose errors of the other trajectories); the first
+    /// file that cannot be written drops them all.
+    fn stage_results(
+        &self,
+        path: &[StampedPose],
+        first: &Written,
+        refinement: PathRefinement,
+    ) -> Result<Staged, SinkError> {
+        let mut files = Vec::new();
+        let trajectory =
+            StagedFile::write(&self.dir.join(TRAJECTORY_FILE), tum_text(path).as_bytes())?;
+        let relative_pose_error =
+            match (&self.options.relations, &first.metrics.relative_pose_error) {
+                (Some(truth), Some(before)) => Some(RelativePoseErrors {
+                    trajectory: trajectory
+                        .staged_at()
+                        .map(|at| score_tum_file(at, truth, self.options.relations_tolerance_ns))
+                        .transpose()?
+                        .flatten(),
+                    ..before.clone()
+                }),
+                _ => None,
+            };
+        files.push((TRAJECTORY_FILE, trajectory));
+        files.push((
+            MAP_CORNERS_FILE,
+            StagedFile::write(
+                &self.dir.join(MAP_CORNERS_FILE),
+                corners_csv(&self.map).as_bytes(),
+            )?,
+        ));
+        let scored = self.scored(path, relative_pose_error, Some(refinement));
+        let grid = self.grid(path)?;
+        for (name, contents) in map_files(grid.as_ref().map(|(grid, _)| grid), &self.map)? {
+            files.push((name, StagedFile::write(&self.dir.join(name), &contents)?));
+        }
+        let svg = self.picture(
+            &scored.trajectory,
+            scored.stats,
+            &scored.metrics,
+            grid.as_ref().map(|(grid, _)| grid),
+        );
+        files.push((
+            MAP_SVG_FILE,
+            StagedFile::write(&self.dir.join(MAP_SVG_FILE), svg.as_bytes())?,
+        ));
+        Ok(Staged {
+            files,
+            metrics: scored.metrics,
+            grid,
+        })
+    }
+
+    /// Step 1's files stand: `metrics.json` is written again, saying what became of the
+    /// refinement.
+    fn restate(
+        &mut self,
+        first: Written,
+        state: RefinementState,
+        passes_done: usize,
+        report: Option<RefinementReport>,
+    ) -> Finished {
+        let mut metrics = first.metrics.clone();
+        metrics.refinement = Some(PathRefinement {
+            passes_asked: self.options.refinement.passes,
+            passes_done,
+            state,
+        });
+        let metrics = self.write_metrics(&metrics);
+        let mut finished = first.finished(report);
+        finished.metrics = metrics;
+        finished
+    }
+
+    /// Writes `metrics` as metrics.json, atomically, with the run's incomplete files; a
+    /// metrics.json that cannot be written is listed in what is returned (for the closing
+    /// summary), not in the file.
+    fn write_metrics(&self, metrics: &Metrics) -> Metrics {
+        let mut metrics = metrics.clone();
+        metrics.incomplete_outputs = self.incomplete.clone();
+        let written = serde_json::to_string_pretty(&metrics)
+            .map_err(SinkError::from)
+            .and_then(|mut json| {
+                json.push('\n');
+                write_atomic(&self.dir.join(METRICS_FILE), json.as_bytes())
+            });
+        if let Err(e) = written {
+            metrics
+                .incomplete_outputs
+                .push(IncompleteOutput::new(METRICS_FILE, "not written", &e));
+        }
+        metrics
+    }
+
+    /// Writes the map's files (`files` as [`map_files`] made them) atomically in their
+    /// order; true when all were written.
+    fn write_map_files(&mut self, files: Result<Vec<(&'static str, Vec<u8>)>, SinkError>) -> bool {
+        let written = files.and_then(|files| {
+            files
+                .into_iter()
+                .try_for_each(|(name, contents)| write_atomic(&self.dir.join(name), &contents))
+        });
+        match written {
+            Ok(()) => {
+                self.incomplete.retain(|o| o.file != map_files_label());
+                true
+            }
+            Err(e) => {
+                // The map's files name each other: they are written in an order that leaves
+                // none naming a file that is not there, and the first failure ends them.
+                let label = map_files_label();
+                if !self.incomplete.iter().any(|o| o.file == label) {
+                    self.incomplete
+                        .push(IncompleteOutput::new(&label, "not all written", &e));
+                }
+                false
+            }
+        }
+    }
+
+    /// The metrics of `path` as the run's trajectory, with the trajectory's positions and
+    /// its alignment to the truth for the picture.
+    fn scored(
+        &self,
+        path: &[StampedPose],
+        relative_pose_error: Option<RelativePoseErrors>,
+        refinement: Option<PathRefinement>,
+    ) -> Scored {
+        let trajectory: Vec<[f64; 2]> = path.iter().map(|p| p.pose.position().into()).collect();
+        let stats = self.score_path(path);
         let online_stats = self.score(|e| Some(e.pose));
         let dead_reckoning_stats = self.score(|e| e.dead_reckoning);
         let map_corner_rmse_m = stats.and_then(|s| {
@@ -391,65 +715,23 @@ impl Recorder {
                 .collect();
             nearest_rmse(&aligned, &self.true_corners)
         });
-        let relative_pose_error = self
-            .options
-            .relations
-            .as_ref()
-            .map(|truth| score_run(&self.dir, truth, self.options.relations_tolerance_ns))
-            .transpose()?;
         let mut metrics = self.metrics(&trajectory, stats, dead_reckoning_stats, map_corner_rmse_m);
         metrics.relative_pose_error = relative_pose_error;
         metrics.online_ate_rmse_m = online_stats.map(|s| s.rmse_m);
-
-        self.write_result(MAP_CORNERS_FILE, corners_csv(&self.map).as_bytes());
-        let grid = self.grid(&final_path)?;
-        let report = grid.as_ref().map(|(grid, traced)| GridReport {
-            width: grid.width(),
-            height: grid.height(),
-            resolution_m: grid.resolution_m(),
-            scans_traced: *traced,
-            beams_kept: self.scans.beams(),
-            scan_bytes: self.scans.bytes(),
-            grid_bytes: grid.bytes(),
-            build_s: started.elapsed().as_secs_f64(),
-            refinement,
-        });
-        let grid = grid.map(|(grid, _)| grid);
-        let map_written = match write_map(&self.dir, grid.as_ref(), &self.map) {
-            Ok(()) => true,
-            Err(e) => {
-                // The map's files name each other: they are written in an order that leaves
-                // none naming a file that is not there, and the first failure ends them.
-                let name =
-                    format!("{MAP_PGM_FILE}, {MAP_PNG_FILE}, {MAP_YAML_FILE}, {LANDMARKS_FILE}");
-                self.incomplete
-                    .push(IncompleteOutput::new(&name, "not all written", &e));
-                false
-            }
-        };
-        let svg = self.picture(&trajectory, stats, &metrics, grid.as_ref());
-        self.write_result(MAP_SVG_FILE, svg.as_bytes());
-        metrics.incomplete_outputs = self.incomplete.clone();
-        let mut json = serde_json::to_string_pretty(&metrics)?;
-        json.push('\n');
-        if let Err(e) = write_atomic(&self.dir.join(METRICS_FILE), json.as_bytes()) {
-            // Not in the file, then, but in what is returned, for the closing summary.
-            metrics
-                .incomplete_outputs
-                .push(IncompleteOutput::new(METRICS_FILE, "not written", &e));
-        }
-        Ok(FinishedRun {
+        metrics.refinement = refinement;
+        Scored {
             metrics,
-            report,
-            final_path: path_written.then_some(final_path),
-            grid: grid.filter(|_| map_written),
-        })
+            trajectory,
+            stats,
+        }
     }
 
-    /// The filter's final path refined against the grid its kept scans trace.
+    /// The filter's final path refined against the grid its kept scans trace, for as long
+    /// as `has_time` says there is time.
     fn refine(
         &self,
         path: &[StampedPose],
+        has_time: &(dyn Fn() -> bool + Sync),
     ) -> Result<(Vec<StampedPose>, RefinementReport), SinkError> {
         let scans: Vec<(u64, &CompactScan)> = self
             .scans
@@ -457,12 +739,13 @@ impl Recorder {
             .iter()
             .map(|(stamp, scan)| (*stamp, scan))
             .collect();
-        Ok(refine_path(
+        Ok(refine_path_within(
             path,
             &scans,
             &self.options.grid,
             &self.options.refinement,
             self.prior.as_ref(),
+            has_time,
         )?)
     }
 
@@ -566,6 +849,7 @@ impl Recorder {
             dead_reckoning_ate_rmse_m: dead_reckoning.map(|s| s.rmse_m),
             online_ate_rmse_m: None,
             relative_pose_error: None,
+            refinement: None,
             converged_at_scan: self.converged_at.map(|(seq, _)| seq),
             converged_at_stamp: self
                 .converged_at
@@ -623,6 +907,81 @@ impl Recorder {
             true_corners,
         })
     }
+}
+
+/// Time kept free for writing, beyond twice what step 1 took: the margin of a machine
+/// under load.
+const WRITE_MARGIN: Duration = Duration::from_millis(1500);
+/// What renaming the staged files into place needs at most: the refined files are only put
+/// in place while this much is left, so that the kill does not come halfway through.
+const SWAP_TIME: Duration = Duration::from_millis(500);
+/// The refined files, as one output in the list of incomplete ones.
+const REFINED_RESULTS: &str = "refined trajectory.tum, map and map.svg";
+/// The map's files written from a grid, in their order.
+const MAP_NAMES: [&str; 4] = [MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, LANDMARKS_FILE];
+
+/// The map's files as one output in the list of incomplete ones.
+fn map_files_label() -> String {
+    MAP_NAMES.join(", ")
+}
+
+/// A TUM file of `path`.
+fn tum_text(path: &[StampedPose]) -> String {
+    path.iter()
+        .map(|p| format_tum_line(p.stamp_ns, &p.pose))
+        .collect()
+}
+
+/// The grid's size and cost, and the scans traced, for the [`GridReport`].
+fn traced_counts((grid, traced): &(OccupancyGrid, usize)) -> (usize, usize, usize, usize) {
+    (grid.width(), grid.height(), grid.bytes(), *traced)
+}
+
+/// A path's metrics, positions and alignment to the truth.
+struct Scored {
+    metrics: Metrics,
+    trajectory: Vec<[f64; 2]>,
+    stats: Option<AteStats>,
+}
+
+/// What step 1 wrote.
+struct Written {
+    /// As written in metrics.json (with the files that could not be written).
+    metrics: Metrics,
+    path: Vec<StampedPose>,
+    path_written: bool,
+    grid: Option<(OccupancyGrid, usize)>,
+    map_written: bool,
+}
+
+impl Written {
+    /// Step 1's results as the run's result.
+    fn finished(self, refinement: Option<RefinementReport>) -> Finished {
+        Finished {
+            metrics: self.metrics,
+            final_path: self.path_written.then_some(self.path),
+            traced: self.grid.as_ref().map(traced_counts),
+            grid: self.grid.filter(|_| self.map_written).map(|(grid, _)| grid),
+            refinement,
+        }
+    }
+}
+
+/// The refined results under their temporary names, in the order they are put in place.
+struct Staged {
+    files: Vec<(&'static str, StagedFile)>,
+    metrics: Metrics,
+    grid: Option<(OccupancyGrid, usize)>,
+}
+
+/// The run's result, before its [`GridReport`].
+struct Finished {
+    metrics: Metrics,
+    final_path: Option<Vec<StampedPose>>,
+    /// Width, height, log-odds bytes and scans traced of the grid.
+    traced: Option<(usize, usize, usize, usize)>,
+    grid: Option<OccupancyGrid>,
+    refinement: Option<RefinementReport>,
 }
 
 /// The picture's metric lines.
@@ -696,6 +1055,112 @@ fn xy(pose: &Pose2) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_room::room_returns;
+    use std::sync::Mutex;
+
+    /// A recorder in a fresh directory holding three laps of the test room, the last one
+    /// drifting off as an open loop does, with the filter's final path of those poses.
+    fn three_laps(tag: &str) -> Result<(PathBuf, Recorder, Vec<StampedPose>), SinkError> {
+        let dir = std::env::temp_dir().join(format!("map-sink-unit-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+        let mut path = Vec::new();
+        for i in 0..120_u64 {
+            let a = (i % 40) as f64 / 40.0 * std::f64::consts::TAU;
+            let truth = Pose2::new(1.0 + 0.8 * a.cos(), 0.8 * a.sin(), a + 1.5);
+            let drift = i.saturating_sub(79) as f64 / 40.0;
+            let pose = Pose2::new(0.06 * drift, -0.04 * drift, 0.02 * drift).compose(&truth);
+            let ranges: Vec<f32> = room_returns(truth)
+                .iter()
+                .map(|p| p[0].hypot(p[1]) as f32)
+                .collect();
+            recorder.record_pose(i, i * 25_000_000, pose, None, None)?;
+            recorder.record_scan(i, 0.0, 1_f64.to_radians(), 0.05, 30.0, &ranges);
+            path.push(StampedPose {
+                stamp_ns: i * 25_000_000,
+                pose,
+            });
+        }
+        recorder.set_final_path(&path);
+        Ok((dir, recorder, path))
+    }
+
+    fn read_metrics(dir: &Path) -> Option<Metrics> {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(METRICS_FILE)).ok()?).ok()
+    }
+
+    fn refinement(passes_done: usize, state: RefinementState) -> Option<PathRefinement> {
+        Some(PathRefinement {
+            passes_asked: PathRefinementConfig::default().passes,
+            passes_done,
+            state,
+        })
+    }
+
+    #[test]
+    fn a_kill_while_refining_finds_the_filters_path_written_whole() -> Result<(), SinkError> {
+        let (dir, recorder, path) = three_laps("refining")?;
+        // The clock is first read once the refinement has begun: what the directory holds
+        // then is what a kill then would leave.
+        let seen: Mutex<Option<(Option<Metrics>, String, bool)>> = Mutex::new(None);
+        let look = || {
+            seen.lock().expect("not poisoned").get_or_insert_with(|| {
+                let trajectory =
+                    std::fs::read_to_string(dir.join(TRAJECTORY_FILE)).unwrap_or_default();
+                let map = [MAP_PGM_FILE, MAP_YAML_FILE, MAP_PNG_FILE, LANDMARKS_FILE]
+                    .iter()
+                    .all(|name| dir.join(name).is_file());
+                (read_metrics(&dir), trajectory, map)
+            });
+            false
+        };
+        let run = recorder.finish_run_within(&EndClock::new(None, &look))?;
+
+        let (metrics, trajectory, map) = seen
+            .into_inner()
+            .expect("not poisoned")
+            .expect("the clock was read");
+        let metrics = metrics.expect("metrics.json before the refinement");
+        assert_eq!(metrics.refinement, refinement(0, RefinementState::Pending));
+        assert_eq!(trajectory, tum_text(&path), "the filter's path");
+        assert!(map, "the map traced along it");
+        // Then refined, in full.
+        let written = read_metrics(&dir).expect("metrics.json");
+        let passes = PathRefinementConfig::default().passes;
+        assert_eq!(
+            written.refinement,
+            refinement(passes, RefinementState::Complete)
+        );
+        assert_eq!(run.metrics.refinement, written.refinement);
+        let refined = std::fs::read_to_string(dir.join(TRAJECTORY_FILE)).unwrap_or_default();
+        assert_ne!(refined, tum_text(&path));
+        assert_eq!(Some(refined), run.final_path.map(|p| tum_text(&p)));
+        let _ = std::fs::remove_dir_all(&dir);
+        Ok(())
+    }
+
+    #[test]
+    fn a_stop_with_its_budget_spent_keeps_the_filters_path_and_says_so() -> Result<(), SinkError> {
+        let (dir, recorder, path) = three_laps("spent")?;
+        let stopped = || true;
+        let clock = EndClock::new(Some(Duration::ZERO), &stopped);
+        let run = recorder.finish_run_within(&clock)?;
+        let written = read_metrics(&dir).expect("metrics.json");
+        assert_eq!(written.refinement, refinement(0, RefinementState::CutShort));
+        assert_eq!(
+            std::fs::read_to_string(dir.join(TRAJECTORY_FILE)).unwrap_or_default(),
+            tum_text(&path)
+        );
+        assert!(run.grid.is_some() && dir.join(MAP_PGM_FILE).is_file());
+        let left: Vec<String> = std::fs::read_dir(&dir)
+            .map_err(|e| SinkError::io("list", &dir, e))?
+            .filter_map(|e| Some(e.ok()?.file_name().to_string_lossy().into_owned()))
+            .filter(|name| name.ends_with(".tmp"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+        Ok(())
+    }
 
     #[test]
     fn scans_meet_their_pose_in_either_order() -> Result<(), SinkError> {

@@ -1,6 +1,6 @@
 //! The scans kept for the occupancy grid until the final path comes.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashSet};
 
 use crate::compact_scan::CompactScan;
 use slam_geom::Pose2;
@@ -12,18 +12,39 @@ const MAX_PENDING: usize = 256;
 /// grid cell): turning by it moves a wall 2.5 m away by a cell of 5 cm.
 const KEEP_TURN_RAD: f64 = 0.02;
 
+/// Beams kept before a scan must also come from a viewpoint where no kept scan was taken:
+/// about 16 MB of scans, and an end step (tracing, refining) that fits slam-launch's stop
+/// budget on a loaded machine. Well above a run of the benchmark logs (the office loop
+/// keeps 0.66 M beams), so their maps do not change; a robot that goes round the same rooms
+/// for an hour keeps a lap or two of scans and then only those of places new to it.
+const REVISIT_BEAMS: usize = 4_000_000;
+/// Past [`REVISIT_BEAMS`], viewpoints fall in cells of this edge and ...
+const VIEWPOINT_CELL_M: f64 = 0.25;
+/// ... headings in sectors of this width; a scan is kept when no kept scan's viewpoint fell
+/// in its cell and sector.
+const VIEWPOINT_SECTOR_RAD: f64 = 0.1;
+
 /// Keeps each scan whose viewpoint differs from the last one kept: by the online estimate,
 /// the robot moved at least a grid cell or turned at least [`KEEP_TURN_RAD`]. A scan from
 /// (nearly) the same viewpoint sees the same cells again and only adds certainty that the
-/// log-odds clamp would cap anyway, so a robot standing still costs no memory.
+/// log-odds clamp would cap anyway, so a robot standing still costs no memory. Past
+/// [`REVISIT_BEAMS`] a scan is also left out when a kept scan was taken from about the same
+/// place and heading, however long ago, so that a robot going round and round costs memory
+/// and end-step time for the places it saw, not for its laps.
 #[derive(Debug)]
 pub struct ScanKeeper {
     min_move_m: f64,
+    /// [`REVISIT_BEAMS`], but for the tests.
+    revisit_beams: usize,
     pending: BTreeMap<u64, CompactScan>,
     kept: Vec<(u64, CompactScan)>,
     last_kept: Option<Pose2>,
+    /// The cell and sector of every kept scan's viewpoint.
+    viewpoints: HashSet<(i64, i64, i64)>,
     bytes: usize,
     beams: usize,
+    /// Scans left out past [`REVISIT_BEAMS`] for a viewpoint seen before.
+    revisits: usize,
 }
 
 impl ScanKeeper {
@@ -31,11 +52,14 @@ impl ScanKeeper {
     pub fn new(min_move_m: f64) -> Self {
         Self {
             min_move_m,
+            revisit_beams: REVISIT_BEAMS,
             pending: BTreeMap::new(),
             kept: Vec::new(),
             last_kept: None,
+            viewpoints: HashSet::new(),
             bytes: 0,
             beams: 0,
+            revisits: 0,
         }
     }
 
@@ -74,6 +98,12 @@ impl ScanKeeper {
         self.bytes
     }
 
+    /// Scans left out because a kept scan had their viewpoint, once the beams kept passed
+    /// the point where revisits stop adding scans.
+    pub fn revisits(&self) -> usize {
+        self.revisits
+    }
+
     /// Scans waiting for their pose.
     pub fn pending(&self) -> usize {
         self.pending.len()
@@ -89,6 +119,16 @@ impl ScanKeeper {
             if moved < self.min_move_m && turned < KEEP_TURN_RAD {
                 return;
             }
+        }
+        let viewpoint = (
+            (pose.x / VIEWPOINT_CELL_M).floor() as i64,
+            (pose.y / VIEWPOINT_CELL_M).floor() as i64,
+            (pose.yaw / VIEWPOINT_SECTOR_RAD).floor() as i64,
+        );
+        let seen = !self.viewpoints.insert(viewpoint);
+        if seen && self.beams >= self.revisit_beams {
+            self.revisits += 1;
+            return;
         }
         self.last_kept = Some(pose);
         self.bytes += scan.bytes();
@@ -126,5 +166,32 @@ mod tests {
             keeper.add_scan(seq, scan(), None);
         }
         assert_eq!(keeper.pending(), MAX_PENDING);
+    }
+
+    #[test]
+    fn past_the_cap_a_lap_over_the_same_places_adds_no_scans() {
+        let mut keeper = ScanKeeper::new(0.05);
+        // Two beams a scan: the first lap reaches the cap.
+        keeper.revisit_beams = 100;
+        let lap = |keeper: &mut ScanKeeper, lap: u64| {
+            for i in 0..50_u64 {
+                let seq = lap * 50 + i;
+                // Along a 5 m line, and again a little off it, as a second lap would be.
+                let pose = Pose2::new(0.1 * i as f64 + 0.01 * lap as f64, 0.02 * lap as f64, 0.0);
+                keeper.add_scan(seq, scan(), Some((seq, pose)));
+            }
+        };
+        lap(&mut keeper, 0);
+        assert_eq!(keeper.kept().len(), 50, "a first lap is all new");
+        assert_eq!(keeper.revisits(), 0);
+        lap(&mut keeper, 1);
+        assert_eq!(keeper.kept().len(), 50, "the second lap saw nothing new");
+        // Its last scan is taken where the last kept one was: left out as ever, not a
+        // revisit.
+        assert_eq!(keeper.revisits(), 49);
+        let kept = keeper.kept().len();
+        // A new place is kept however far past the cap.
+        keeper.add_scan(1000, scan(), Some((1000, Pose2::new(20.0, 0.0, 0.0))));
+        assert_eq!(keeper.kept().len(), kept + 1);
     }
 }

@@ -286,6 +286,10 @@ fn run(args: Args) -> Result<()> {
         ));
     }
     ipc_types::losses::report(&[
+        (
+            "particle_clouds_incomplete",
+            summary.particle_clouds_incomplete,
+        ),
         ("path_chunks_out_of_place", summary.path_chunks_out_of_place),
         (
             "final_map_pieces_out_of_place",

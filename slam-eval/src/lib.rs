@@ -37,6 +37,7 @@ mod error;
 mod gap;
 mod incomplete_output;
 mod metrics;
+mod path_refinement;
 mod percentile;
 mod pose;
 mod relations;
@@ -52,11 +53,12 @@ pub use ate::{AteStats, ate, distance};
 pub use corner_score::nearest_rmse;
 pub use incomplete_output::IncompleteOutput;
 pub use metrics::{FrameCounts, Metrics};
+pub use path_refinement::{PathRefinement, RefinementState};
 pub use percentile::percentile;
 pub use run_files::{
     DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, METRICS_FILE, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE,
 };
-pub use run_score::{RelationsFile, RelativePoseErrors, score_run};
+pub use run_score::{RelationsFile, RelativePoseErrors, score_run, score_tum_file};
 
 pub use error::EvalError;
 pub use gap::{Gaps, position_gaps};

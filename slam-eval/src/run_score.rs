@@ -54,6 +54,25 @@ pub struct RelativePoseErrors {
     pub dead_reckoning: Option<ScoreSummary>,
 }
 
+/// Scores the TUM file at `path` against `truth`, as [`score_run`] scores each of a run's
+/// trajectory files (map-sink: a trajectory written but not yet renamed into place);
+/// `None` when there is no file.
+pub fn score_tum_file(
+    path: &Path,
+    truth: &RelationsFile,
+    tolerance_ns: u64,
+) -> Result<Option<ScoreSummary>, EvalError> {
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let trajectory = Trajectory::read_tum(path)?;
+    Ok(Some(ScoreSummary::from(&score(
+        &trajectory,
+        &truth.relations,
+        tolerance_ns,
+    ))))
+}
+
 /// Scores the trajectory files present in `dir` against `truth`, matching stamps within
 /// `tolerance_ns`.
 pub fn score_run(
@@ -61,18 +80,7 @@ pub fn score_run(
     truth: &RelationsFile,
     tolerance_ns: u64,
 ) -> Result<RelativePoseErrors, EvalError> {
-    let score_file = |name: &str| -> Result<Option<ScoreSummary>, EvalError> {
-        let path = dir.join(name);
-        if !path.is_file() {
-            return Ok(None);
-        }
-        let trajectory = Trajectory::read_tum(&path)?;
-        Ok(Some(ScoreSummary::from(&score(
-            &trajectory,
-            &truth.relations,
-            tolerance_ns,
-        ))))
-    };
+    let score_file = |name: &str| score_tum_file(&dir.join(name), truth, tolerance_ns);
     Ok(RelativePoseErrors {
         relations_file: truth.path.clone(),
         tolerance_ns,

@@ -7,6 +7,8 @@
 //! Processes are signalled, waited for and reaped through `nix`'s safe wrappers, so no test
 //! needs `unsafe`.
 
+pub mod map_server;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -373,10 +375,16 @@ pub fn output_within(command: &mut Command, limit: Duration) -> Option<Output> {
 /// An emulated Hokuyo (`hokuyo-emulator`) serving the scans of `file` on a free port, and
 /// its `HOST:PORT`. The caller kills and reaps it.
 pub fn start_hokuyo_emulator(file: &Path) -> (std::process::Child, String) {
+    start_hokuyo_emulator_with(file, &[])
+}
+
+/// [`start_hokuyo_emulator`] with more of the emulator's options (`--loop`).
+pub fn start_hokuyo_emulator_with(file: &Path, args: &[&str]) -> (std::process::Child, String) {
     use std::io::{BufRead, BufReader};
     let mut emulator = Command::new(bin("hokuyo-emulator"))
         .args(["--port", "0", "--file"])
         .arg(file)
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()

@@ -165,10 +165,17 @@ impl<T: Message> Outlet<T> {
     }
 }
 
-/// A lossless publisher blocked on a full subscriber: give up on Ctrl-C, and every so often
-/// remove dead nodes, since a killed subscriber would otherwise block us for ever.
+/// How long a lossless send blocked on a full subscriber still waits once a stop was asked
+/// for. A stage's last messages go out as it stops (slam-proc's final path, several chunks
+/// of it on a long run), and their reader (map-sink) still drains its queue for a moment
+/// after the stop; a reader that does not costs this once, then the send fails.
+const STOP_PATIENCE: Duration = Duration::from_secs(1);
+
+/// A lossless publisher blocked on a full subscriber: give up once stopped (after
+/// [`STOP_PATIENCE`]), and every so often remove dead nodes, since a killed subscriber would
+/// otherwise block us for ever.
 fn on_backpressure(domain: &Domain, info: &BackpressureInfo) -> BackpressureAction {
-    if shutdown::requested() {
+    if shutdown::requested() && info.elapsed_time >= STOP_PATIENCE {
         return BackpressureAction::DiscardDataAndFail;
     }
     let sweeps_due = info.elapsed_time.as_millis() / DEAD_NODE_SWEEP.as_millis();

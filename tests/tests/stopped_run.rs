@@ -1,0 +1,118 @@
+//! Issue 15, maps that outlive the run: a live run stopped with Ctrl-C keeps its map however
+//! long it was. map-sink writes the filter's final path and the grid traced along it before
+//! it refines the path, and once stopped it refines only while its budget (`[grid]
+//! stop_budget`) leaves time to write what it reached. With no budget at all not one pass
+//! fits: the run ends with the filter's path as a whole map, and metrics.json says the
+//! refinement was cut short.
+
+use std::path::Path;
+use std::process::Stdio;
+use std::time::Duration;
+
+use slam_eval::{PathRefinement, RefinementState};
+use tests::map_server::{Cell, parse_pgm, parse_yaml, read_pixel};
+use tests::*;
+
+/// Generous for a loaded 2-core machine.
+const LIMIT: Duration = Duration::from_secs(180);
+/// Past the end of the 400 scans of the file: the looping emulator has started over.
+const POSES: usize = 500;
+
+#[test]
+fn a_run_stopped_without_time_to_refine_leaves_the_filters_path_as_a_whole_map() {
+    let (mut emulator, addr) = start_hokuyo_emulator_with(&test_data::seed_hall_csv(), &["--loop"]);
+    let dir = scratch("stopped-run");
+    let config = dir.join("run.toml");
+    std::fs::write(&config, "[grid]\nstop_budget = 0\n").expect("run.toml");
+    let out = dir.join("run");
+    let args = [
+        "--source",
+        "hokuyo",
+        "--addr",
+        &addr,
+        "--config",
+        config.to_str().expect("a UTF-8 path"),
+    ];
+    let mut launcher = spawn_launch(&domain("stopped-run"), &out, &args, Stdio::piped());
+    let console = read_console(&mut launcher);
+    wait_for_poses(&mut launcher, &out, POSES, LIMIT);
+    send(pid_of(&launcher), Signal::SIGINT);
+    let status = wait_within(&mut launcher, LIMIT);
+    if status.is_none() {
+        stop(&mut launcher);
+    }
+    let _ = emulator.kill();
+    let _ = emulator.wait();
+    let console = console.join().expect("the console");
+    // Ctrl-C is how a live run ends: a success, with map-sink done before the grace ended.
+    assert!(status.is_some_and(|s| s.success()), "{status:?}\n{console}");
+    assert!(!console.contains("killed"), "{console}");
+    let log = std::fs::read_to_string(out.join("logs/map-sink.log")).expect("map-sink's log");
+    assert!(
+        log.contains("the refinement of the final path was cut short after 0 of 3 passes"),
+        "{log}"
+    );
+
+    let metrics = metrics(&out);
+    assert_eq!(
+        metrics.refinement,
+        Some(PathRefinement {
+            passes_asked: 3,
+            passes_done: 0,
+            state: RefinementState::CutShort,
+        })
+    );
+    // The filter's final path, which slam-proc sends as it stops, not the online estimate
+    // standing in for it.
+    let trajectory = read_tum(&out.join("trajectory.tum"));
+    assert!(trajectory.len() >= POSES, "{} poses", trajectory.len());
+    assert_ne!(
+        std::fs::read(out.join("trajectory.tum")).expect("trajectory.tum"),
+        std::fs::read(out.join("trajectory_online.tum")).expect("trajectory_online.tum")
+    );
+
+    // The map as map_server reads it, traced along that path.
+    let yaml = std::fs::read_to_string(out.join("map.yaml")).expect("map.yaml");
+    let map = parse_yaml(&yaml);
+    assert_eq!(map.image, "map.pgm");
+    let (width, height, pixels) = parse_pgm(&std::fs::read(out.join(&map.image)).expect("map.pgm"));
+    assert!(pixels.iter().all(|p| [0, 205, 254].contains(p)));
+    let occupied = pixels
+        .iter()
+        .filter(|&&p| read_pixel(&map, p) == Cell::Occupied)
+        .count();
+    assert!(occupied > 1000, "{occupied} occupied cells");
+    let extent = |axis: usize, cells: usize| {
+        map.origin[axis]..map.origin[axis] + cells as f64 * map.resolution
+    };
+    let (xs, ys) = (extent(0, width), extent(1, height));
+    assert!(
+        trajectory
+            .iter()
+            .all(|p| xs.contains(&p.position[0]) && ys.contains(&p.position[1])),
+        "the path leaves the grid traced along it"
+    );
+    // The landmarks name that grid and hold the map's corners.
+    let landmarks: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("landmarks.json")).expect("landmarks.json"),
+    )
+    .expect("landmarks.json parses");
+    assert_eq!(landmarks["grid"]["image"], "map.pgm");
+    assert_eq!(landmarks["grid"]["width"], width);
+    assert_eq!(landmarks["grid"]["height"], height);
+    let corners = landmarks["corners"].as_array().expect("corners").len();
+    assert_eq!(corners, metrics.map_corners);
+    assert!(corners > 0);
+    assert_eq!(leftover_temporaries(&out), Vec::<String>::new());
+}
+
+/// Files of a run's directory still under their temporary names.
+fn leftover_temporaries(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .expect("the run's directory")
+        .filter_map(|entry| {
+            let name = entry.ok()?.file_name().to_string_lossy().into_owned();
+            name.ends_with(".tmp").then_some(name)
+        })
+        .collect()
+}
