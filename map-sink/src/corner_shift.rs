@@ -107,28 +107,34 @@ mod tests {
             .collect()
     }
 
+    /// `path` with each pose moved by `move_pose`, stamps kept.
+    fn moved(path: &[StampedPose], move_pose: impl Fn(Pose2) -> Pose2) -> Vec<StampedPose> {
+        path.iter()
+            .map(|p| StampedPose {
+                stamp_ns: p.stamp_ns,
+                pose: move_pose(p.pose),
+            })
+            .collect()
+    }
+
     #[test]
     fn corners_move_as_the_poses_near_them_moved() {
         let filter = path();
         // The first half stays, the second half is moved 0.2 m sideways.
-        let refined: Vec<StampedPose> = filter
-            .iter()
-            .map(|p| StampedPose {
-                stamp_ns: p.stamp_ns,
-                pose: if p.pose.x < 10.0 {
-                    p.pose
-                } else {
-                    Pose2::new(p.pose.x, 0.2, 0.0)
-                },
-            })
-            .collect();
+        let refined = moved(&filter, |p| {
+            if p.x < 10.0 {
+                p
+            } else {
+                Pose2::new(p.x, 0.2, 0.0)
+            }
+        });
         let corners = [corner(2.0, 1.0), corner(18.0, 1.0)];
-        let moved = follow_refined_path(&corners, &filter, &refined).unwrap();
-        assert!((moved[0].x - 2.0).abs() < 1e-12 && (moved[0].y - 1.0).abs() < 1e-12);
-        assert_eq!(moved[0].covariance, corners[0].covariance);
-        assert!((moved[1].x - 18.0).abs() < 1e-9, "{:?}", moved[1]);
-        assert!((moved[1].y - 1.2).abs() < 1e-9, "{:?}", moved[1]);
-        assert!((moved[1].heading - 0.3).abs() < 1e-9);
+        let after = follow_refined_path(&corners, &filter, &refined).unwrap();
+        assert!((after[0].x - 2.0).abs() < 1e-12 && (after[0].y - 1.0).abs() < 1e-12);
+        assert_eq!(after[0].covariance, corners[0].covariance);
+        assert!((after[1].x - 18.0).abs() < 1e-9, "{:?}", after[1]);
+        assert!((after[1].y - 1.2).abs() < 1e-9, "{:?}", after[1]);
+        assert!((after[1].heading - 0.3).abs() < 1e-9);
     }
 
     #[test]
@@ -136,40 +142,28 @@ mod tests {
         let filter = path();
         // The whole path turned 0.1 rad about the origin.
         let turn = Pose2::new(0.0, 0.0, 0.1);
-        let refined: Vec<StampedPose> = filter
-            .iter()
-            .map(|p| StampedPose {
-                stamp_ns: p.stamp_ns,
-                pose: turn.compose(&p.pose),
-            })
-            .collect();
+        let refined = moved(&filter, |p| turn.compose(&p));
         let c = corner(5.0, 1.0);
-        let moved = follow_refined_path(&[c], &filter, &refined).unwrap()[0];
+        let after = follow_refined_path(&[c], &filter, &refined).unwrap()[0];
         let expected = turn.transform(Point2::new(5.0, 1.0));
-        assert!((moved.x - expected.x).abs() < 1e-9 && (moved.y - expected.y).abs() < 1e-9);
-        assert!((moved.heading - 0.4).abs() < 1e-9);
+        assert!((after.x - expected.x).abs() < 1e-9 && (after.y - expected.y).abs() < 1e-9);
+        assert!((after.heading - 0.4).abs() < 1e-9);
         // The x-y block turned: its trace is kept and it gains a cross term.
-        let xy = moved.covariance.fixed_view::<2, 2>(0, 0);
+        let xy = after.covariance.fixed_view::<2, 2>(0, 0);
         assert!((xy.trace() - 0.05).abs() < 1e-12);
         assert!(xy[(0, 1)].abs() > 1e-4);
-        assert_eq!(moved.covariance[(2, 2)], 0.02);
-        assert_eq!(moved.covariance[(3, 3)], 0.03);
-        assert_eq!(moved.covariance, moved.covariance.transpose());
+        assert_eq!(after.covariance[(2, 2)], 0.02);
+        assert_eq!(after.covariance[(3, 3)], 0.03);
+        assert_eq!(after.covariance, after.covariance.transpose());
     }
 
     #[test]
     fn a_corner_far_from_the_path_follows_the_nearest_pose() {
         let filter = path();
-        let refined: Vec<StampedPose> = filter
-            .iter()
-            .map(|p| StampedPose {
-                stamp_ns: p.stamp_ns,
-                pose: Pose2::new(p.pose.x + 0.01 * p.pose.x, 0.0, 0.0),
-            })
-            .collect();
-        let moved = follow_refined_path(&[corner(30.0, 0.0)], &filter, &refined).unwrap()[0];
+        let refined = moved(&filter, |p| Pose2::new(1.01 * p.x, 0.0, 0.0));
+        let after = follow_refined_path(&[corner(30.0, 0.0)], &filter, &refined).unwrap()[0];
         // The last pose, at x = 20, moved 0.2 m along x.
-        assert!((moved.x - 30.2).abs() < 1e-9, "{moved:?}");
+        assert!((after.x - 30.2).abs() < 1e-9, "{after:?}");
     }
 
     #[test]
