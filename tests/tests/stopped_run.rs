@@ -23,7 +23,8 @@ fn a_run_stopped_without_time_to_refine_leaves_the_filters_path_as_a_whole_map()
     let (mut emulator, addr) = start_hokuyo_emulator_with(&test_data::seed_hall_csv(), &["--loop"]);
     let dir = scratch("stopped-run");
     let config = dir.join("run.toml");
-    std::fs::write(&config, "[grid]\nstop_budget = 0\n").expect("run.toml");
+    // The passes asked are named, so that the test does not follow the default.
+    std::fs::write(&config, "[grid]\nstop_budget = 0\nrefine_passes = 3\n").expect("run.toml");
     let out = dir.join("run");
     let args = [
         "--source",
