@@ -28,7 +28,7 @@ use crate::compact_scan::{Beam, CompactScan};
 use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 use crate::pose_chain::{PosePrior, solve_pose_chain};
 use crate::prior_grid::saved_walls;
-use crate::scan_alignment::{ScanAlignment, ScanAlignmentConfig, align_scan};
+use crate::scan_alignment::{ScanAlignment, ScanAlignmentConfig, WeakDirections, align_scan};
 use crate::wall_field::{CellWindow, SeenReturn, WallField};
 
 /// How the final path is refined.
@@ -49,6 +49,11 @@ pub struct PathRefinementConfig {
     /// as far again), the other passes, not to the second wall its own pass drew beside
     /// theirs. 0 aligns it to every scan's walls.
     pub own_pass_m: f64,
+    /// A scan of another pass is a revisit when the path from a block to it is at least
+    /// this much longer than the straight line between them, metres: the robot went away
+    /// and came back, rather than looking along the way it was going. A block whose other
+    /// passes hold no revisit is aligned along the directions their walls fix firmly only.
+    pub revisit_detour_m: f64,
     /// When a scan's alignment is trusted.
     pub alignment: ScanAlignmentConfig,
 }
@@ -61,6 +66,7 @@ impl Default for PathRefinementConfig {
             step_yaw_variance_per_m: 0.002,
             step_yaw_variance_per_rad: 0.002,
             own_pass_m: 6.0,
+            revisit_detour_m: 6.0,
             alignment: ScanAlignmentConfig::default(),
         }
     }
@@ -186,7 +192,15 @@ pub fn refine_path_within(
                 .sensor_ends
                 .iter()
                 .zip(&pass_scans.guesses)
-                .map(|(ends, guess)| align_scan(&walls, ends, *guess, &config.alignment))
+                .map(|(ends, guess)| {
+                    align_scan(
+                        &walls,
+                        ends,
+                        *guess,
+                        &config.alignment,
+                        WeakDirections::Follow,
+                    )
+                })
                 .collect()
         };
         let priors: Vec<PosePrior> = on_path
@@ -306,6 +320,8 @@ fn align_to_other_passes(
         scans,
         tiles: &tiles,
         block_of: &block_of,
+        travelled,
+        revisit_detour_m: refinement.revisit_detour_m,
         saved,
         config,
     };
@@ -349,6 +365,9 @@ struct OtherPasses<'a> {
     /// The scan and return indices of the returns in each tile.
     tiles: &'a HashMap<(i64, i64), Vec<(u32, u32)>>,
     block_of: &'a [usize],
+    /// How far the path has gone at each scan, metres.
+    travelled: &'a [f64],
+    revisit_detour_m: f64,
     /// A saved map's walls, when the run maps on one: in the tiles as scan [`SAVED`].
     saved: &'a [SeenReturn],
     config: &'a ScanAlignmentConfig,
@@ -402,18 +421,36 @@ impl OtherPasses<'_> {
             .sum();
         let stride = candidates.div_ceil(MAX_OTHER_RETURNS).max(1);
         let mut others = Vec::new();
+        // Whether the walls are another visit's (a saved map's are) or only this pass's
+        // seen from farther along it.
+        let mut revisited = false;
+        let mut seen = vec![false; world_ends.len()];
+        let mut seen_others: Vec<usize> = Vec::new();
         for t in &near {
             for &(k, j) in self.tiles.get(t).into_iter().flatten().step_by(stride) {
                 if k == SAVED {
                     others.push(self.saved[j as usize]);
+                    revisited = true;
                     continue;
                 }
                 let (k, j) = (k as usize, j as usize);
                 if self.block_of[k].abs_diff(block) > 2 {
                     others.push(world_ends[k][j]);
+                    if !seen[k] {
+                        seen[k] = true;
+                        seen_others.push(k);
+                    }
                 }
             }
         }
+        if !revisited {
+            revisited = seen_others.iter().any(|&k| self.is_revisit(&members, k));
+        }
+        let weak = if revisited {
+            WeakDirections::Follow
+        } else {
+            WeakDirections::Keep
+        };
         let Some(window) = CellWindow::around(self.grid, min, max) else {
             return Vec::new();
         };
@@ -430,10 +467,20 @@ impl OtherPasses<'_> {
             .into_iter()
             .map(|k| {
                 let (ends, guess) = (self.scans.sensor_ends[k], self.scans.guesses[k]);
-                let aligned = align_scan(&walls, ends, guess, config);
+                let aligned = align_scan(&walls, ends, guess, config, weak);
                 (k, aligned)
             })
             .collect()
+    }
+
+    /// Whether scan `k` sees the block `members` on another visit: the path between them
+    /// is longer than the straight line by the detour, from the block's middle scan.
+    fn is_revisit(&self, members: &[usize], k: usize) -> bool {
+        let middle = members[members.len() / 2];
+        let along = (self.travelled[k] - self.travelled[middle]).abs();
+        let straight =
+            (self.scans.guesses[k].position() - self.scans.guesses[middle].position()).norm();
+        along - straight >= self.revisit_detour_m
     }
 }
 

@@ -1,9 +1,15 @@
 //! One scan aligned to a map: the pose, near a guess, that brings the scan's returns
 //! closest to the map's walls (Gauss-Newton, point to line, with a Cauchy loss so that what
 //! the map does not hold pulls little), and how firmly the scan fixes it.
+//!
+//! Against walls the scan's own pass drew from farther along, the fit keeps only its motion
+//! along the directions the walls fix firmly: along a corridor the fit's pull is then the
+//! noise of a door frame seen at a glance, and a path refined pass after pass on such
+//! pulls slides along the corridor. Those directions stay at the guess, with next to no
+//! information, and the path's own steps decide them.
 
-use nalgebra::{Matrix3, Vector3};
-use slam_geom::Pose2;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use slam_geom::{Pose2, wrap_angle};
 
 use crate::wall_field::WallField;
 
@@ -31,6 +37,10 @@ pub struct ScanAlignmentConfig {
     pub max_mean_distance_m: f64,
     /// An alignment that moves the guess farther than this is a wrong basin, metres.
     pub max_shift_m: f64,
+    /// A direction of `x, y, yaw` (yaw in metres at the returns' RMS range) whose
+    /// information is below this share of the best-fixed direction's is left at the guess
+    /// when the walls are the scan's own pass's (see [`WeakDirections::Keep`]).
+    pub degeneracy_ratio: f64,
 }
 
 impl Default for ScanAlignmentConfig {
@@ -45,6 +55,7 @@ impl Default for ScanAlignmentConfig {
             min_inlier_share: 0.7,
             max_mean_distance_m: 0.12,
             max_shift_m: 0.6,
+            degeneracy_ratio: 0.2,
         }
     }
 }
@@ -57,6 +68,17 @@ pub struct ScanAlignment {
     pub information: Matrix3<f64>,
 }
 
+/// How far a scan's alignment may move it along the directions its walls fix weakly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum WeakDirections {
+    /// The walls were drawn on another visit: even a weak pull (along a corridor) is
+    /// evidence the path does not have.
+    Follow,
+    /// The walls are the scan's own pass seen from farther along it: a weak pull there is
+    /// the pass's own error read back at a glance, so those directions stay at the guess.
+    Keep,
+}
+
 /// Aligns the returns `ends` (points in the sensor frame) to `walls` from `guess`. `None`
 /// when the fit is not trusted: too few returns near the map, too far on average, or moved
 /// too far.
@@ -65,12 +87,14 @@ pub(crate) fn align_scan(
     ends: &[[f64; 2]],
     guess: Pose2,
     config: &ScanAlignmentConfig,
+    weak: WeakDirections,
 ) -> Option<ScanAlignment> {
     if ends.is_empty() {
         return None;
     }
+    let reach = (ends.iter().map(|[x, y]| x * x + y * y).sum::<f64>() / ends.len() as f64).sqrt();
     let mut pose = guess;
-    let mut information = None;
+    let mut hessian = None;
     for iteration in 0..config.iterations + config.coarse_iterations {
         let coarse = iteration < config.coarse_iterations;
         let (distance, scale) = if coarse {
@@ -112,12 +136,21 @@ pub(crate) fn align_scan(
         h += Matrix3::identity() * 1e-6;
         let step = h.cholesky()?.solve(&(-g));
         pose = Pose2::new(pose.x + step.x, pose.y + step.y, pose.yaw + step.z);
-        information = Some(h);
+        hessian = Some(h);
         if step.amax() < 1e-4 && iteration >= config.coarse_iterations {
             break;
         }
     }
-    let information = information?;
+    // What the walls fix is judged at the fit's own scale, once it has converged; the
+    // coarse steps may have leaned on walls farther off than the fit trusts.
+    let hessian = hessian?;
+    let (pose, information) = match weak {
+        WeakDirections::Follow => (pose, hessian),
+        WeakDirections::Keep => {
+            let fixed = FixedDirections::of(&hessian, reach, config.degeneracy_ratio)?;
+            (fixed.keep(guess, pose), fixed.information())
+        }
+    };
     let (s, c) = pose.yaw.sin_cos();
     let (mut near, mut total) = (0_usize, 0.0);
     for &[lx, ly] in ends {
@@ -134,6 +167,66 @@ pub(crate) fn align_scan(
         && total / ends.len() as f64 <= config.max_mean_distance_m
         && (pose.position() - guess.position()).norm() <= config.max_shift_m;
     trusted.then_some(ScanAlignment { pose, information })
+}
+
+/// The directions of `x, y, yaw` a fit's Hessian fixes, found in a space where yaw is
+/// measured in metres at the returns' range so that a turn and a shift compare.
+struct FixedDirections {
+    /// To the scaled space: `diag(1, 1, 1 / reach)`.
+    to_scaled: Vector3<f64>,
+    /// The fixed directions (unit, scaled space) with their information.
+    fixed: Vec<(Vector3<f64>, f64)>,
+}
+
+impl FixedDirections {
+    /// `None` when the Hessian fixes nothing.
+    fn of(hessian: &Matrix3<f64>, reach: f64, degeneracy_ratio: f64) -> Option<Self> {
+        let reach = if reach.is_finite() && reach > 0.1 {
+            reach
+        } else {
+            1.0
+        };
+        let to_scaled = Vector3::new(1.0, 1.0, 1.0 / reach);
+        let scale = Matrix3::from_diagonal(&to_scaled);
+        let scaled = scale * hessian * scale;
+        let eigen = SymmetricEigen::new(0.5 * (scaled + scaled.transpose()));
+        let strongest = eigen.eigenvalues.max();
+        let fixed: Vec<(Vector3<f64>, f64)> = (0..3)
+            .filter(|&i| {
+                let value = eigen.eigenvalues[i];
+                value > 0.0 && value >= degeneracy_ratio * strongest
+            })
+            .map(|i| {
+                (
+                    eigen.eigenvectors.column(i).into_owned(),
+                    eigen.eigenvalues[i],
+                )
+            })
+            .collect();
+        (!fixed.is_empty()).then_some(Self { to_scaled, fixed })
+    }
+
+    /// `to` moved back towards `from` along the directions that are not fixed.
+    fn keep(&self, from: Pose2, to: Pose2) -> Pose2 {
+        let moved = Vector3::new(to.x - from.x, to.y - from.y, wrap_angle(to.yaw - from.yaw))
+            .component_div(&self.to_scaled);
+        let kept: Vector3<f64> = self.fixed.iter().map(|(v, _)| v * v.dot(&moved)).sum();
+        let kept = kept.component_mul(&self.to_scaled);
+        Pose2::new(from.x + kept.x, from.y + kept.y, from.yaw + kept.z)
+    }
+
+    /// The information over `x, y, yaw`: the Hessian's along the fixed directions, none
+    /// along the others.
+    fn information(&self) -> Matrix3<f64> {
+        let scaled: Matrix3<f64> = self
+            .fixed
+            .iter()
+            .map(|(v, value)| v * v.transpose() * *value)
+            .sum();
+        let from_scaled = Matrix3::from_diagonal(&self.to_scaled.map(|s| 1.0 / s));
+        let information = from_scaled * scaled * from_scaled;
+        0.5 * (information + information.transpose())
+    }
 }
 
 #[cfg(test)]
@@ -169,8 +262,14 @@ mod tests {
         let truth = Pose2::new(0.4, -0.3, 0.2);
         let returns = room_returns(truth);
         let guess = Pose2::new(0.5, -0.2, 0.15);
-        let aligned = align_scan(&walls, &returns, guess, &ScanAlignmentConfig::default())
-            .expect("a room fixes the pose");
+        let aligned = align_scan(
+            &walls,
+            &returns,
+            guess,
+            &ScanAlignmentConfig::default(),
+            WeakDirections::Keep,
+        )
+        .expect("a room fixes the pose");
         assert!(
             (aligned.pose.position() - truth.position()).norm() < 0.02,
             "{aligned:?}"
@@ -185,9 +284,45 @@ mod tests {
         // The room's returns, but seen from 1.5 m away: nothing lines up.
         let returns = room_returns(Pose2::new(0.0, 0.0, 0.0));
         let guess = Pose2::new(-1.2, 1.0, 1.0);
-        assert_eq!(
-            align_scan(&walls, &returns, guess, &ScanAlignmentConfig::default()),
-            None
+        for weak in [WeakDirections::Keep, WeakDirections::Follow] {
+            assert_eq!(
+                align_scan(
+                    &walls,
+                    &returns,
+                    guess,
+                    &ScanAlignmentConfig::default(),
+                    weak
+                ),
+                None
+            );
+        }
+    }
+
+    #[test]
+    fn a_direction_the_walls_hardly_fix_is_kept_at_the_guess_with_no_information() {
+        // Along a corridor: x barely fixed, y and the heading firmly (returns 5 m out).
+        let reach = 5.0;
+        let hessian = Matrix3::from_diagonal(&Vector3::new(1e-3, 100.0, 100.0 * reach * reach));
+        let fixed = FixedDirections::of(&hessian, reach, 0.2).expect("y and yaw are fixed");
+        let guess = Pose2::new(1.0, 2.0, 0.1);
+        let fit = Pose2::new(1.3, 2.05, 0.12);
+
+        let kept = fixed.keep(guess, fit);
+        assert!((kept.x - guess.x).abs() < 1e-12, "{kept:?}");
+        assert!((kept.y - fit.y).abs() < 1e-12, "{kept:?}");
+        assert!((kept.yaw - fit.yaw).abs() < 1e-12, "{kept:?}");
+        let information = fixed.information();
+        assert!(information[(0, 0)].abs() < 1e-12, "{information}");
+        assert!((information[(1, 1)] - 100.0).abs() < 1e-9, "{information}");
+        assert!((information[(2, 2)] - 2500.0).abs() < 1e-6, "{information}");
+
+        // Fixed well enough in x, all of the fit is kept.
+        let all = FixedDirections::of(&hessian, reach, 0.0).expect("fixed");
+        let all_kept = all.keep(guess, fit);
+        assert!(
+            (all_kept.position() - fit.position()).norm() < 1e-12,
+            "{all_kept:?}"
         );
+        assert!((all_kept.yaw - fit.yaw).abs() < 1e-12, "{all_kept:?}");
     }
 }
