@@ -156,13 +156,19 @@ fn run(args: Args) -> Result<()> {
         {
             features.publish_end_of_stream(seq, stamp_ns)?;
             say_err(&format!("feature-proc: {}", counts.summary()));
-            say_err(&front_end_summary(&front_end.stats()));
+            say_err(&front_end_summary(
+                &front_end.stats(),
+                front_end.odometry_scale(),
+            ));
             ipc_types::losses::report(&counts.losses());
             return Ok(());
         }
     }
     say_err(&format!("feature-proc: stopped; {}", counts.summary()));
-    say_err(&front_end_summary(&front_end.stats()));
+    say_err(&front_end_summary(
+        &front_end.stats(),
+        front_end.odometry_scale(),
+    ));
     ipc_types::losses::report(&counts.losses());
     Ok(())
 }
@@ -315,8 +321,9 @@ fn scan_motion(output: &FrontEndOutput) -> ScanMotion {
     }
 }
 
-/// The front end's counts over the run, as a summary block slam-launch shows at the end.
-fn front_end_summary(stats: &FrontEndStats) -> String {
+/// The front end's counts over the run and the wheels' distance scale it learnt, as a
+/// summary block slam-launch shows at the end.
+fn front_end_summary(stats: &FrontEndStats, odometry_scale: f64) -> String {
     let per_scan_ms = if stats.scans > 0 {
         stats.busy_ns as f64 / stats.scans as f64 * 1e-6
     } else {
@@ -326,7 +333,8 @@ fn front_end_summary(stats: &FrontEndStats) -> String {
         "feature-proc: summary of the scan-matching front end\n  \
          scans:           {} ({} matched, {} with a direction left to the prior, {} not \
          registered)\n  \
-         odometry steps:  {} used, {} rejected\n  \
+         odometry steps:  {} used, {} rejected; wheel distances x {odometry_scale:.3} \
+         (learnt from the fits)\n  \
          keyframes:       {}\n  \
          time:            {per_scan_ms:.3} ms per scan",
         stats.scans,

@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::odometry_scale::OdometryScaleConfig;
 use stage_kit::settings::{SettingError, check, check_counts, check_positive};
 
 /// Every setting of [`crate::FrontEnd`]. Deserialises from a TOML/JSON table where any field
@@ -80,6 +81,13 @@ pub struct FrontEndConfig {
     pub velocity_sigma_linear: f64,
     /// The same for the turn rate, rad/s.
     pub velocity_sigma_angular: f64,
+    /// The wheels' distance scale is learnt where the scan fixes every direction, over
+    /// about this much travel, metres (see [`crate::odometry_scale`]) ...
+    pub odometry_scale_memory: f64,
+    /// ... and used once the fits have measured this far, metres ...
+    pub odometry_scale_min_evidence: f64,
+    /// ... within `1 +-` this; 0 leaves the wheels' distances as they are.
+    pub odometry_scale_max_correction: f64,
 }
 
 impl Default for FrontEndConfig {
@@ -109,11 +117,23 @@ impl Default for FrontEndConfig {
             max_angular_speed: 10.0,
             velocity_sigma_linear: 0.5,
             velocity_sigma_angular: 1.0,
+            odometry_scale_memory: 50.0,
+            odometry_scale_min_evidence: 5.0,
+            odometry_scale_max_correction: 0.1,
         }
     }
 }
 
 impl FrontEndConfig {
+    /// The odometry scale estimator's part of the settings.
+    pub fn odometry_scale(&self) -> OdometryScaleConfig {
+        OdometryScaleConfig {
+            memory_m: self.odometry_scale_memory,
+            min_evidence_m: self.odometry_scale_min_evidence,
+            max_correction: self.odometry_scale_max_correction,
+        }
+    }
+
     /// Checks every field; the error names the first that is out of range.
     pub fn validate(&self) -> Result<(), SettingError> {
         check_positive(&stage_kit::named_fields!(self;
@@ -121,8 +141,14 @@ impl FrontEndConfig {
             max_search_yaw, recovery_translation, recovery_yaw, keyframe_distance, keyframe_angle,
             degenerate_keyframe_interval, degeneracy_ratio, odometry_gate, odometry_min_sigma_xy,
             odometry_min_sigma_yaw, max_linear_speed, max_angular_speed, velocity_sigma_linear,
-            velocity_sigma_angular,
+            velocity_sigma_angular, odometry_scale_memory, odometry_scale_min_evidence,
         ))?;
+        check(
+            "odometry_scale_max_correction",
+            self.odometry_scale_max_correction,
+            (0.0..0.5).contains(&self.odometry_scale_max_correction),
+            "must be in [0, 0.5)",
+        )?;
         check(
             "degeneracy_ratio",
             self.degeneracy_ratio,
@@ -174,6 +200,10 @@ mod tests {
         };
         assert_eq!(refused(|c| c.range_sigma = -1.0), Some("range_sigma"));
         assert_eq!(refused(|c| c.max_keyframes = 0), Some("max_keyframes"));
+        assert_eq!(
+            refused(|c| c.odometry_scale_max_correction = 0.5),
+            Some("odometry_scale_max_correction")
+        );
         assert_eq!(
             refused(|c| c.degeneracy_ratio = f64::NAN),
             Some("degeneracy_ratio")

@@ -11,6 +11,7 @@ use crate::error::InputError;
 use crate::fusion::{Prediction, disagreement, fuse, predict, robot_to_map};
 use crate::input::{OdometryInput, ScanInput};
 use crate::local_map::LocalMap;
+use crate::odometry_scale::OdometryScale;
 use crate::output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
 use crate::points::{Extractor, SurfacePoint};
 use crate::prior::{
@@ -49,6 +50,53 @@ const WEAK_SHARE: f64 = 0.1;
 /// by chance is no reason to jump.
 const RECOVERY_MARGIN: f64 = 1.2;
 
+/// A step is measured from the last odometry reading believed for at most this long,
+/// nanoseconds: longer, and the odometry's frame was reset rather than frozen.
+const MAX_CATCH_UP_NS: u64 = 2_000_000_000;
+
+/// A contradicted wheel step shorter than this (metres, radians) is wheels that froze.
+const FROZEN_M: f64 = 1e-3;
+const FROZEN_RAD: f64 = 1e-3;
+
+fn is_frozen(step: &Pose2) -> bool {
+    step.translation_norm() < FROZEN_M && step.yaw.abs() < FROZEN_RAD
+}
+
+/// The last odometry reading a step was believed from, with the front end's pose and the
+/// stamp of its scan.
+#[derive(Debug, Clone, Copy)]
+struct OdometryAnchor {
+    reading: OdometryInput,
+    pose: Pose2,
+    stamp_ns: u64,
+}
+
+impl OdometryAnchor {
+    /// The wheels' step from the anchor to `current` (at `stamp_ns`), scaled, as a step
+    /// from `previous_pose`: where the anchor's pose and the wheels' motion since put the
+    /// robot, its uncertainty the wheels' over the whole span.
+    fn step_to(
+        &self,
+        current: &OdometryInput,
+        stamp_ns: u64,
+        previous_pose: &Pose2,
+        scale: &OdometryScale,
+        config: &FrontEndConfig,
+    ) -> Result<Step, OdometryRejection> {
+        let span_s = (stamp_ns.saturating_sub(self.stamp_ns) as f64 * 1e-9).max(MIN_DT);
+        let span = scale.apply(odometry_step(&self.reading, current, span_s, config)?);
+        let increment = previous_pose.between(&self.pose.compose(&span.increment));
+        // The span's covariance is in the anchor's frame; the step's in the previous one.
+        let turn = Pose2::new(0.0, 0.0, self.pose.yaw - previous_pose.yaw);
+        let rotation = robot_to_map(&turn);
+        let covariance = rotation * span.covariance * rotation.transpose();
+        Ok(Step {
+            increment,
+            covariance: 0.5 * (covariance + covariance.transpose()),
+        })
+    }
+}
+
 /// Registers every scan against a local map of recent keyframes, fused with odometry.
 /// Feed it every scan in order with [`FrontEnd::process`].
 #[derive(Debug, Clone)]
@@ -64,12 +112,20 @@ pub struct FrontEnd {
     /// `(vx, vy, yaw rate)` in the robot frame, from the last step.
     velocity: Vector3<f64>,
     last_odometry: Option<OdometryInput>,
+    /// The last odometry reading a step was believed from.
+    odometry_anchor: Option<OdometryAnchor>,
+    /// Whether the wheels stood still since then while the scans moved: frozen odometry
+    /// that will catch up in one step.
+    wheels_froze: bool,
+    /// The wheels' distance scale, learnt from the fits.
+    odometry_scale: OdometryScale,
     stats: FrontEndStats,
 }
 
 impl FrontEnd {
     pub fn new(config: FrontEndConfig) -> Result<Self, SettingError> {
         config.validate()?;
+        let odometry_scale = OdometryScale::new(config.odometry_scale());
         Ok(Self {
             params: RegistrationParams {
                 range_sigma: config.range_sigma,
@@ -87,6 +143,9 @@ impl FrontEnd {
             keyframe_stamp_ns: 0,
             velocity: Vector3::zeros(),
             last_odometry: None,
+            odometry_anchor: None,
+            wheels_froze: false,
+            odometry_scale,
             stats: FrontEndStats::default(),
         })
     }
@@ -98,6 +157,12 @@ impl FrontEnd {
     /// The latest pose, `odom_from_robot` in the front end's frame.
     pub fn pose(&self) -> Pose2 {
         self.pose
+    }
+
+    /// The scale the wheels' distances are multiplied by, learnt from the fits so far (1
+    /// until there is evidence).
+    pub fn odometry_scale(&self) -> f64 {
+        self.odometry_scale.scale()
     }
 
     /// Counts over the run so far.
@@ -154,10 +219,26 @@ impl FrontEnd {
         let dt = elapsed_s.max(MIN_DT);
 
         let cv = constant_velocity_step(&self.velocity, dt, &self.config);
+        let mut wheels_moved = None;
         let mut odometry = match (scan.odometry, self.last_odometry) {
             (None, _) => Err(OdometryStatus::Absent),
             (Some(_), None) => Err(OdometryStatus::Started),
             (Some(current), Some(previous)) => odometry_step(&previous, &current, dt, &self.config)
+                .and_then(|step| {
+                    wheels_moved = Some(step.increment);
+                    match self.catch_up(scan.stamp_ns, &step) {
+                        // Wheels that froze while the scans moved, moving again: their
+                        // step is the motion since the last reading believed.
+                        Some(anchor) => anchor.step_to(
+                            &current,
+                            scan.stamp_ns,
+                            &self.pose,
+                            &self.odometry_scale,
+                            &self.config,
+                        ),
+                        None => Ok(self.odometry_scale.apply(step)),
+                    }
+                })
                 .map_err(OdometryStatus::Rejected),
         };
         // The next step starts from this reading even if this step was rejected: a reset
@@ -221,7 +302,17 @@ impl FrontEnd {
                 output.iterations = found.iterations;
                 let mut open = found.constraint.degenerate_directions();
                 output.status = match open.next() {
-                    None => MatchStatus::Matched,
+                    None => {
+                        // The scan measured the whole step: what the wheels' distance
+                        // is worth.
+                        if let (Ok(_), Some(moved), false) =
+                            (odometry, wheels_moved, self.wheels_froze)
+                        {
+                            self.odometry_scale
+                                .observe(&moved, &self.pose.between(&found.pose));
+                        }
+                        MatchStatus::Matched
+                    }
                     Some(weakest) => MatchStatus::Degenerate {
                         direction: robot_direction(&found.pose, &weakest),
                         count: 1 + open.count() as u8,
@@ -242,6 +333,30 @@ impl FrontEnd {
             Ok(_) => OdometryStatus::Used,
             Err(status) => status,
         };
+        let believed = matches!(
+            output.odometry,
+            OdometryStatus::Used | OdometryStatus::Started
+        );
+        match scan.odometry {
+            Some(reading) if believed => {
+                self.odometry_anchor = Some(OdometryAnchor {
+                    reading,
+                    pose,
+                    stamp_ns: scan.stamp_ns,
+                });
+            }
+            None => self.odometry_anchor = None,
+            Some(_) => {}
+        }
+        if believed {
+            self.wheels_froze = false;
+        } else if let (
+            OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. }),
+            Some(moved),
+        ) = (output.odometry, wheels_moved)
+        {
+            self.wheels_froze = is_frozen(&moved);
+        }
 
         let to_map = robot_to_map(&self.pose);
         let increment = self.pose.between(&pose);
@@ -383,6 +498,15 @@ impl FrontEnd {
         let at_odometry = score_sample(&self.map, &sample, &predict(&self.pose, step).pose, radius);
         let at_fit = score_sample(&self.map, &sample, &found.pose, radius);
         at_fit >= WEAK_FIT_MIN_SCORE && at_odometry < WEAK_FIT_MARGIN * at_fit
+    }
+
+    /// The reading to measure the wheels' `step` to the scan at `stamp_ns` from instead of
+    /// the last one, when the wheels froze since it (recently) and `step` moves again.
+    fn catch_up(&self, stamp_ns: u64, step: &Step) -> Option<OdometryAnchor> {
+        let anchor = self.odometry_anchor?;
+        let moving = !is_frozen(&step.increment);
+        (self.wheels_froze && moving && stamp_ns.saturating_sub(anchor.stamp_ns) <= MAX_CATCH_UP_NS)
+            .then_some(anchor)
     }
 
     /// Whether the scan just registered at `stamp_ns` joins the map: after enough motion,

@@ -8,7 +8,8 @@
 //! Per scan ([`FrontEnd::process`] on a [`ScanInput`]):
 //! 1. valid beams become points with surface normals, thinned to one per voxel
 //!    ([`points`], with the beams' directions kept between scans: [`bearings`]);
-//! 2. the prior step is the odometry increment with the growth of its covariance, or
+//! 2. the prior step is the odometry increment with the growth of its covariance, its
+//!    distance scaled by what the fits have measured of the wheels ([`odometry_scale`]), or
 //!    constant velocity without odometry ([`prior`]);
 //! 3. where the prior is too uncertain, a correlative search picks the basin ([`search`]);
 //!    after a gap in the data that outgrows its window, a wide search up to a full turn
@@ -41,6 +42,7 @@ pub mod fusion;
 mod input;
 pub mod local_map;
 mod nearest_field;
+pub mod odometry_scale;
 mod output;
 pub mod points;
 pub mod prior;

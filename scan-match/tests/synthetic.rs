@@ -356,3 +356,72 @@ fn without_odometry_a_recess_that_comes_into_view_teaches_the_motion_along_a_cor
     });
     assert!(by_distance.abs() < 0.3, "advanced {by_distance} m");
 }
+
+/// The true poses of a drive along the room, 8 cm and 0.005 rad a scan.
+fn drive_through_room(scans: usize) -> Vec<Pose2> {
+    let step = Pose2::new(0.08, 0.0, 0.005);
+    std::iter::successors(Some(Pose2::new(-3.0, -2.0, 0.0)), |p| {
+        Some(p.compose(&step))
+    })
+    .take(scans)
+    .collect()
+}
+
+#[test]
+fn wheels_that_freeze_and_catch_up_are_measured_from_before_they_froze() {
+    let walls = room();
+    let truth = drive_through_room(14);
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let mut statuses = Vec::new();
+    for (k, pose) in truth.iter().enumerate() {
+        // The wheels report nothing new for scans 5 to 8, then the whole motion at once.
+        let reported = if (5..=8).contains(&k) { 4 } else { k };
+        let wheels = odometry(truth[0].between(&truth[reported]), 1e-4 * reported as f64);
+        let ranges = raycast(&walls, pose, &SICK, 361, 0.0);
+        let out = front_end
+            .process(&scan(k as u64, &ranges, SICK, Some(wheels)))
+            .unwrap();
+        if k > 0 {
+            assert_close(&out.increment, &truth[k - 1].between(pose), 0.01, 0.005);
+        }
+        statuses.push(out.odometry);
+    }
+    for (k, status) in statuses.iter().enumerate().take(9).skip(5) {
+        assert!(
+            matches!(
+                status,
+                OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. })
+            ),
+            "{k}: {status:?}"
+        );
+    }
+    // The catch-up agrees with the scans since scan 4: believed, not rejected as a jump.
+    assert_eq!(statuses[9], OdometryStatus::Used);
+    assert!(statuses[10..].iter().all(|s| *s == OdometryStatus::Used));
+}
+
+#[test]
+fn wheels_that_count_four_per_cent_too_far_are_learnt() {
+    let walls = room();
+    let truth = drive_through_room(120);
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    assert_eq!(front_end.odometry_scale(), 1.0);
+    for (k, pose) in truth.iter().enumerate() {
+        let moved = truth[0].between(pose);
+        let long = Pose2::new(1.04 * moved.x, 1.04 * moved.y, moved.yaw);
+        let ranges = raycast(&walls, pose, &SICK, 361, 0.0);
+        let out = front_end
+            .process(&scan(
+                k as u64,
+                &ranges,
+                SICK,
+                Some(odometry(long, 1e-4 * k as f64)),
+            ))
+            .unwrap();
+        if k > 0 {
+            assert_eq!(out.odometry, OdometryStatus::Used, "{k}");
+        }
+    }
+    let scale = front_end.odometry_scale();
+    assert!((scale - 1.0 / 1.04).abs() < 0.005, "{scale}");
+}
