@@ -266,8 +266,10 @@ fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
         // Converged in the right place (a wrong one is metres off) and then following the
         // mapping run's path. Where that path's loops stayed open by more than its
         // refinement could pull together, the map holds a wall twice and the two paths
-        // part by a decimetre or two for a while (README), which the RMSE allows for.
-        assert!(gaps.rmse_m <= 0.10, "{gaps:?}");
-        assert!(gaps.stats.mean <= 0.07, "{gaps:?}");
+        // part by a decimetre or two for a while (README), which the RMSE allows for; never
+        // by half a metre.
+        assert!(gaps.rmse_m <= 0.08, "{gaps:?}");
+        assert!(gaps.stats.mean <= 0.06, "{gaps:?}");
+        assert!(gaps.stats.max <= 0.4, "{gaps:?}");
     }
 }
