@@ -11,6 +11,7 @@ use crate::error::InputError;
 use crate::fusion::{Prediction, disagreement, fuse, predict, robot_to_map};
 use crate::input::{OdometryInput, ScanInput};
 use crate::local_map::LocalMap;
+use crate::odometry_anchor::{MAX_CATCH_UP_NS, OdometryAnchor, is_frozen};
 use crate::odometry_scale::OdometryScale;
 use crate::output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
 use crate::points::{Extractor, SurfacePoint};
@@ -25,7 +26,7 @@ use stage_kit::SettingError;
 
 /// Steps closer in time than this (repeated or reordered stamps) are timed as this long,
 /// and teach nothing about the velocity.
-const MIN_DT: f64 = 1e-3;
+pub(crate) const MIN_DT: f64 = 1e-3;
 
 /// The correlative search runs only when fewer of the scan's points than this (weighted
 /// by closeness) lie near the map at the prior's prediction.
@@ -49,53 +50,6 @@ const WEAK_SHARE: f64 = 0.1;
 /// higher: the wide search sees many more poses, and one of them fitting a little better
 /// by chance is no reason to jump.
 const RECOVERY_MARGIN: f64 = 1.2;
-
-/// A step is measured from the last odometry reading believed for at most this long,
-/// nanoseconds: longer, and the odometry's frame was reset rather than frozen.
-const MAX_CATCH_UP_NS: u64 = 2_000_000_000;
-
-/// A contradicted wheel step shorter than this (metres, radians) is wheels that froze.
-const FROZEN_M: f64 = 1e-3;
-const FROZEN_RAD: f64 = 1e-3;
-
-fn is_frozen(step: &Pose2) -> bool {
-    step.translation_norm() < FROZEN_M && step.yaw.abs() < FROZEN_RAD
-}
-
-/// The last odometry reading a step was believed from, with the front end's pose and the
-/// stamp of its scan.
-#[derive(Debug, Clone, Copy)]
-struct OdometryAnchor {
-    reading: OdometryInput,
-    pose: Pose2,
-    stamp_ns: u64,
-}
-
-impl OdometryAnchor {
-    /// The wheels' step from the anchor to `current` (at `stamp_ns`), scaled, as a step
-    /// from `previous_pose`: where the anchor's pose and the wheels' motion since put the
-    /// robot, its uncertainty the wheels' over the whole span.
-    fn step_to(
-        &self,
-        current: &OdometryInput,
-        stamp_ns: u64,
-        previous_pose: &Pose2,
-        scale: &OdometryScale,
-        config: &FrontEndConfig,
-    ) -> Result<Step, OdometryRejection> {
-        let span_s = (stamp_ns.saturating_sub(self.stamp_ns) as f64 * 1e-9).max(MIN_DT);
-        let span = scale.apply(odometry_step(&self.reading, current, span_s, config)?);
-        let increment = previous_pose.between(&self.pose.compose(&span.increment));
-        // The span's covariance is in the anchor's frame; the step's in the previous one.
-        let turn = Pose2::new(0.0, 0.0, self.pose.yaw - previous_pose.yaw);
-        let rotation = robot_to_map(&turn);
-        let covariance = rotation * span.covariance * rotation.transpose();
-        Ok(Step {
-            increment,
-            covariance: 0.5 * (covariance + covariance.transpose()),
-        })
-    }
-}
 
 /// Registers every scan against a local map of recent keyframes, fused with odometry.
 /// Feed it every scan in order with [`FrontEnd::process`].

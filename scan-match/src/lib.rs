@@ -42,6 +42,7 @@ pub mod fusion;
 mod input;
 pub mod local_map;
 mod nearest_field;
+mod odometry_anchor;
 pub mod odometry_scale;
 mod output;
 pub mod points;

@@ -129,33 +129,32 @@ mod tests {
         assert!(scaled.covariance[(0, 0)] < 1.0 && scaled.covariance[(2, 2)] == 1.0);
     }
 
+    /// `steps` straight steps the wheels count `wheels` metres long and the fit `fitted`.
+    fn drive(scale: &mut OdometryScale, steps: usize, wheels: f64, fitted: f64) {
+        for _ in 0..steps {
+            scale.observe(&Pose2::new(wheels, 0.0, 0.0), &Pose2::new(fitted, 0.0, 0.0));
+        }
+    }
+
     #[test]
     fn no_scale_before_enough_evidence_nor_from_standing_still() {
         let mut scale = OdometryScale::new(config());
-        for _ in 0..1000 {
-            // Standing still: the fit jitters, the wheels do not move.
-            scale.observe(&Pose2::new(0.0, 0.0, 0.0), &Pose2::new(0.003, 0.0, 0.0));
-        }
+        // Standing still: the fit jitters, the wheels do not move.
+        drive(&mut scale, 1000, 0.0, 0.003);
         assert_eq!(scale.scale(), 1.0);
-        for _ in 0..40 {
-            scale.observe(&Pose2::new(0.1, 0.0, 0.0), &Pose2::new(0.11, 0.0, 0.0));
-        }
         // 4 m observed: not yet.
+        drive(&mut scale, 40, 0.1, 0.11);
         assert_eq!(scale.scale(), 1.0);
     }
 
     #[test]
     fn the_scale_is_kept_within_its_limit_and_follows_a_change() {
         let mut scale = OdometryScale::new(config());
-        for _ in 0..200 {
-            scale.observe(&Pose2::new(0.1, 0.0, 0.0), &Pose2::new(0.2, 0.0, 0.0));
-        }
+        drive(&mut scale, 200, 0.1, 0.2);
         assert_eq!(scale.scale(), 1.2);
         // A new floor where the wheels are right: after 200 m (over six memories) the old
         // floor is forgotten.
-        for _ in 0..2000 {
-            scale.observe(&Pose2::new(0.1, 0.0, 0.0), &Pose2::new(0.1, 0.0, 0.0));
-        }
+        drive(&mut scale, 2000, 0.1, 0.1);
         assert!((scale.scale() - 1.0).abs() < 0.01, "{}", scale.scale());
     }
 }
