@@ -66,6 +66,8 @@ pub struct FastSlam {
     resamplings: u64,
     /// The saved map's grid when mapping on top of it.
     saved_grid: Option<SavedGrid>,
+    /// The path length at the last scan the saved grid judged, metres.
+    on_grid_at: f64,
 }
 
 /// What the filter did over a run, for its closing summary.
@@ -185,6 +187,7 @@ impl FastSlam {
             updates: 0,
             resamplings: 0,
             saved_grid: None,
+            on_grid_at: 0.0,
             config,
         })
     }
@@ -194,12 +197,6 @@ impl FastSlam {
     /// [`FastSlam::set_scan`]: mapping on top of a saved map stays in its frame.
     pub fn with_saved_grid(mut self, grid: &map_sink::GridMap) -> Self {
         self.saved_grid = Some(SavedGrid::new(grid, &self.config));
-        // The grid keeps the particles in the saved map's frame; a revisit would pair the
-        // saved corners (all seen "long ago") by its wide gate, wrongly (see
-        // `SlamConfig::saved_grid_refine`).
-        if self.config.saved_grid_refine {
-            self.config.revisit_search_radius = 0.0;
-        }
         self
     }
 
@@ -411,6 +408,24 @@ impl FastSlam {
         let variance = std::mem::take(&mut self.since_update).noise;
         self.updates += 1;
         self.gates.ensure(prepared.len());
+        // The grid judges the scan only where the saved map has seen what the beams hit.
+        let best_pose = self.particles.get(self.best).map(|p| p.pose);
+        let judged = match (&mut self.saved_grid, best_pose) {
+            (Some(grid), Some(pose)) => grid.select_known(&pose, config.saved_grid_min_known),
+            _ => false,
+        };
+        let saved_grid = self.saved_grid.as_ref().filter(|_| judged);
+        // With the saved grid, a revisit's wide gate pairs the saved corners (all seen
+        // "long ago") wrongly, on the saved map and beside it; the grid closes the loops
+        // instead. Back on the grid after a stretch off it as long as
+        // `revisit_min_distance`, the particles may have drifted beyond the tracking climb's
+        // reach: they climb from the search's wider steps once.
+        let now = self.path_length.last().copied().unwrap_or(0.0);
+        let revisits = self.saved_grid.is_none() || !config.saved_grid_refine;
+        let returned = judged && now - self.on_grid_at >= config.revisit_min_distance;
+        if judged {
+            self.on_grid_at = now;
+        }
         let context = ScanContext {
             observations: &prepared,
             pose: PoseUncertainty::from_variances(
@@ -425,15 +440,9 @@ impl FastSlam {
             cos_half_fov: (0.5 * config.view_fov).cos(),
             scan: self.scans,
             path_length: &self.path_length,
+            revisits,
         };
         let (streams, scan) = (&self.streams, self.scans);
-        // The grid judges the scan only where the saved map has seen what the beams hit.
-        let best_pose = self.particles.get(self.best).map(|p| p.pose);
-        let judged = match (&mut self.saved_grid, best_pose) {
-            (Some(grid), Some(pose)) => grid.select_known(&pose, config.saved_grid_min_known),
-            _ => false,
-        };
-        let saved_grid = self.saved_grid.as_ref().filter(|_| judged);
         let (refine, pull, grid_weight) = (
             config.saved_grid_refine,
             config.saved_grid_pull,
@@ -448,7 +457,11 @@ impl FastSlam {
                 let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
                 if let Some(grid) = saved_grid {
                     if refine {
-                        particle.pose = grid.refine(particle.pose, pull);
+                        particle.pose = if returned {
+                            grid.search(particle.pose)
+                        } else {
+                            grid.refine(particle.pose, pull)
+                        };
                     }
                     if grid_weight > 0.0 {
                         particle.log_weight += grid_weight * grid.log_likelihood(&particle.pose);

@@ -5,7 +5,7 @@
 use crate::config::SlamConfig;
 use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
 use crate::localize::localizer::{
-    RefineSteps, ScanRanges, refine_by, sample_beam_ends, scan_score,
+    RefineSteps, SEARCH_STEPS, ScanRanges, refine_by, sample_beam_ends, scan_score,
 };
 use map_sink::GridMap;
 use slam_geom::{Pose2, wrap_angle};
@@ -76,6 +76,11 @@ impl SavedGrid {
             // The fit's yaw may have wrapped past +-pi.
             pose.yaw + pull * wrap_angle(fit.yaw - pose.yaw),
         )
+    }
+
+    /// `pose` moved to the best fit uphill from it, by the localizer's search steps.
+    pub fn search(&self, pose: Pose2) -> Pose2 {
+        refine_by(&self.field, &self.known, pose, SEARCH_STEPS)
     }
 
     /// The selected beams' log-likelihood from `pose`.

@@ -55,7 +55,7 @@ pub(crate) struct RefineSteps {
 
 /// The search's steps: wide enough to reach the true place from a particle spread at random
 /// near it.
-const SEARCH_STEPS: RefineSteps = RefineSteps {
+pub(crate) const SEARCH_STEPS: RefineSteps = RefineSteps {
     xy: REFINE_STEP_XY,
     yaw: REFINE_STEP_YAW,
 };
