@@ -119,10 +119,17 @@ mod tests {
                 let x = ORIGIN[0] + (col as f64 + 0.5) * RESOLUTION;
                 let y = ORIGIN[1] + (row as f64 + 0.5) * RESOLUTION;
                 let [x0, x1, y0, y1] = ROOM;
-                let near = |v: f64, wall: f64| (v - wall).abs() <= 0.5 * RESOLUTION;
+                // Walls 0.1 m thick, their inner face on the room's edge: a beam that a
+                // drifted pose carries past the face still ends in a seen cell.
+                let thick = |v: f64, wall: f64, outward: f64| {
+                    let d = (v - wall) * outward;
+                    (-0.5 * RESOLUTION..=0.1).contains(&d)
+                };
                 let inside = x > x0 && x < x1 && y > y0 && y < y1;
-                let on_wall = (near(x, x0) || near(x, x1)) && y >= y0 && y <= y1
-                    || (near(y, y0) || near(y, y1)) && x >= x0 && x <= x1;
+                let along_x = x >= x0 - 0.1 && x <= x1 + 0.1;
+                let along_y = y >= y0 - 0.1 && y <= y1 + 0.1;
+                let on_wall = (thick(x, x0, -1.0) || thick(x, x1, 1.0)) && along_y
+                    || (thick(y, y0, -1.0) || thick(y, y1, 1.0)) && along_x;
                 cells.push(if on_wall {
                     CellState::Occupied
                 } else if inside {
