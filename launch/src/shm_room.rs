@@ -93,8 +93,8 @@ mod tests {
         assert!(shape.topics.contains(&("robot/odometry", 1)));
         config.record.enabled = true;
         assert!(run_shape(&config).topics.contains(&("robot/odometry", 2)));
-        // Localizing, slam-proc reads the scans too.
-        config.localize = true;
+        // On a saved map, slam-proc reads the scans too.
+        config.map = Some("runs/office".into());
         assert_eq!(run_shape(&config).topics[0], ("lidar/scan", 4));
     }
 

@@ -16,6 +16,8 @@ pub struct RunKind {
     pub odometry: bool,
     /// slam-proc localizes on a saved map, weighting its particles by the scans' beams.
     pub localize: bool,
+    /// The run has a saved map (`--map DIR`), to localize on or to map on top of.
+    pub saved_map: bool,
     /// slam-record records every topic (`--record`).
     pub recorded: bool,
 }
@@ -32,6 +34,7 @@ impl RunKind {
                 SourceKind::Hokuyo => false,
             },
             localize: config.localize,
+            saved_map: config.map.is_some(),
             recorded: config.record.enabled,
         }
     }
@@ -49,6 +52,8 @@ pub enum When {
     Localize,
     /// slam-proc maps (on a saved map or not): the run does not `--localize`.
     Mapping,
+    /// The run has a saved map (`--map DIR`), localizing on it or mapping on top of it.
+    SavedMap,
     /// The run is recorded.
     Recorded,
 }
@@ -61,6 +66,7 @@ impl When {
             When::Odometry => run.odometry,
             When::Localize => run.localize,
             When::Mapping => !run.localize,
+            When::SavedMap => run.saved_map,
             When::Recorded => run.recorded,
         }
     }
@@ -244,10 +250,10 @@ pub const STAGES: &[Stage] = &[
         ],
         reads: &[
             reads(FEATURES),
-            // The beams weight the particles on a saved map.
+            // The beams fit the particles to a saved map's grid.
             Reading {
                 topic: SCAN,
-                when: When::Localize,
+                when: When::SavedMap,
                 if_published: false,
             },
         ],
@@ -427,6 +433,7 @@ fn condition_text(when: When) -> Option<&'static str> {
         When::Odometry => Some("with odometry"),
         When::Localize => Some("--localize"),
         When::Mapping => Some("without --localize"),
+        When::SavedMap => Some("--map"),
         When::Recorded => Some("--record"),
     }
 }
@@ -452,12 +459,13 @@ mod tests {
         let mut runs = Vec::new();
         for source in [SourceKind::Sim, SourceKind::Replay, SourceKind::Hokuyo] {
             for odometry in [false, true] {
-                for localize in [false, true] {
+                for (localize, saved_map) in [(false, false), (false, true), (true, true)] {
                     for recorded in [false, true] {
                         runs.push(RunKind {
                             source,
                             odometry: odometry && source != SourceKind::Hokuyo,
                             localize,
+                            saved_map,
                             recorded,
                         });
                     }
@@ -471,6 +479,7 @@ mod tests {
         source: SourceKind::Sim,
         odometry: false,
         localize: false,
+        saved_map: false,
         recorded: false,
     };
 
@@ -577,6 +586,7 @@ mod tests {
         let localize = RunKind {
             source: SourceKind::Replay,
             localize: true,
+            saved_map: true,
             ..PLAIN
         };
         assert_eq!(

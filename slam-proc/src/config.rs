@@ -156,6 +156,30 @@ pub struct SlamConfig {
     pub duplicate_radius: f64,
     /// Headings closer than this are similar for the duplicate test, radians.
     pub duplicate_heading: f64,
+    /// Mapping on a saved map (`--map DIR` without `--localize`): at every corner update,
+    /// each particle climbs this scan's likelihood on the saved grid (the localizer's
+    /// field and beam model, `[slam.localize]`'s `sigma_hit`, `beam_floor` and
+    /// `max_distance`) before its corners correct it, so the new run stays in the saved
+    /// map's frame between corner sightings instead of drifting with the front end until a
+    /// revisit pulls it back in a jump. Revisits are then left out while the grid holds the
+    /// particles: every saved corner counts as seen long ago, and a revisit's wide
+    /// association pairs them wrongly and throws the particles off the grid they were on.
+    pub saved_grid_refine: bool,
+    /// The particle moves this fraction of the way to the grid's best fit, in (0, 1]: less
+    /// than all of it smooths the fit's own jitter out of the path.
+    pub saved_grid_pull: f64,
+    /// ... and the scan's likelihood on the saved grid, times this, joins each particle's
+    /// log weight (per beam, as `localize.beam_exponent`; 0: not weighted by the grid).
+    pub saved_grid_weight: f64,
+    /// Beams of a scan that fit the particles to the saved grid, spread evenly over its
+    /// valid beams.
+    pub saved_grid_beams: usize,
+    /// Only the beams that end in the saved grid's seen cells count (from the best
+    /// particle's pose: the same beams for every particle); with fewer than this fraction
+    /// of them the grid is left out of the scan. High: at the saved map's edge the grid
+    /// holds walls seen from afar, and a climb on a few of them pulls the run off its own
+    /// (the office with its first 1200 scans saved: ATE 0.06-0.07 m at 0.5, 0.012 m at 0.8).
+    pub saved_grid_min_known: f64,
     /// Localization on a saved map (`slam-proc --map DIR --localize`).
     pub localize: LocalizeConfig,
 }
@@ -214,6 +238,11 @@ impl Default for SlamConfig {
             view_fov: 270f64.to_radians(),
             duplicate_radius: 0.5,
             duplicate_heading: 30f64.to_radians(),
+            saved_grid_refine: true,
+            saved_grid_pull: 0.5,
+            saved_grid_weight: 0.0,
+            saved_grid_beams: 120,
+            saved_grid_min_known: 0.8,
             localize: LocalizeConfig::default(),
         }
     }
@@ -248,8 +277,20 @@ impl SlamConfig {
             measured_yaw_variance_per_metre, measured_yaw_variance_per_radian, update_min_distance,
             update_min_rotation, revisit_search_radius, revisit_min_distance,
             revisit_sigma_xy_per_metre, revisit_sigma_yaw_per_metre, revisit_max_sigma_xy,
-            revisit_max_sigma_yaw,
+            revisit_max_sigma_yaw, saved_grid_weight,
         ))?;
+        check(
+            "saved_grid_pull",
+            self.saved_grid_pull,
+            self.saved_grid_pull > 0.0 && self.saved_grid_pull <= 1.0,
+            "must be in (0, 1]",
+        )?;
+        check(
+            "saved_grid_min_known",
+            self.saved_grid_min_known,
+            (0.0..=1.0).contains(&self.saved_grid_min_known),
+            "must be in [0, 1]",
+        )?;
         let probabilities = [
             ("motion_gate_probability", self.motion_gate_probability),
             ("motion_inlier_probability", self.motion_inlier_probability),

@@ -91,10 +91,28 @@ fn run(args: Args) -> Result<()> {
         None => FastSlam::new(config, args.seed),
     }
     .context("slam configuration")?;
+    // The saved grid keeps the particles in the saved map's frame scan by scan (a map
+    // without one is extended from its corners alone).
+    let saved_grid = saved.as_ref().and_then(|saved| saved.grid.as_ref());
+    if let Some(grid) = saved_grid {
+        anyhow::ensure!(
+            grid.yaml.origin[2] == 0.0,
+            "cannot map on the map in {}: its grid is rotated (origin yaw {}), which is not supported",
+            args.map.as_deref().unwrap_or(Path::new("")).display(),
+            grid.yaml.origin[2]
+        );
+        slam = slam.with_saved_grid(grid);
+    }
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("slam-proc")?;
     let features = Inlet::open(&node, topic::FEATURES)?;
+    // The scans' beams, only for the saved grid.
+    let scans = match saved_grid {
+        Some(_) => Some(Inlet::open(&node, topic::SCAN)?),
+        None => None,
+    };
+    let mut held: VecDeque<HeldScan> = VecDeque::new();
     let delivery = features.delivery();
     let maps = Outlet::create(&domain, &node, topic::MAP, delivery, 1)?;
     let poses = Outlet::create(&domain, &node, topic::POSE, delivery, 0)?;
@@ -115,9 +133,17 @@ fn run(args: Args) -> Result<()> {
     let mut last_header = Header::new(0, 0, "map");
     // The most corners a map snapshot had to leave out (MAX_MAP_CORNERS fit in one).
     let mut left_out = 0u64;
+    // Woken by the scans too: their queue must not fill while the features wait for them.
+    let mut inlets: Vec<&dyn ipc_types::Wakeable> = vec![&features];
+    if let Some(scans) = &scans {
+        inlets.push(scans);
+    }
     loop {
-        if wait_any(&[&features], Duration::from_millis(100))? == Wake::Shutdown {
+        if wait_any(&inlets, Duration::from_millis(100))? == Wake::Shutdown {
             break;
+        }
+        if let Some(scans) = &scans {
+            hold_scans(scans, &mut held)?;
         }
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
@@ -127,6 +153,12 @@ fn run(args: Args) -> Result<()> {
                 say_err(&summary(&slam.stats()));
                 ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
                 return Ok(());
+            }
+            if let Some(scans) = &scans {
+                hold_scans(scans, &mut held)?;
+                let scan = wait_for_scan(scans, &mut held, sample.header.seq, delivery)?
+                    .map(HeldScan::ranges);
+                slam.set_scan(scan.as_ref());
             }
             observations.clear();
             observations.extend(sample.corners().iter().map(to_observation));
@@ -353,6 +385,18 @@ struct HeldScan {
     ranges: Vec<f32>,
 }
 
+impl HeldScan {
+    fn ranges(&self) -> ScanRanges<'_> {
+        ScanRanges {
+            angle_min: self.angle_min,
+            angle_increment: self.angle_increment,
+            range_min: self.range_min,
+            range_max: self.range_max,
+            ranges: &self.ranges,
+        }
+    }
+}
+
 /// Scans held at most: feature-proc is never further behind than its queues hold.
 const HELD_SCANS: usize = 256;
 /// How long a features message waits for its scan in lockstep, where the scan cannot be
@@ -422,32 +466,8 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
                 ]);
                 return Ok(());
             }
-            let seq = sample.header.seq;
-            // The scan goes to every subscriber in turn: feature-proc may have had it (and
-            // sent its features) before it reached this queue. In lockstep it is on its way;
-            // in real time it may have been lost, and waiting would only add latency.
-            let patience = match delivery {
-                Delivery::Lossless => SCAN_WAIT_LOCKSTEP,
-                Delivery::Latest => SCAN_WAIT_REAL_TIME,
-            };
-            let since = std::time::Instant::now();
-            while held.back().is_none_or(|s| s.seq < seq) && since.elapsed() < patience {
-                if shutdown::requested() {
-                    break;
-                }
-                wait_any(&[&scans], Duration::from_millis(10))?;
-                hold_scans(&scans, &mut held)?;
-            }
-            while held.front().is_some_and(|s| s.seq < seq) {
-                held.pop_front();
-            }
-            let scan = held.front().filter(|s| s.seq == seq).map(|s| ScanRanges {
-                angle_min: s.angle_min,
-                angle_increment: s.angle_increment,
-                range_min: s.range_min,
-                range_max: s.range_max,
-                ranges: &s.ranges,
-            });
+            let scan = wait_for_scan(&scans, &mut held, sample.header.seq, delivery)?
+                .map(HeldScan::ranges);
             // A first scan, or a source without a front end, brings no step: stand still.
             let motion = sample.motion().map_or(
                 MeasuredMotion {
@@ -490,6 +510,35 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
         ("scans_without_beams", localizer.stats().scans_without_beams),
     ]);
     Ok(())
+}
+
+/// The beams of scan `seq`, once they have come (the features of a scan can arrive before
+/// its beams), or `None` when they were lost; older held scans are dropped.
+fn wait_for_scan<'a>(
+    scans: &Inlet<LaserScan>,
+    held: &'a mut VecDeque<HeldScan>,
+    seq: u64,
+    delivery: Delivery,
+) -> Result<Option<&'a HeldScan>> {
+    // The scan goes to every subscriber in turn: feature-proc may have had it (and
+    // sent its features) before it reached this queue. In lockstep it is on its way;
+    // in real time it may have been lost, and waiting would only add latency.
+    let patience = match delivery {
+        Delivery::Lossless => SCAN_WAIT_LOCKSTEP,
+        Delivery::Latest => SCAN_WAIT_REAL_TIME,
+    };
+    let since = std::time::Instant::now();
+    while held.back().is_none_or(|s| s.seq < seq) && since.elapsed() < patience {
+        if shutdown::requested() {
+            break;
+        }
+        wait_any(&[scans], Duration::from_millis(10))?;
+        hold_scans(scans, held)?;
+    }
+    while held.front().is_some_and(|s| s.seq < seq) {
+        held.pop_front();
+    }
+    Ok(held.front().filter(|s| s.seq == seq))
 }
 
 /// Takes the scans that have come, keeping their beams for the features to come.

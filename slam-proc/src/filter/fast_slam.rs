@@ -20,6 +20,8 @@ use crate::filter::resample::{
     effective_sample_size, heaviest, log_sum_exp, normalise, systematic,
 };
 use crate::filter::rng::Streams;
+use crate::filter::saved_grid::SavedGrid;
+use crate::localize::localizer::ScanRanges;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
 use crate::motion::predict::{self, MotionNoise};
@@ -62,6 +64,10 @@ pub struct FastSlam {
     updates: u64,
     /// Resamplings so far.
     resamplings: u64,
+    /// The saved map's grid when mapping on top of it.
+    saved_grid: Option<SavedGrid>,
+    /// The path length at the last scan the saved grid judged, metres.
+    on_grid_at: f64,
 }
 
 /// What the filter did over a run, for its closing summary.
@@ -180,8 +186,28 @@ impl FastSlam {
             path_length: Vec::new(),
             updates: 0,
             resamplings: 0,
+            saved_grid: None,
+            on_grid_at: 0.0,
             config,
         })
+    }
+
+    /// The filter fitting its particles to the saved map's occupancy grid at every corner
+    /// update (`saved_grid_refine`, `saved_grid_weight`), with the beams given by
+    /// [`FastSlam::set_scan`]: mapping on top of a saved map stays in its frame.
+    pub fn with_saved_grid(mut self, grid: &map_sink::GridMap) -> Self {
+        self.saved_grid = Some(SavedGrid::new(grid, &self.config));
+        self
+    }
+
+    /// The beams of the scan the next [`FastSlam::process`] or
+    /// [`FastSlam::process_measured`] brings (`None`: they did not arrive); only a filter
+    /// with a saved grid reads them.
+    pub fn set_scan(&mut self, scan: Option<&ScanRanges<'_>>) {
+        let beams = self.config.saved_grid_beams;
+        if let Some(grid) = &mut self.saved_grid {
+            grid.set_scan(scan, beams);
+        }
     }
 
     pub fn config(&self) -> &SlamConfig {
@@ -382,6 +408,24 @@ impl FastSlam {
         let variance = std::mem::take(&mut self.since_update).noise;
         self.updates += 1;
         self.gates.ensure(prepared.len());
+        // The grid judges the scan only where the saved map has seen what the beams hit.
+        let best_pose = self.particles.get(self.best).map(|p| p.pose);
+        let judged = match (&mut self.saved_grid, best_pose) {
+            (Some(grid), Some(pose)) => grid.select_known(&pose, config.saved_grid_min_known),
+            _ => false,
+        };
+        let saved_grid = self.saved_grid.as_ref().filter(|_| judged);
+        // With the saved grid, a revisit's wide gate pairs the saved corners (all seen
+        // "long ago") wrongly, on the saved map and beside it; the grid closes the loops
+        // instead. Back on the grid after a stretch off it as long as
+        // `revisit_min_distance`, the particles may have drifted beyond the tracking climb's
+        // reach: they climb from the search's wider steps once.
+        let now = self.path_length.last().copied().unwrap_or(0.0);
+        let revisits = self.saved_grid.is_none() || !config.saved_grid_refine;
+        let returned = judged && now - self.on_grid_at >= config.revisit_min_distance;
+        if judged {
+            self.on_grid_at = now;
+        }
         let context = ScanContext {
             observations: &prepared,
             pose: PoseUncertainty::from_variances(
@@ -396,8 +440,14 @@ impl FastSlam {
             cos_half_fov: (0.5 * config.view_fov).cos(),
             scan: self.scans,
             path_length: &self.path_length,
+            revisits,
         };
         let (streams, scan) = (&self.streams, self.scans);
+        let (refine, pull, grid_weight) = (
+            config.saved_grid_refine,
+            config.saved_grid_pull,
+            config.saved_grid_weight,
+        );
         // Fixed chunks, each with its own scratch kept across scans: the buffers grow once,
         // not at every split of the work.
         let chunks = self.particles.len().div_ceil(PARTICLES_PER_TASK);
@@ -405,6 +455,18 @@ impl FastSlam {
         let update_chunk = |chunk: usize, (particles, scratch): (&mut [Particle], &mut Scratch)| {
             for (k, particle) in particles.iter_mut().enumerate() {
                 let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
+                if let Some(grid) = saved_grid {
+                    if refine {
+                        particle.pose = if returned {
+                            grid.search(particle.pose)
+                        } else {
+                            grid.refine(particle.pose, pull)
+                        };
+                    }
+                    if grid_weight > 0.0 {
+                        particle.log_weight += grid_weight * grid.log_likelihood(&particle.pose);
+                    }
+                }
                 particle.log_weight += particle.update(&context, scratch, &mut rng);
                 particle.path.push(
                     StampedPose {
@@ -438,6 +500,9 @@ impl FastSlam {
     /// and the ends of its motion estimate, prediction and update.
     fn finish(&mut self, times: [Instant; 4]) -> Estimate {
         let [start, motion_done, predict_done, update_done] = times;
+        if let Some(grid) = &mut self.saved_grid {
+            grid.clear_scan();
+        }
         let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
         let map_size = self
             .particles

@@ -8,3 +8,4 @@ pub(crate) mod observation;
 pub(crate) mod particle;
 pub(crate) mod resample;
 pub(crate) mod rng;
+pub(crate) mod saved_grid;

@@ -58,6 +58,8 @@ pub(crate) struct ScanContext<'a> {
     pub scan: u64,
     /// The path length of the motion at each scan so far, this one last, metres.
     pub path_length: &'a [f64],
+    /// Whether old corners may close a loop (a revisit) at this scan.
+    pub revisits: bool,
 }
 
 impl ScanContext<'_> {
@@ -356,7 +358,7 @@ impl Particle {
     ) -> Option<(PoseUncertainty, f64)> {
         let config = context.config;
         let now = *context.path_length.last()?;
-        if config.revisit_search_radius <= 0.0 {
+        if !context.revisits || config.revisit_search_radius <= 0.0 {
             return None;
         }
         let before = now - config.revisit_min_distance;
@@ -577,6 +579,7 @@ mod tests {
             cos_half_fov: (0.5 * config.view_fov).cos(),
             scan: 1,
             path_length: &[0.0, path_length],
+            revisits: true,
         };
         let mut particle = Particle {
             pose: predicted,

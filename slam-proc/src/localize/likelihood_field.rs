@@ -39,6 +39,8 @@ pub struct LikelihoodField {
     far_score: f64,
     /// Indices of the free cells, where a robot may stand.
     free: Vec<u32>,
+    /// Whether each cell was seen (free or occupied), row 0 the lowest y.
+    known: Vec<bool>,
 }
 
 impl LikelihoodField {
@@ -70,6 +72,11 @@ impl LikelihoodField {
             .filter(|(_, c)| **c == CellState::Free)
             .filter_map(|(i, _)| u32::try_from(i).ok())
             .collect();
+        let known = grid
+            .cells
+            .iter()
+            .map(|c| *c != CellState::Unknown)
+            .collect();
         Self {
             origin: [grid.yaml.origin[0], grid.yaml.origin[1]],
             resolution,
@@ -80,7 +87,15 @@ impl LikelihoodField {
             score,
             far_score: model.log_likelihood(max_distance),
             free,
+            known,
         }
+    }
+
+    /// Whether `(x, y)` (map frame) lies in a cell the grid saw, free or occupied: a beam
+    /// ending there can be judged by the field, one ending in unknown space cannot.
+    #[inline]
+    pub fn is_known(&self, x: f64, y: f64) -> bool {
+        self.index(x, y).is_some_and(|i| self.known[i])
     }
 
     /// Metres from `(x, y)` (map frame) to the nearest occupied cell; `max_distance` off

@@ -37,7 +37,7 @@ const REFINE_LEVELS: usize = 4;
 const REFINE_PASSES: usize = 3;
 
 /// The log-likelihood of beam ends `points` (sensor frame) seen from `pose`.
-fn scan_score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
+pub(crate) fn scan_score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
     let (s, c) = pose.yaw.sin_cos();
     points
         .iter()
@@ -45,14 +45,40 @@ fn scan_score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64
         .sum()
 }
 
+/// The first steps of a hill-climb on a scan's likelihood, metres and radians; each of
+/// `REFINE_LEVELS` levels halves them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct RefineSteps {
+    pub xy: f64,
+    pub yaw: f64,
+}
+
+/// The search's steps: wide enough to reach the true place from a particle spread at random
+/// near it.
+pub(crate) const SEARCH_STEPS: RefineSteps = RefineSteps {
+    xy: REFINE_STEP_XY,
+    yaw: REFINE_STEP_YAW,
+};
+
 /// `pose` moved uphill on the scan's likelihood, by steps that halve from
 /// `REFINE_STEP_XY` / `REFINE_STEP_YAW`: a particle spread at random lands at the best fit
 /// near it, so the true place is found with far fewer particles than would have to fall
 /// on it by chance (the grid's field is only centimetres wide around the walls).
 fn refine(field: &LikelihoodField, points: &[[f64; 2]], pose: Pose2) -> Pose2 {
+    refine_by(field, points, pose, SEARCH_STEPS)
+}
+
+/// `pose` moved uphill on the likelihood of beam ends `points` (sensor frame), by steps
+/// that start at `steps` and halve at each level.
+pub(crate) fn refine_by(
+    field: &LikelihoodField,
+    points: &[[f64; 2]],
+    pose: Pose2,
+    steps: RefineSteps,
+) -> Pose2 {
     let mut best = pose;
     let mut best_score = scan_score(field, points, &best);
-    let (mut step_xy, mut step_yaw) = (REFINE_STEP_XY, REFINE_STEP_YAW);
+    let (mut step_xy, mut step_yaw) = (steps.xy, steps.yaw);
     for _ in 0..REFINE_LEVELS {
         for _ in 0..REFINE_PASSES {
             let mut moved = false;
@@ -79,6 +105,38 @@ fn refine(field: &LikelihoodField, points: &[[f64; 2]], pose: Pose2) -> Pose2 {
         step_yaw *= 0.5;
     }
     best
+}
+
+/// Fills `points` with the ends (sensor frame) of at most `beams` of the scan's valid
+/// beams, spread evenly over them, the first and the last included; false when the scan
+/// has no valid beam.
+pub(crate) fn sample_beam_ends(
+    scan: &ScanRanges<'_>,
+    beams: usize,
+    points: &mut Vec<[f64; 2]>,
+) -> bool {
+    points.clear();
+    let valid: Vec<usize> = scan
+        .ranges
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| {
+            let r = f64::from(**r);
+            r.is_finite() && r >= scan.range_min && r <= scan.range_max
+        })
+        .map(|(i, _)| i)
+        .collect();
+    if valid.is_empty() {
+        return false;
+    }
+    let take = beams.min(valid.len());
+    for k in 0..take {
+        let i = valid[k * valid.len() / take];
+        let bearing = scan.angle_min + i as f64 * scan.angle_increment;
+        let r = f64::from(scan.ranges[i]);
+        points.push([r * bearing.cos(), r * bearing.sin()]);
+    }
+    true
 }
 
 /// Where the robot starts.
@@ -338,28 +396,9 @@ impl Localizer {
     /// Adds every particle's log-likelihood of the scan's beams; false when the scan has
     /// no valid beam.
     fn weigh(&mut self, scan: &ScanRanges<'_>) -> bool {
-        self.points.clear();
-        let valid: Vec<usize> = scan
-            .ranges
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| {
-                let r = f64::from(**r);
-                r.is_finite() && r >= scan.range_min && r <= scan.range_max
-            })
-            .map(|(i, _)| i)
-            .collect();
-        if valid.is_empty() {
+        if !sample_beam_ends(scan, self.config.beams, &mut self.points) {
             self.stats.scans_without_valid_beams += 1;
             return false;
-        }
-        let take = self.config.beams.min(valid.len());
-        for k in 0..take {
-            // Evenly over the valid beams, the first and the last included.
-            let i = valid[k * valid.len() / take];
-            let bearing = scan.angle_min + i as f64 * scan.angle_increment;
-            let r = f64::from(scan.ranges[i]);
-            self.points.push([r * bearing.cos(), r * bearing.sin()]);
         }
         let field = if self.converged {
             &self.field
