@@ -127,7 +127,7 @@ impl Particle {
         // uncertainty included, from the usual association: the same whether or not a
         // revisit then corrects the pose, so particles are compared on one footing.
         let mut pose = context.pose;
-        let mut revisit_from = None;
+        let mut revisit_ties = Vec::new();
         let mut association = self.associate(context, scratch, &pose, config.search_radius, None);
         let unexplained = scratch.world.len() - association.pairings;
         let log_likelihood =
@@ -148,14 +148,14 @@ impl Particle {
             if wide.pairings >= config.revisit_min_corners.max(association.pairings) {
                 association = wide;
                 pose = revisit;
-                revisit_from = scratch
+                revisit_ties = scratch
                     .jcbb
                     .assignment()
                     .iter()
                     .flatten()
                     .filter_map(|&index| self.map.get(scratch.pairings[index].corner))
-                    .map(|corner| corner.last_seen)
-                    .min();
+                    .filter_map(|corner| usize::try_from(corner.last_seen).ok())
+                    .collect();
             } else {
                 association = self.associate(context, scratch, &pose, config.search_radius, None);
             }
@@ -167,13 +167,8 @@ impl Particle {
         {
             let predicted = self.pose;
             self.pose = corrected;
-            self.closure = revisit_from
-                .and_then(|scan| usize::try_from(scan).ok())
-                .map(|from| Closure {
-                    from,
-                    drifted: predicted,
-                });
-            if let Some(closure) = self.closure {
+            self.closure = Closure::new(revisit_ties, predicted);
+            if let Some(closure) = self.closure.clone() {
                 self.reanchor_since(&closure, corrected);
             }
             // The step the next constant-velocity prior repeats takes the correction only
@@ -256,12 +251,14 @@ impl Particle {
         log_likelihood
     }
 
-    /// After a loop closed at `landed`: moves the corners mapped since `closure.from` as
-    /// the path that mapped them will be spread (see [`crate::path::particle_path`]), so the map stays the
-    /// one its path implies. Left as they were, the corners of the drifted stretch would
-    /// pull the particle back into its drift when it sees them again.
+    /// After a loop closed at `landed`: moves the corners mapped since the closure's drift
+    /// start as the path that mapped them will be spread (see
+    /// [`crate::path::particle_path`]), so the map stays the one its path implies. Left as
+    /// they were, the corners of the drifted stretch would pull the particle back into its
+    /// drift when it sees them again.
     fn reanchor_since(&mut self, closure: &Closure, landed: Pose2) {
-        let raw = self.path.since(closure.from);
+        let from = closure.drift_start();
+        let raw = self.path.since(from);
         if raw.is_empty() {
             return;
         }
@@ -270,12 +267,11 @@ impl Particle {
             stamp_ns: 0,
             pose: landed,
         });
-        let jump = Closure {
-            from: 0,
-            drifted: closure.drifted,
+        let Some(jump) = Closure::new(vec![0], closure.drifted) else {
+            return;
         };
         particle_path::spread(&mut spread, raw.len(), &jump);
-        let first = closure.from as u64;
+        let first = from as u64;
         self.map.reanchor(first..first + raw.len() as u64, |scan| {
             let i = usize::try_from(scan - first).ok()?;
             Some(spread.get(i)?.pose.compose(&raw.get(i)?.pose.inverse()))
@@ -646,13 +642,7 @@ mod tests {
         // The old corners were seen again: no longer old. The jump is kept for the path,
         // back to the scan that last saw them.
         assert!(closed.map.get(0).is_some_and(|c| c.last_seen == 1));
-        assert_eq!(
-            closed.closure,
-            Some(Closure {
-                from: 0,
-                drifted: predicted
-            })
-        );
+        assert_eq!(closed.closure, Closure::new(vec![0], predicted));
 
         // Without revisits, or with the corners seen only 5 m ago, the particle stays off.
         let no_revisits = SlamConfig {

@@ -19,13 +19,38 @@ use slam_geom::{Pose2, StampedPose, wrap_angle};
 use crate::path::pose_graph::{self, GraphNoise};
 
 /// A loop closed at a pose: the pose the particle had drifted to before the jump, and the
-/// first pose of the drift it undoes.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// poses that last saw the old corners it landed on.
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Closure {
-    /// Index in the path of the last pose that saw the old part of the map.
-    pub from: usize,
+    /// Indices in the path of the poses that last saw the old corners the revisit paired,
+    /// in increasing order, each once; never empty. Each ties its pose to the landed one:
+    /// both saw a corner where the map has it.
+    ties: Vec<usize>,
     /// The pose before the jump.
     pub drifted: Pose2,
+}
+
+impl Closure {
+    /// The closure of a jump from `drifted` onto old corners last seen at the path's
+    /// indices `ties` (in any order, repeats allowed); `None` without a tie.
+    pub fn new(mut ties: Vec<usize>, drifted: Pose2) -> Option<Self> {
+        ties.sort_unstable();
+        ties.dedup();
+        (!ties.is_empty()).then_some(Self { ties, drifted })
+    }
+
+    /// The poses tied to the landed one, earliest first.
+    pub fn ties(&self) -> &[usize] {
+        &self.ties
+    }
+
+    /// The first pose of the drift the jump undoes: the last that saw one of the old
+    /// corners. The poses before it saw corners that the landed pose finds where they
+    /// left them, so whatever they drifted the map drifted with them; a loop that an
+    /// earlier closure had pinned on its way is not bent again.
+    pub fn drift_start(&self) -> usize {
+        self.ties[self.ties.len() - 1]
+    }
 }
 
 #[derive(Debug)]
@@ -112,8 +137,8 @@ impl Path {
         let mut closures = Vec::new();
         let mut node = self.last.as_deref();
         while let Some(n) = node {
-            if let Some(closure) = n.closure {
-                closures.push((self.len - 1 - poses.len(), closure));
+            if let Some(closure) = &n.closure {
+                closures.push((self.len - 1 - poses.len(), closure.clone()));
             }
             poses.push(n.pose);
             node = n.previous.as_deref();
@@ -125,10 +150,11 @@ impl Path {
 }
 
 /// Spreads the jump at `poses[at]` (from `closure.drifted` to where it landed) over the poses
-/// from `closure.from` on: each step turns by its share of the rotation (its share of the
-/// path length), then each pose moves by its share of the translation left at the end.
+/// from the closure's drift start on: each step turns by its share of the rotation (its
+/// share of the path length), then each pose moves by its share of the translation left at
+/// the end.
 pub(crate) fn spread(poses: &mut [StampedPose], at: usize, closure: &Closure) {
-    let from = closure.from;
+    let from = closure.drift_start();
     if from >= at || at >= poses.len() {
         return;
     }
@@ -247,10 +273,7 @@ mod tests {
                 stamp_ns: 40,
                 pose: end,
             },
-            Some(Closure {
-                from: 0,
-                drifted: drifted[40],
-            }),
+            Closure::new(vec![0], drifted[40]),
         );
         let raw = path.poses();
         // Drift that grows with the path alone, as this loop's did.

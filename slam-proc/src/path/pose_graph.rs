@@ -1,20 +1,20 @@
-//! A path's loop closures solved jointly: the path is a chain of steps, each closure a
-//! constraint between two of its poses, and the smoothed path the least-squares fit of both
-//! (a pose graph). Solved as LAGO does for planar graphs: the headings first, a linear
-//! problem once the closures' heading offsets are unwrapped against the chain, then the
-//! positions, linear once the headings are fixed.
+//! A path's loop closures solved jointly: the path is a chain of steps, each closure ties
+//! its landed pose to every pose that last saw one of the old corners it landed on, and
+//! the smoothed path is the least-squares fit of both (a pose graph). Solved as LAGO does
+//! for planar graphs: the headings first, a linear problem once the ties' heading offsets
+//! are unwrapped against the chain, then the positions, linear once the headings are fixed.
 //!
-//! A chain with closures needs no sparse solver: the unknowns are the steps, each closure
+//! A chain with ties needs no sparse solver: the unknowns are the steps, each tie
 //! constrains the sum of the steps it spans, and the normal equations reduce to one small
-//! system over the closures (`S^T W^-1 S + C`, k x k for k closures, `S` their spans, `W`
-//! the steps' information, `C` the closures' variances), whose entry for two closures is the
-//! variance of the steps they share. The solution moves each step by its variance times the multipliers of
-//! the closures spanning it: a step that drifts more takes more of the correction, and a
-//! stretch that two loops share is bent only as far as both allow.
+//! system over the ties (`S^T W^-1 S + C`, k x k for k ties, `S` their spans, `W` the
+//! steps' information, `C` the ties' variances), whose entry for two ties is the variance
+//! of the steps they share. The solution moves each step by its variance times the
+//! multipliers of the ties spanning it: a step that drifts more takes more of the
+//! correction, and a stretch that two loops share is bent only as far as both allow.
 //!
-//! Spreading each jump back on its own (see [`crate::path::particle_path::spread`]) is this solution for one
-//! closure; with several, a later loop spread over a stretch an earlier one had pinned to
-//! the old map would undo it.
+//! Spreading each jump back on its own (see [`crate::path::particle_path::spread`]) is this
+//! solution for one closure with one tie; with several, a later loop spread over a stretch
+//! an earlier one had pinned to the old map would undo it.
 
 use nalgebra::{DMatrix, DVector};
 use slam_geom::{Pose2, wrap_angle};
@@ -48,8 +48,8 @@ const CLOSURE_SHARE: f64 = 1e-4;
 /// singular; this keeps it invertible and, next to any real step's, rigid.
 const MIN_STEP_VARIANCE: f64 = 1e-12;
 
-/// A closure in the graph: the poses it joins (`from < at`) and the measured motion between
-/// them.
+/// A tie in the graph: the poses it joins (`from < at`) and the motion between them as the
+/// map placed them.
 struct Constraint {
     from: usize,
     at: usize,
@@ -60,10 +60,9 @@ struct Constraint {
 /// `closures` with the index of the pose each landed at, in the order they closed.
 pub(crate) fn smooth(poses: &mut [StampedPose], closures: &[(usize, Closure)], noise: &GraphNoise) {
     let n = poses.len();
-    let closures: Vec<(usize, Closure)> = closures
+    let closures: Vec<&(usize, Closure)> = closures
         .iter()
-        .copied()
-        .filter(|&(at, c)| c.from < at && at < n)
+        .filter(|(at, c)| c.ties()[0] < *at && *at < n)
         .collect();
     if closures.is_empty() {
         return;
@@ -72,15 +71,22 @@ pub(crate) fn smooth(poses: &mut [StampedPose], closures: &[(usize, Closure)], n
     // from, as the map then placed that pose. A corner map is moved with each closure's
     // spread (`CornerMap::reanchor`), so a later closure found the corners of an earlier
     // drift where the earlier spread had put them.
+    // Each pose that last saw one of a closure's old corners is tied to the landed pose:
+    // the poses between two ties of one closure keep the shape the map gave them, and a
+    // later closure's correction goes to the stretch that drifted, not to a loop that an
+    // earlier closure had already pinned.
     let mut reference = poses.to_vec();
-    let mut constraints = Vec::with_capacity(closures.len());
+    let mut constraints = Vec::new();
     for &(at, closure) in &closures {
-        constraints.push(Constraint {
-            from: closure.from,
-            at,
-            between: reference[closure.from].pose.between(&reference[at].pose),
-        });
-        spread(&mut reference, at, &closure);
+        let at = *at;
+        for &from in closure.ties().iter().filter(|&&from| from < at) {
+            constraints.push(Constraint {
+                from,
+                at,
+                between: reference[from].pose.between(&reference[at].pose),
+            });
+        }
+        spread(&mut reference, at, closure);
     }
     // The chain's steps as the particle moved, without the jumps.
     let mut steps: Vec<Pose2> = poses
@@ -258,10 +264,10 @@ mod tests {
         let drifted = poses[20].pose;
         let landed = Pose2::new(0.0, 0.0, std::f64::consts::PI);
         poses[20].pose = landed;
-        let closure = Closure { from: 0, drifted };
+        let closure = Closure::new(vec![0], drifted).expect("a tie");
         let mut spread_alone = poses.clone();
         spread(&mut spread_alone, 20, &closure);
-        smooth(&mut poses, &[(20, closure)], &NOISE);
+        smooth(&mut poses, &[(20, closure.clone())], &NOISE);
         assert_eq!(poses[0].pose, Pose2::IDENTITY);
         // The closure holds (its variance is tiny next to the chain's)...
         let end = poses[20].pose;
@@ -286,10 +292,7 @@ mod tests {
             .enumerate()
             .map(|(i, &p)| path_pose(i, p))
             .collect();
-        let first = Closure {
-            from: 2,
-            drifted: raw[20],
-        };
+        let first = Closure::new(vec![2], raw[20]).expect("a tie");
         poses[20].pose = line(raw[2], 18.0);
         for i in 21..=30 {
             let step = raw[i - 1].between(&raw[i]);
@@ -297,16 +300,13 @@ mod tests {
         }
         let mut settled = poses.clone();
         spread(&mut settled, 20, &first);
-        let second = Closure {
-            from: 10,
-            drifted: poses[30].pose,
-        };
+        let second = Closure::new(vec![10], poses[30].pose).expect("a tie");
         poses[30].pose = line(settled[10].pose, 20.0);
         let closures = [(20, first), (30, second)];
 
         let mut sequential = poses.clone();
-        for &(at, closure) in &closures {
-            spread(&mut sequential, at, &closure);
+        for (at, closure) in &closures {
+            spread(&mut sequential, *at, closure);
         }
         let mut joint = poses.clone();
         smooth(&mut joint, &closures, &NOISE);
@@ -334,6 +334,57 @@ mod tests {
     }
 
     #[test]
+    fn the_stretch_between_a_closures_ties_keeps_the_shape_the_map_gave_it() {
+        // A line of 30 one-metre steps, straight up to pose 18 and drifting by 0.02 rad a
+        // step after it. At pose 30 the robot lands on corners last seen from poses 5 and
+        // 18: the drift grew after 18, and the poses before it stay where they were.
+        let mut raw = drifted_line(18, 0.0);
+        for _ in 18..30 {
+            let last = raw[raw.len() - 1];
+            raw.push(last.compose(&Pose2::new(1.0, 0.0, 0.02)));
+        }
+        let mut poses: Vec<StampedPose> = raw
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| path_pose(i, p))
+            .collect();
+        let landed = Pose2::new(30.0, 0.0, 0.0);
+        poses[30].pose = landed;
+        let closure = Closure::new(vec![18, 5, 18], raw[30]).expect("ties");
+        assert_eq!((closure.ties(), closure.drift_start()), (&[5, 18][..], 18));
+
+        // Tied to pose 5 alone, the closure would bend the straight stretch as well.
+        let mut tied_to_the_first = poses.clone();
+        let first = Closure::new(vec![5], raw[30]).expect("a tie");
+        smooth(&mut tied_to_the_first, &[(30, first)], &NOISE);
+        let bent = tied_to_the_first[18]
+            .pose
+            .between(&raw[18])
+            .translation_norm();
+        assert!(bent > 0.02, "{bent}");
+
+        let mut spread_alone = poses.clone();
+        spread(&mut spread_alone, 30, &closure);
+        smooth(&mut poses, &[(30, closure)], &NOISE);
+        for solved in [&poses, &spread_alone] {
+            for (i, pose) in solved.iter().enumerate().take(19) {
+                let moved = pose.pose.between(&raw[i]).translation_norm();
+                assert!(moved < 1e-3, "{i} {moved}");
+            }
+            let end = solved[30].pose.between(&landed);
+            assert!(
+                end.translation_norm() < 1e-3 && end.yaw.abs() < 1e-4,
+                "{end:?}"
+            );
+            assert!(
+                solved
+                    .windows(2)
+                    .all(|w| (w[0].pose.between(&w[1].pose).translation_norm() - 1.0).abs() < 0.05)
+            );
+        }
+    }
+
+    #[test]
     fn no_closures_leave_the_path_as_it_is() {
         let raw: Vec<StampedPose> = drifted_line(5, 0.1)
             .into_iter()
@@ -344,11 +395,8 @@ mod tests {
         smooth(&mut poses, &[], &NOISE);
         assert_eq!(poses, raw);
         // A closure that points outside the path is ignored, not a panic.
-        let stray = Closure {
-            from: 3,
-            drifted: Pose2::IDENTITY,
-        };
-        smooth(&mut poses, &[(2, stray), (9, stray)], &NOISE);
+        let stray = Closure::new(vec![3], Pose2::IDENTITY).expect("a tie");
+        smooth(&mut poses, &[(2, stray.clone()), (9, stray)], &NOISE);
         assert_eq!(poses, raw);
     }
 }
