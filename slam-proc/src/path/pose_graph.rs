@@ -44,6 +44,13 @@ pub(crate) struct GraphNoise {
 /// same span would make the system singular.
 const CLOSURE_SHARE: f64 = 1e-4;
 
+/// A closure that another one follows within this much path (metres) is its first landing,
+/// which the second corrected: the map put the robot where the second landed. Both kept as
+/// ties, the two landings would disagree by the correction, and the stretch between the two
+/// closures' ties (hundreds of metres long, where a short stretch between the landings is
+/// what moved) would bend to make them agree.
+const RELANDING_M: f64 = 2.0;
+
 /// A step of a stopped robot has no drift, but a variance of zero would make the solve
 /// singular; this keeps it invertible and, next to any real step's, rigid.
 const MIN_STEP_VARIANCE: f64 = 1e-12;
@@ -67,24 +74,28 @@ pub(crate) fn smooth(poses: &mut [StampedPose], closures: &[(usize, Closure)], n
     if closures.is_empty() {
         return;
     }
-    // What each closure measured: its landed pose relative to the pose it was recognised
-    // from, as the map then placed that pose. A corner map is moved with each closure's
-    // spread (`CornerMap::reanchor`), so a later closure found the corners of an earlier
-    // drift where the earlier spread had put them.
-    // Each pose that last saw one of a closure's old corners is tied to the landed pose:
-    // the poses between two ties of one closure keep the shape the map gave them, and a
-    // later closure's correction goes to the stretch that drifted, not to a loop that an
-    // earlier closure had already pinned.
+    // What each closure measured: its landed pose relative to each pose that last saw one
+    // of its old corners (its ties), as the map then placed that pose. The poses between
+    // two ties of one closure keep the shape the map gave them, and a later closure's
+    // correction goes to the stretch that drifted, not to a loop an earlier closure had
+    // already pinned. A corner map is moved with each closure's spread
+    // (`CornerMap::reanchor`), so a later closure found the corners of an earlier drift
+    // where the earlier spread had put them.
     let mut reference = poses.to_vec();
     let mut constraints = Vec::new();
-    for &(at, closure) in &closures {
+    for (i, &(at, closure)) in closures.iter().enumerate() {
         let at = *at;
-        for &from in closure.ties().iter().filter(|&&from| from < at) {
-            constraints.push(Constraint {
-                from,
-                at,
-                between: reference[from].pose.between(&reference[at].pose),
-            });
+        let relanded = closures
+            .get(i + 1)
+            .is_some_and(|&(next, _)| path_length(&poses[at..*next]) < RELANDING_M);
+        if !relanded {
+            for &from in closure.ties().iter().filter(|&&from| from < at) {
+                constraints.push(Constraint {
+                    from,
+                    at,
+                    between: reference[from].pose.between(&reference[at].pose),
+                });
+            }
         }
         spread(&mut reference, at, closure);
     }
@@ -155,6 +166,14 @@ pub(crate) fn smooth(poses: &mut [StampedPose], closures: &[(usize, Closure)], n
         y[i] = y[i - 1] + turned[i - 1].1 + shifts[1][i - 1];
         pose.pose = Pose2::new(x[i], y[i], wrap_angle(yaw[i]));
     }
+}
+
+/// The length of the path through `poses`, metres.
+fn path_length(poses: &[StampedPose]) -> f64 {
+    poses
+        .windows(2)
+        .map(|w| w[0].pose.between(&w[1].pose).translation_norm())
+        .sum()
 }
 
 /// `(x, y)` turned by `yaw`.
@@ -237,12 +256,25 @@ mod tests {
 
     /// A straight line along x, one metre a step, whose steps carry `bias` of extra turn.
     fn drifted_line(steps: usize, bias: f64) -> Vec<Pose2> {
+        line_drifting_after(0, steps, bias)
+    }
+
+    /// `steps` one-metre steps along x, those after pose `straight` turning by `bias`.
+    fn line_drifting_after(straight: usize, steps: usize, bias: f64) -> Vec<Pose2> {
         let mut poses = vec![Pose2::IDENTITY];
         for i in 1..=steps {
             let last = poses[i - 1];
-            poses.push(last.compose(&Pose2::new(1.0, 0.0, bias)));
+            let turn = if i > straight { bias } else { 0.0 };
+            poses.push(last.compose(&Pose2::new(1.0, 0.0, turn)));
         }
         poses
+    }
+
+    fn path_poses(raw: &[Pose2]) -> Vec<StampedPose> {
+        raw.iter()
+            .enumerate()
+            .map(|(i, &p)| path_pose(i, p))
+            .collect()
     }
 
     #[test]
@@ -287,11 +319,7 @@ mod tests {
         // spread had settled.
         let raw = drifted_line(30, 0.005);
         let line = |from: Pose2, metres: f64| from.compose(&Pose2::new(metres, 0.0, 0.0));
-        let mut poses: Vec<StampedPose> = raw
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| path_pose(i, p))
-            .collect();
+        let mut poses = path_poses(&raw);
         let first = Closure::new(vec![2], raw[20]).expect("a tie");
         poses[20].pose = line(raw[2], 18.0);
         for i in 21..=30 {
@@ -338,16 +366,8 @@ mod tests {
         // A line of 30 one-metre steps, straight up to pose 18 and drifting by 0.02 rad a
         // step after it. At pose 30 the robot lands on corners last seen from poses 5 and
         // 18: the drift grew after 18, and the poses before it stay where they were.
-        let mut raw = drifted_line(18, 0.0);
-        for _ in 18..30 {
-            let last = raw[raw.len() - 1];
-            raw.push(last.compose(&Pose2::new(1.0, 0.0, 0.02)));
-        }
-        let mut poses: Vec<StampedPose> = raw
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| path_pose(i, p))
-            .collect();
+        let raw = line_drifting_after(18, 30, 0.02);
+        let mut poses = path_poses(&raw);
         let landed = Pose2::new(30.0, 0.0, 0.0);
         poses[30].pose = landed;
         let closure = Closure::new(vec![18, 5, 18], raw[30]).expect("ties");
@@ -385,12 +405,37 @@ mod tests {
     }
 
     #[test]
+    fn a_landing_corrected_a_metre_later_leaves_the_loop_to_the_second() {
+        // A straight line of 40 one-metre steps whose heading drifted by 0.002 rad a step
+        // after pose 20. At pose 30 a revisit lands the robot on corners last seen from
+        // pose 10, half a metre to the side of where it is; a metre on, another lands it
+        // on corners last seen from pose 5, on the line. The second corrected the first;
+        // kept as a tie, the first would bend the five steps between poses 5 and 10 by
+        // most of the half metre.
+        let raw = line_drifting_after(20, 40, 0.002);
+        let mut poses = path_poses(&raw);
+        let first = Closure::new(vec![10], raw[30]).expect("a tie");
+        poses[30].pose = Pose2::new(30.0, 0.5, 0.0);
+        let drifted = poses[30].pose.compose(&raw[30].between(&raw[31]));
+        let second = Closure::new(vec![5], drifted).expect("a tie");
+        poses[31].pose = Pose2::new(31.0, 0.0, 0.0);
+        for i in 32..=40 {
+            poses[i].pose = poses[i - 1].pose.compose(&raw[i - 1].between(&raw[i]));
+        }
+        smooth(&mut poses, &[(30, first), (31, second)], &NOISE);
+        // The straight stretch bends only by its share of the drift...
+        for (i, pose) in poses.iter().enumerate().take(21) {
+            let off = pose.pose.between(&raw[i]).translation_norm();
+            assert!(off < 0.05, "{i} {off}");
+        }
+        // ...and the second landing holds.
+        let end = poses[31].pose.between(&Pose2::new(31.0, 0.0, 0.0));
+        assert!(end.translation_norm() < 1e-3, "{end:?}");
+    }
+
+    #[test]
     fn no_closures_leave_the_path_as_it_is() {
-        let raw: Vec<StampedPose> = drifted_line(5, 0.1)
-            .into_iter()
-            .enumerate()
-            .map(|(i, p)| path_pose(i, p))
-            .collect();
+        let raw = path_poses(&drifted_line(5, 0.1));
         let mut poses = raw.clone();
         smooth(&mut poses, &[], &NOISE);
         assert_eq!(poses, raw);
