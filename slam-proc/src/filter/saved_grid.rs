@@ -3,19 +3,19 @@
 //! stays in the saved map's frame between corner sightings.
 
 use crate::config::SlamConfig;
+use crate::localize::hill_climb::{HillClimb, scan_score};
 use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
-use crate::localize::localizer::{
-    RefineSteps, SEARCH_STEPS, ScanRanges, refine_by, sample_beam_ends, scan_score,
-};
+use crate::localize::localizer::{ScanRanges, sample_beam_ends};
 use map_sink::GridMap;
 use slam_geom::{Pose2, wrap_angle};
 
-/// The hill-climb's first steps: a particle is at most a few centimetres and a fraction of
+/// The hill-climb from smaller first steps: a particle is at most a few centimetres and a fraction of
 /// a degree off the grid after one corner update's worth of the front end's drift (half a
 /// metre of path), so the search's wide steps would only risk a neighbouring wall.
-const TRACKING_STEPS: RefineSteps = RefineSteps {
+const TRACKING: HillClimb = HillClimb {
     xy: 0.05,
     yaw: 0.02,
+    ..HillClimb::SEARCH
 };
 
 /// The saved grid's field and this scan's beam ends that fall on it.
@@ -69,7 +69,7 @@ impl SavedGrid {
 
     /// `pose` moved `pull` of the way uphill on the selected beams' likelihood.
     pub fn refine(&self, pose: Pose2, pull: f64) -> Pose2 {
-        let fit = refine_by(&self.field, &self.known, pose, TRACKING_STEPS);
+        let fit = TRACKING.climb(&self.field, &self.known, pose);
         Pose2::new(
             pose.x + pull * (fit.x - pose.x),
             pose.y + pull * (fit.y - pose.y),
@@ -80,7 +80,7 @@ impl SavedGrid {
 
     /// `pose` moved to the best fit uphill from it, by the localizer's search steps.
     pub fn search(&self, pose: Pose2) -> Pose2 {
-        refine_by(&self.field, &self.known, pose, SEARCH_STEPS)
+        HillClimb::SEARCH.climb(&self.field, &self.known, pose)
     }
 
     /// The selected beams' log-likelihood from `pose`.

@@ -16,6 +16,7 @@ use crate::filter::estimate::{Estimate, weighted_mean_and_covariance};
 use crate::filter::observation::MeasuredMotion;
 use crate::filter::resample::{effective_sample_size, heaviest, normalise};
 use crate::filter::rng::Streams;
+use crate::localize::hill_climb::{HillClimb, scan_score};
 use crate::localize::kld::{Bins, kld_count};
 use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
 use crate::localize_config::LocalizeConfig;
@@ -27,85 +28,8 @@ use stage_kit::SettingError;
 /// Bisection steps of the tempering exponent: 2^-12 of `beam_exponent` is fine enough.
 const TEMPERING_STEPS: usize = 12;
 
-/// Particles per parallel task of the refinement.
-const REFINE_PARTICLES_PER_TASK: usize = 256;
-/// The refinement's first steps, metres and radians; each level halves them.
-const REFINE_STEP_XY: f64 = 0.2;
-const REFINE_STEP_YAW: f64 = 0.1;
-const REFINE_LEVELS: usize = 4;
-/// Passes over the six moves at one level, at most.
-const REFINE_PASSES: usize = 3;
-
-/// The log-likelihood of beam ends `points` (sensor frame) seen from `pose`.
-pub(crate) fn scan_score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
-    let (s, c) = pose.yaw.sin_cos();
-    points
-        .iter()
-        .map(|[px, py]| field.score(pose.x + c * px - s * py, pose.y + s * px + c * py))
-        .sum()
-}
-
-/// The first steps of a hill-climb on a scan's likelihood, metres and radians; each of
-/// `REFINE_LEVELS` levels halves them.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct RefineSteps {
-    pub xy: f64,
-    pub yaw: f64,
-}
-
-/// The search's steps: wide enough to reach the true place from a particle spread at random
-/// near it.
-pub(crate) const SEARCH_STEPS: RefineSteps = RefineSteps {
-    xy: REFINE_STEP_XY,
-    yaw: REFINE_STEP_YAW,
-};
-
-/// `pose` moved uphill on the scan's likelihood, by steps that halve from
-/// `REFINE_STEP_XY` / `REFINE_STEP_YAW`: a particle spread at random lands at the best fit
-/// near it, so the true place is found with far fewer particles than would have to fall
-/// on it by chance (the grid's field is only centimetres wide around the walls).
-fn refine(field: &LikelihoodField, points: &[[f64; 2]], pose: Pose2) -> Pose2 {
-    refine_by(field, points, pose, SEARCH_STEPS)
-}
-
-/// `pose` moved uphill on the likelihood of beam ends `points` (sensor frame), by steps
-/// that start at `steps` and halve at each level.
-pub(crate) fn refine_by(
-    field: &LikelihoodField,
-    points: &[[f64; 2]],
-    pose: Pose2,
-    steps: RefineSteps,
-) -> Pose2 {
-    let mut best = pose;
-    let mut best_score = scan_score(field, points, &best);
-    let (mut step_xy, mut step_yaw) = (steps.xy, steps.yaw);
-    for _ in 0..REFINE_LEVELS {
-        for _ in 0..REFINE_PASSES {
-            let mut moved = false;
-            for (dx, dy, dyaw) in [
-                (step_xy, 0.0, 0.0),
-                (-step_xy, 0.0, 0.0),
-                (0.0, step_xy, 0.0),
-                (0.0, -step_xy, 0.0),
-                (0.0, 0.0, step_yaw),
-                (0.0, 0.0, -step_yaw),
-            ] {
-                let candidate = Pose2::new(best.x + dx, best.y + dy, best.yaw + dyaw);
-                let score = scan_score(field, points, &candidate);
-                if score > best_score {
-                    (best, best_score) = (candidate, score);
-                    moved = true;
-                }
-            }
-            if !moved {
-                break;
-            }
-        }
-        step_xy *= 0.5;
-        step_yaw *= 0.5;
-    }
-    best
-}
+/// Particles per parallel task of the hill-climb.
+const CLIMB_PARTICLES_PER_TASK: usize = 256;
 
 /// Fills `points` with the ends (sensor frame) of at most `beams` of the scan's valid
 /// beams, spread evenly over them, the first and the last included; false when the scan
@@ -411,8 +335,8 @@ impl Localizer {
             let coarse: Vec<[f64; 2]> = points.iter().step_by(stride).copied().collect();
             self.poses
                 .par_iter_mut()
-                .with_min_len(REFINE_PARTICLES_PER_TASK)
-                .for_each(|pose| *pose = refine(field, &coarse, *pose));
+                .with_min_len(CLIMB_PARTICLES_PER_TASK)
+                .for_each(|pose| *pose = HillClimb::SEARCH.climb(field, &coarse, *pose));
         }
         self.scan_log_likelihoods.clear();
         for pose in &self.poses {

@@ -1,6 +1,7 @@
 //! Localization on a saved map: Monte Carlo localization over its likelihood field, and the
 //! start pose given on the command line.
 
+pub(crate) mod hill_climb;
 pub(crate) mod kld;
 pub(crate) mod likelihood_field;
 pub(crate) mod localizer;
