@@ -28,6 +28,16 @@ fn mean(stats: Option<slam_eval::ErrorStats>) -> f64 {
         .mean
 }
 
+/// The mean translational error of `estimate`, asserted positive and at most `bound`.
+fn translation_within(estimate: &slam_eval::ScoreSummary, bound: f64) -> f64 {
+    let translation = mean(estimate.translation_m);
+    assert!(
+        translation > 0.0 && translation <= bound,
+        "mean translational error {translation} m > {bound} m: {estimate:?}"
+    );
+    translation
+}
+
 #[test]
 fn mit_csail_is_scored_against_the_relations_beside_it() {
     let log = test_data::carmen_log("mit-csail");
@@ -64,11 +74,7 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
     // counted, not scored.
     assert!((150..=300).contains(&estimate.used), "{estimate:?}");
     assert_eq!(estimate.used + estimate.unmatched, estimate.relations);
-    let translation = mean(estimate.translation_m);
-    assert!(
-        translation > 0.0 && translation <= MIT_CSAIL_400_MAX_TRANSLATION_M,
-        "mean translational error {translation} m > {MIT_CSAIL_400_MAX_TRANSLATION_M} m: {estimate:?}"
-    );
+    let translation = translation_within(&estimate, MIT_CSAIL_400_MAX_TRANSLATION_M);
     assert!(mean(estimate.rotation_deg) > 0.0);
     // The front end's own estimate is scored over the same relations.
     let used = |score: Option<slam_eval::ScoreSummary>| score.map(|s| s.used);
@@ -111,11 +117,7 @@ fn aces_closes_its_overlapping_loops_together() {
         .and_then(|rpe| rpe.trajectory)
         .expect("metrics.json scores trajectory.tum");
     assert_eq!(estimate.used, 1279, "{estimate:?}");
-    let translation = mean(estimate.translation_m);
-    assert!(
-        translation > 0.0 && translation <= ACES_MAX_TRANSLATION_M,
-        "mean translational error {translation} m > {ACES_MAX_TRANSLATION_M} m: {estimate:?}"
-    );
+    translation_within(&estimate, ACES_MAX_TRANSLATION_M);
     assert!(shm_leftovers(&domain).is_empty());
 }
 
@@ -162,11 +164,7 @@ fn a_loop_that_drifted_late_is_closed_without_bending_the_run() {
     // Both scans of a relation survive the cut for a few dozen of them, most a minute or
     // more apart: the loops' relations.
     assert!(estimate.used >= 20, "{estimate:?}");
-    let translation = mean(estimate.translation_m);
-    assert!(
-        translation > 0.0 && translation <= MIT_CSAIL_THIRD_RATE_MAX_TRANSLATION_M,
-        "mean translational error {translation} m > {MIT_CSAIL_THIRD_RATE_MAX_TRANSLATION_M} m: {estimate:?}"
-    );
+    translation_within(&estimate, MIT_CSAIL_THIRD_RATE_MAX_TRANSLATION_M);
     assert!(shm_leftovers(&domain).is_empty());
 }
 
