@@ -46,7 +46,8 @@ pub struct LocalizeConfig {
     pub refine_beam_stride: usize,
     /// Distance at which the field stops growing, metres.
     pub max_distance: f64,
-    /// The scans weight the particles once the robot has moved this far, metres, ...
+    /// The scans weight the particles once the robot is this far from where they last did,
+    /// metres, ...
     pub update_min_distance: f64,
     /// ... or turned this much, radians, since they last did.
     pub update_min_rotation: f64,

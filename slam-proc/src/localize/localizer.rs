@@ -126,9 +126,10 @@ pub struct Localizer {
     poses: Vec<Pose2>,
     log_weights: Vec<f64>,
     weights: Vec<f64>,
-    /// Path length and rotation since the beams last weighted the particles.
-    since_distance: f64,
-    since_rotation: f64,
+    /// The front end's motion since the beams last weighted the particles, as one step:
+    /// the net motion, so that a standing robot's scan-matching jitter, millimetres back
+    /// and forth, never adds up to a move (AMCL measures its odometry the same way).
+    since_weighted: Pose2,
     dead_reckoning: Pose2,
     /// This scan's beam ends in the sensor frame.
     points: Vec<[f64; 2]>,
@@ -208,8 +209,7 @@ impl Localizer {
             streams,
             log_weights: vec![0.0; n],
             weights: Vec::new(),
-            since_distance: 0.0,
-            since_rotation: 0.0,
+            since_weighted: Pose2::IDENTITY,
             dead_reckoning: Pose2::IDENTITY,
             points: Vec::new(),
             scan_log_likelihoods: Vec::new(),
@@ -257,13 +257,12 @@ impl Localizer {
         if !first {
             self.predict(&delta);
         }
-        self.since_distance += delta.translation_norm();
-        self.since_rotation += delta.yaw.abs();
+        self.since_weighted = self.since_weighted.compose(&delta);
         let predict_done = Instant::now();
 
         let due = first
-            || self.since_distance >= self.config.update_min_distance
-            || self.since_rotation >= self.config.update_min_rotation;
+            || self.since_weighted.translation_norm() >= self.config.update_min_distance
+            || self.since_weighted.yaw.abs() >= self.config.update_min_rotation;
         let weighted = match scan {
             Some(scan) if due => self.weigh(scan),
             Some(_) => false,
@@ -274,8 +273,7 @@ impl Localizer {
         };
         let update_done = Instant::now();
         if weighted {
-            self.since_distance = 0.0;
-            self.since_rotation = 0.0;
+            self.since_weighted = Pose2::IDENTITY;
         }
         // Between weightings the statistics are those of the cloud as it moved.
         let (best, mean, covariance, effective) = self.summarise_and_resample(weighted);
