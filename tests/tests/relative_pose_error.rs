@@ -20,12 +20,22 @@ const ACES_MAX_TRANSLATION_M: f64 = 0.060;
 /// minute apart decimetres off (0.28-0.32 m over seeds 1-3); held to the stretch that
 /// drifted, a tenth of that.
 const MIT_CSAIL_THIRD_RATE_MAX_TRANSLATION_M: f64 = 0.1;
+/// The seed and particle count the bounds were measured with.
+const SEED_1_100_PARTICLES: [&str; 4] = ["--seed", "1", "--particles", "100"];
 
 /// The mean of one error of a score that used some relations.
 fn mean(stats: Option<slam_eval::ErrorStats>) -> f64 {
     stats
         .expect("a score over some relations has statistics")
         .mean
+}
+
+/// The score of a run's `trajectory.tum` against the relations, from its `metrics.json`.
+fn trajectory_score(out: &std::path::Path) -> slam_eval::ScoreSummary {
+    metrics(out)
+        .relative_pose_error
+        .and_then(|rpe| rpe.trajectory)
+        .expect("metrics.json scores trajectory.tum")
 }
 
 /// The mean translational error of `estimate`, asserted positive and at most `bound`.
@@ -51,15 +61,10 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
         "mit-csail-rpe",
         &log,
         &[
-            "--format",
-            "carmen",
-            "--frames",
-            FRAMES,
-            "--seed",
-            "1",
-            "--particles",
-            "100",
-        ],
+            &["--format", "carmen", "--frames", FRAMES][..],
+            &SEED_1_100_PARTICLES,
+        ]
+        .concat(),
     );
     let metrics = metrics(&out);
     assert_eq!(metrics.frames_processed, 400);
@@ -102,7 +107,7 @@ fn aces_closes_its_overlapping_loops_together() {
         domain,
         out,
         output,
-    } = replayed("aces-rpe", &log, &["--seed", "1", "--particles", "100"]);
+    } = replayed("aces-rpe", &log, &SEED_1_100_PARTICLES);
     // slam-proc's summary block, on the console's stderr.
     let stderr = String::from_utf8_lossy(&output.stderr);
     let closed = stderr
@@ -112,10 +117,7 @@ fn aces_closes_its_overlapping_loops_together() {
         .and_then(|count| count.parse::<u32>().ok())
         .unwrap_or_else(|| panic!("no count of loops closed in {stderr}"));
     assert!(closed >= 2, "{closed} loops closed: {stderr}");
-    let estimate = metrics(&out)
-        .relative_pose_error
-        .and_then(|rpe| rpe.trajectory)
-        .expect("metrics.json scores trajectory.tum");
+    let estimate = trajectory_score(&out);
     assert_eq!(estimate.used, 1279, "{estimate:?}");
     translation_within(&estimate, ACES_MAX_TRANSLATION_M);
     assert!(shm_leftovers(&domain).is_empty());
@@ -147,20 +149,13 @@ fn a_loop_that_drifted_late_is_closed_without_bending_the_run() {
         "mit-csail-third-rate",
         &log,
         &[
-            "--relations",
-            relations.to_str().unwrap(),
-            "--seed",
-            "1",
-            "--particles",
-            "100",
-        ],
+            &["--relations", relations.to_str().unwrap()][..],
+            &SEED_1_100_PARTICLES,
+        ]
+        .concat(),
     );
-    let metrics = metrics(&out);
-    assert_eq!(metrics.frames_processed, 663);
-    let estimate = metrics
-        .relative_pose_error
-        .and_then(|rpe| rpe.trajectory)
-        .expect("metrics.json scores trajectory.tum");
+    assert_eq!(metrics(&out).frames_processed, 663);
+    let estimate = trajectory_score(&out);
     // Both scans of a relation survive the cut for a few dozen of them, most a minute or
     // more apart: the loops' relations.
     assert!(estimate.used >= 20, "{estimate:?}");

@@ -354,11 +354,7 @@ mod tests {
             missed(&sequential, 2, 20)
         );
         // No step jumps: each stays within centimetres of a metre.
-        assert!(
-            joint
-                .windows(2)
-                .all(|w| { (w[0].pose.between(&w[1].pose).translation_norm() - 1.0).abs() < 0.02 })
-        );
+        assert!(crate::path::steps_are_a_metre(&joint, 0.02));
     }
 
     #[test]
@@ -396,11 +392,7 @@ mod tests {
                 end.translation_norm() < 1e-3 && end.yaw.abs() < 1e-4,
                 "{end:?}"
             );
-            assert!(
-                solved
-                    .windows(2)
-                    .all(|w| (w[0].pose.between(&w[1].pose).translation_norm() - 1.0).abs() < 0.05)
-            );
+            assert!(crate::path::steps_are_a_metre(solved, 0.05));
         }
     }
 
