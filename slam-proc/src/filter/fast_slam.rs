@@ -25,6 +25,7 @@ use crate::localize::localizer::ScanRanges;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
 use crate::motion::predict::{self, MotionNoise};
+use crate::update::drift::revisit_covariance;
 use slam_geom::Pose2;
 use slam_geom::StampedPose;
 use stage_kit::SettingError;
@@ -419,10 +420,13 @@ impl FastSlam {
         // "long ago") wrongly, on the saved map and beside it; the grid closes the loops
         // instead. Back on the grid after a stretch off it as long as
         // `revisit_min_distance`, the particles may have drifted beyond the tracking climb's
-        // reach: they climb from the search's wider steps once.
+        // reach: they climb from the search's wider steps once, as far as the front end can
+        // have drifted over that stretch (the revisits' allowance).
         let now = self.path_length.last().copied().unwrap_or(0.0);
         let revisits = self.saved_grid.is_none() || !config.saved_grid_refine;
-        let returned = judged && now - self.on_grid_at >= config.revisit_min_distance;
+        let off_grid = now - self.on_grid_at;
+        let returned = judged && off_grid >= config.revisit_min_distance;
+        let drift = revisit_covariance(off_grid, config);
         if judged {
             self.on_grid_at = now;
         }
@@ -458,7 +462,7 @@ impl FastSlam {
                 if let Some(grid) = saved_grid {
                     if refine {
                         particle.pose = if returned {
-                            grid.search(particle.pose)
+                            grid.search(particle.pose, &drift, pull)
                         } else {
                             grid.refine(particle.pose, pull)
                         };
