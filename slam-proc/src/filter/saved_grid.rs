@@ -188,6 +188,17 @@ mod tests {
             .collect()
     }
 
+    /// The ranges of [`scan_from`] as the scan they are.
+    fn room_scan(ranges: &[f32]) -> ScanRanges<'_> {
+        ScanRanges {
+            angle_min: -std::f64::consts::PI,
+            angle_increment: 1f64.to_radians(),
+            range_min: 0.1,
+            range_max: 30.0,
+            ranges,
+        }
+    }
+
     /// Drives 7 m along the room with a front end that overstates every step by 5 % and
     /// turns 0.004 rad a step that the robot does not; returns the best particle's last
     /// pose and the truth.
@@ -215,13 +226,7 @@ mod tests {
                 truth = truth.compose(&Pose2::new(0.1, 0.0, 0.0));
             }
             let ranges = scan_from(&truth);
-            let scan = ScanRanges {
-                angle_min: -std::f64::consts::PI,
-                angle_increment: 1f64.to_radians(),
-                range_min: 0.1,
-                range_max: 30.0,
-                ranges: &ranges,
-            };
+            let scan = room_scan(&ranges);
             slam.set_scan(Some(&scan));
             let motion = if k == 0 { &standing } else { &drifting };
             last = slam
@@ -240,13 +245,7 @@ mod tests {
         let mut grid = SavedGrid::new(&room_grid(), &config);
         let truth = Pose2::new(4.0, 0.5, 0.0);
         let ranges = scan_from(&truth);
-        let scan = ScanRanges {
-            angle_min: -std::f64::consts::PI,
-            angle_increment: 1f64.to_radians(),
-            range_min: 0.1,
-            range_max: 30.0,
-            ranges: &ranges,
-        };
+        let scan = room_scan(&ranges);
         grid.set_scan(Some(&scan), config.saved_grid_beams);
         assert!(grid.select_known(&truth, config.saved_grid_min_known));
         let off = Pose2::new(4.2, 0.72, 0.25);
