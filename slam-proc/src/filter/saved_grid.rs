@@ -10,9 +10,10 @@ use map_sink::GridMap;
 use nalgebra::Matrix3;
 use slam_geom::{Pose2, wrap_angle};
 
-/// The hill-climb from smaller first steps: a particle is at most a few centimetres and a fraction of
-/// a degree off the grid after one corner update's worth of the front end's drift (half a
-/// metre of path), so the search's wide steps would only risk a neighbouring wall.
+/// The hill-climb from smaller first steps: a particle is at most a few centimetres and a
+/// fraction of a degree off the grid after one corner update's worth of the front end's
+/// drift (half a metre of path), so the search's wide steps would only risk a neighbouring
+/// wall.
 const TRACKING: HillClimb = HillClimb {
     xy: 0.05,
     yaw: 0.02,
