@@ -332,6 +332,8 @@ fn to_line(line: &Line) -> LineObservation {
         rho: line.rho,
         theta: line.theta,
         covariance: nalgebra::Matrix2::from_row_slice(&line.covariance),
+        start: line.start.into(),
+        end: line.end.into(),
     }
 }
 

@@ -21,11 +21,13 @@ use crate::filter::resample::{
 };
 use crate::filter::rng::Streams;
 use crate::filter::saved_grid::SavedGrid;
+use crate::filter::wall_memory::WallMemory;
 use crate::localize::localizer::ScanRanges;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
 use crate::motion::predict::{self, MotionNoise};
 use crate::update::drift::revisit_covariance;
+use crate::update::free_space::WallSegment;
 use slam_geom::Pose2;
 use slam_geom::StampedPose;
 use stage_kit::SettingError;
@@ -55,6 +57,9 @@ pub struct FastSlam {
     parents: Vec<usize>,
     /// This scan's usable lines.
     lines: Vec<LineObservation>,
+    /// This scan's walls, and those of the scans that updated the particles before it.
+    walls: Vec<WallSegment>,
+    wall_memory: WallMemory,
     /// One set of update buffers per chunk of `PARTICLES_PER_TASK` particles.
     scratch: Vec<Scratch>,
     /// The motion since the corners last updated the particles.
@@ -182,6 +187,8 @@ impl FastSlam {
             weights: Vec::new(),
             parents: Vec::new(),
             lines: Vec::new(),
+            walls: Vec::new(),
+            wall_memory: WallMemory::default(),
             scratch: Vec::new(),
             since_update: SinceUpdate::default(),
             path_length: Vec::new(),
@@ -322,6 +329,11 @@ impl FastSlam {
         self.lines.clear();
         self.lines
             .extend(lines.iter().filter(|l| l.is_usable()).copied());
+        self.walls.clear();
+        self.walls.extend(self.lines.iter().map(|l| WallSegment {
+            start: l.start,
+            end: l.end,
+        }));
         let motion = match step {
             StepMotion::Estimate(odometry) => {
                 self.motion
@@ -445,6 +457,8 @@ impl FastSlam {
             scan: self.scans,
             path_length: &self.path_length,
             revisits,
+            walls: &self.walls,
+            wall_memory: &self.wall_memory,
         };
         let (streams, scan) = (&self.streams, self.scans);
         let (refine, pull, grid_weight) = (
@@ -496,6 +510,7 @@ impl FastSlam {
                 .enumerate()
                 .for_each(|(chunk, work)| update_chunk(chunk, work));
         }
+        self.wall_memory.push(scan as usize, &self.walls);
         let update_done = Instant::now();
         self.finish([start, motion_done, predict_done, update_done])
     }

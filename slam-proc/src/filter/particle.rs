@@ -14,9 +14,11 @@ use crate::math::chi2::Gates;
 use crate::math::linalg::sample_information_form3;
 use slam_geom::StampedPose;
 
+use crate::filter::wall_memory::WallMemory;
 use crate::path::particle_path::{self, Closure, Path};
 use crate::update::corner_model::{PoseTransform, WorldObservation};
 use crate::update::drift::revisit_covariance;
+use crate::update::free_space::{PlacedWalls, WallSegment, closure_fits};
 use crate::update::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
 use crate::update::kalman;
 use slam_geom::Pose2;
@@ -40,6 +42,11 @@ pub(crate) struct Particle {
     pub closure: Option<Closure>,
 }
 
+/// How far along the path from a closure's ties the scans whose walls judge it reach,
+/// metres: the ties saw the corners the closure landed on, the scans around them the walls
+/// between those corners and beside them.
+const TIED_WALLS_REACH_M: f64 = 3.0;
+
 /// What every particle's update reads, the same for all particles of a scan.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ScanContext<'a> {
@@ -58,6 +65,10 @@ pub(crate) struct ScanContext<'a> {
     pub scan: u64,
     /// The path length of the motion at each scan so far, this one last, metres.
     pub path_length: &'a [f64],
+    /// This scan's walls.
+    pub walls: &'a [WallSegment],
+    /// The walls of the scans that updated the particles before this one.
+    pub wall_memory: &'a WallMemory,
     /// Whether old corners may close a loop (a revisit) at this scan.
     pub revisits: bool,
 }
@@ -145,17 +156,15 @@ impl Particle {
                 config.revisit_search_radius,
                 Some(old),
             );
-            if wide.pairings >= config.revisit_min_corners.max(association.pairings) {
+            let ties = if wide.pairings >= config.revisit_min_corners.max(association.pairings) {
+                self.ties(scratch)
+            } else {
+                Vec::new()
+            };
+            if !ties.is_empty() && self.walls_allow(context, &revisit, &wide, &ties) {
                 association = wide;
                 pose = revisit;
-                revisit_ties = scratch
-                    .jcbb
-                    .assignment()
-                    .iter()
-                    .flatten()
-                    .filter_map(|&index| self.map.get(scratch.pairings[index].corner))
-                    .filter_map(|corner| usize::try_from(corner.last_seen).ok())
-                    .collect();
+                revisit_ties = ties;
             } else {
                 association = self.associate(context, scratch, &pose, config.search_radius, None);
             }
@@ -401,6 +410,45 @@ impl Particle {
         ))
     }
 
+    /// The scans that last saw the old corners the association just made paired.
+    fn ties(&self, scratch: &Scratch) -> Vec<usize> {
+        scratch
+            .jcbb
+            .assignment()
+            .iter()
+            .flatten()
+            .filter_map(|&index| self.map.get(scratch.pairings[index].corner))
+            .filter_map(|corner| usize::try_from(corner.last_seen).ok())
+            .collect()
+    }
+
+    /// Whether a revisit's landing (the mean of the pose posterior given the `wide`
+    /// association) fits the walls of the scans around its `ties` at least as well as the
+    /// predicted pose does (see [`closure_fits`]).
+    fn walls_allow(
+        &self,
+        context: &ScanContext<'_>,
+        pose: &PoseUncertainty,
+        wide: &Association,
+        ties: &[usize],
+    ) -> bool {
+        let Some(landed) = self.posterior_pose(pose, wide, &Vector3::zeros()) else {
+            return true;
+        };
+        let around = context
+            .wall_memory
+            .around(ties, context.path_length, TIED_WALLS_REACH_M);
+        let scans: Vec<usize> = around.iter().map(|(scan, _)| *scan).collect();
+        let tied: Vec<PlacedWalls> = self
+            .path
+            .map_frame_poses(&scans)
+            .iter()
+            .zip(&around)
+            .filter_map(|(pose, (_, walls))| Some(PlacedWalls::new(pose.as_ref()?, walls)))
+            .collect();
+        closure_fits(context.walls, &tied, &landed, &self.pose)
+    }
+
     /// A draw from the pose posterior given the associated corners: the Gaussian with
     /// information `P^-1 + A` and mean `predicted - (P^-1 + A)^-1 b` (one Gauss-Newton step
     /// of the linearised observations from the predicted pose). `None` when the
@@ -411,9 +459,20 @@ impl Particle {
         association: &Association,
         rng: &mut impl Rng,
     ) -> Option<Pose2> {
-        let information = pose.information + association.pose_information;
         let normal = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
-        let step = sample_information_form3(&information, &association.pose_gradient, &normal)?;
+        self.posterior_pose(pose, association, &normal)
+    }
+
+    /// The posterior's mean moved by `normal` (standard normal numbers) times its square
+    /// root: zeros give the mean.
+    fn posterior_pose(
+        &self,
+        pose: &PoseUncertainty,
+        association: &Association,
+        normal: &Vector3<f64>,
+    ) -> Option<Pose2> {
+        let information = pose.information + association.pose_information;
+        let step = sample_information_form3(&information, &association.pose_gradient, normal)?;
         let pose = Pose2::new(
             self.pose.x + step.x,
             self.pose.y + step.y,
@@ -576,6 +635,8 @@ mod tests {
             scan: 1,
             path_length: &[0.0, path_length],
             revisits: true,
+            walls: &[],
+            wall_memory: &WallMemory::default(),
         };
         let mut particle = Particle {
             pose: predicted,

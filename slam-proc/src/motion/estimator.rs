@@ -522,11 +522,12 @@ mod tests {
             .iter()
             .map(|&(rho, theta)| {
                 let (s, c) = theta.sin_cos();
-                LineObservation {
-                    rho: rho - delta.x * c - delta.y * s,
-                    theta: wrap_angle(theta - delta.yaw),
-                    covariance: nalgebra::Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
-                }
+                LineObservation::centred(
+                    rho - delta.x * c - delta.y * s,
+                    wrap_angle(theta - delta.yaw),
+                    1e-6,
+                    2.0,
+                )
             })
             .collect()
     }

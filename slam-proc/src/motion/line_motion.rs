@@ -273,22 +273,19 @@ mod tests {
     fn seen_from(t: &Pose2, rho: f64, theta: f64) -> LineObservation {
         // The inverse of `moved`: theta = theta' - yaw, rho = rho' - tx cos(theta') - ty sin(theta').
         let (s, c) = theta.sin_cos();
-        LineObservation {
-            rho: rho - t.x * c - t.y * s,
-            theta: wrap_angle(theta - t.yaw),
-            covariance: Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
-        }
+        LineObservation::centred(
+            rho - t.x * c - t.y * s,
+            wrap_angle(theta - t.yaw),
+            1e-6,
+            2.0,
+        )
     }
 
     fn corridor() -> Vec<LineObservation> {
         // Two walls 1 m either side of the sensor, along x, and the far end wall 20 m ahead.
         [(1.0, PI / 2.0), (1.0, -PI / 2.0), (20.0, 0.0)]
             .iter()
-            .map(|&(rho, theta)| LineObservation {
-                rho,
-                theta,
-                covariance: Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
-            })
+            .map(|&(rho, theta)| LineObservation::centred(rho, theta, 1e-6, 2.0))
             .collect()
     }
 
@@ -353,11 +350,7 @@ mod tests {
         // The previous scan saw the near face of a 10 cm wall 2 m ahead; after a step
         // through a doorway beside it the current scan sees its far face: the same line
         // but for 10 cm and the normal, which now points the other way.
-        let previous = vec![LineObservation {
-            rho: 2.0,
-            theta: 0.0,
-            covariance: Matrix2::new(1e-4, 0.0, 0.0, 1e-4),
-        }];
+        let previous = vec![LineObservation::centred(2.0, 0.0, 1e-4, 2.0)];
         let far_face = seen_from(&Pose2::new(2.2, 0.0, 0.0), 2.1, 0.0);
         assert!(far_face.rho < 0.0);
         let current = vec![LineObservation {
@@ -378,11 +371,7 @@ mod tests {
 
     #[test]
     fn pieces_of_one_wall_match_and_parallel_walls_do_not() {
-        let line = |rho: f64, theta: f64| LineObservation {
-            rho,
-            theta,
-            covariance: Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
-        };
+        let line = |rho: f64, theta: f64| LineObservation::centred(rho, theta, 1e-6, 2.0);
         let truth = Pose2::new(0.1, 0.01, 0.0);
         let current = vec![seen_from(&truth, 1.0, PI / 2.0)];
         let belief = prior(Pose2::new(0.1, 0.0, 0.0), 0.05, 0.05);

@@ -120,6 +120,37 @@ impl Path {
         poses
     }
 
+    /// The poses at `scans` (ascending) in the frame of the particle's map: each moved as
+    /// every later loop closure moved the corners mapped from it (see
+    /// `Particle::reanchor_since`), so the walls a scan saw, placed by its pose, lie where
+    /// the map's corners are. `None` for a scan the path does not reach.
+    pub fn map_frame_poses(&self, scans: &[usize]) -> Vec<Option<Pose2>> {
+        let (raw, closures) = self.nodes();
+        let mut poses: Vec<Option<Pose2>> =
+            scans.iter().map(|&s| raw.get(s).map(|p| p.pose)).collect();
+        for (at, closure) in &closures {
+            let from = closure.drift_start();
+            let moved_scans = from..*at;
+            if !scans.iter().any(|s| moved_scans.contains(s)) {
+                continue;
+            }
+            let Some(jump) = Closure::new(vec![0], closure.drifted) else {
+                continue;
+            };
+            let mut moved = raw[from..=*at].to_vec();
+            spread(&mut moved, *at - from, &jump);
+            for (pose, &s) in poses.iter_mut().zip(scans) {
+                if let Some(pose) = pose
+                    && moved_scans.contains(&s)
+                {
+                    let correction = moved[s - from].pose.compose(&raw[s].pose.inverse());
+                    *pose = correction.compose(pose);
+                }
+            }
+        }
+        poses
+    }
+
     /// The number of loop closures kept with the path.
     pub fn closures(&self) -> usize {
         let mut count = 0;
@@ -232,6 +263,59 @@ mod tests {
             panic!("paths are longer than one pose");
         };
         assert!(Arc::ptr_eq(a, b));
+    }
+
+    #[test]
+    fn old_poses_are_moved_into_the_map_frame_as_the_closures_moved_their_corners() {
+        // Along x a metre a step; from scan 2 the path drifted 0.15 m sideways a step, and
+        // at scan 6 a revisit of what scan 2 saw put it back on the line.
+        let drifted = |i: usize| Pose2::new(i as f64, 0.15 * (i.max(2) - 2) as f64, 0.0);
+        let mut path = Path::default();
+        for i in 0..6 {
+            path.push(
+                StampedPose {
+                    stamp_ns: i as u64,
+                    pose: drifted(i),
+                },
+                None,
+            );
+        }
+        path.push(
+            StampedPose {
+                stamp_ns: 6,
+                pose: Pose2::new(6.0, 0.0, 0.0),
+            },
+            Closure::new(vec![2], drifted(6)),
+        );
+        path.push(
+            StampedPose {
+                stamp_ns: 7,
+                pose: Pose2::new(7.0, 0.0, 0.0),
+            },
+            None,
+        );
+        let poses = path.map_frame_poses(&[1, 2, 4, 5, 6, 7, 20]);
+        let on_line = |pose: Option<Pose2>, x: f64| {
+            let pose = pose.expect("on the path");
+            (pose.x - x).abs() < 1e-9 && pose.y.abs() < 1e-9 && pose.yaw.abs() < 1e-9
+        };
+        // Before the drift, and from the landing on, as they were.
+        assert!(
+            on_line(poses[0], 1.0) && on_line(poses[1], 2.0),
+            "{poses:?}"
+        );
+        assert!(
+            on_line(poses[4], 6.0) && on_line(poses[5], 7.0),
+            "{poses:?}"
+        );
+        // The drifted stretch moved back as the jump was spread over it.
+        assert!(
+            on_line(poses[2], 4.0) && on_line(poses[3], 5.0),
+            "{poses:?}"
+        );
+        assert_eq!(poses[6], None);
+        // The path itself keeps the poses the particle had.
+        assert_eq!(path.poses()[4].pose, drifted(4));
     }
 
     #[test]

@@ -3,5 +3,6 @@
 
 pub(crate) mod corner_model;
 pub(crate) mod drift;
+pub(crate) mod free_space;
 pub(crate) mod jcbb;
 pub(crate) mod kalman;

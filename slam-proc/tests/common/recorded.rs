@@ -44,6 +44,8 @@ pub fn seed_hall_features(config: FeatureConfig) -> Vec<ScanFeatures> {
                         rho: l.rho,
                         theta: l.theta,
                         covariance: l.covariance,
+                        start: l.start.into(),
+                        end: l.end.into(),
                     })
                     .collect(),
             }
