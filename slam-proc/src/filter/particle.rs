@@ -423,8 +423,8 @@ impl Particle {
     }
 
     /// Whether a revisit's landing (the mean of the pose posterior given the `wide`
-    /// association) fits the walls of the scans around its `ties` at least as well as the
-    /// predicted pose does (see [`closure_fits`]).
+    /// association) fits the walls of the scans around its `ties` about as well as the
+    /// predicted pose does, or better (see [`closure_fits`]).
     fn walls_allow(
         &self,
         context: &ScanContext<'_>,

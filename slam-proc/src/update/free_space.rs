@@ -6,9 +6,13 @@
 //! closure's pose, the scan now seen and the scans from where the closure ties the path
 //! either agree (their walls lie on each other's, or where the other saw nothing) or one puts
 //! a wall in the other's free space. Two corners can fit a wrong offset in a building of
-//! repeated rooms; the walls around them then cut through what the old scans saw as free.
+//! repeated rooms; the walls around them then leave the old walls, or cut through what the
+//! old scans saw as free. A closure is compared with staying put after each pose has been
+//! settled onto the old walls ([`crate::update::wall_alignment`]).
 
 use slam_geom::{Point2, Pose2};
+
+use crate::update::wall_alignment::settle;
 
 /// A stretch of wall in the sensor frame: the first and last point of a fitted line.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -63,12 +67,14 @@ impl WallAgreement {
     }
 }
 
-/// Whether the scan's walls (`walls`, sensor frame) placed at `landed` fit the walls of the
-/// scans a loop closure ties it to (`tied`, placed in the map) at least as well as they do
-/// at `predicted`, where the particle was before the jump. A jump that undoes real drift
-/// lands the walls on the old ones and out of their free space; one onto corners that
-/// only look alike moves them off walls that fitted better where they were. Without walls
-/// on either side there is nothing to go by, and the closure stands.
+/// Whether the scan's walls (`walls`, sensor frame) fit the walls of the scans a loop
+/// closure ties it to (`tied`, placed in the map) from `landed` about as well as from
+/// `predicted`, where the particle was before the jump, or better. Each pose is first
+/// settled onto the old walls ([`settle`]): a landing from two corners can be a few degrees
+/// off, and the pose before the jump carries the drift. A jump that undoes real drift lands
+/// the walls on the old ones; one onto corners that only look alike takes them off walls
+/// that fitted where they were. Without walls on either side there is nothing to go by,
+/// and the closure stands.
 pub(crate) fn closure_fits(
     walls: &[WallSegment],
     tied: &[PlacedWalls],
@@ -78,12 +84,14 @@ pub(crate) fn closure_fits(
     if walls.is_empty() || tied.iter().all(|t| t.walls.is_empty()) {
         return true;
     }
-    let at = agreement(&PlacedWalls::new(landed, walls), tied);
-    let before = agreement(&PlacedWalls::new(predicted, walls), tied);
-    let stayed = before.score();
-    stayed <= 0.0 || at.score() >= stayed
+    let points = sample_points(walls);
+    let fit = |pose: &Pose2| agreement(&points, &settle(&points, tied, *pose), tied).score();
+    fit(landed) >= fit(predicted) - SCORE_TOLERANCE
 }
 
+/// How much worse than staying a landing may fit and still be taken, as a share of the
+/// points: two poses settled into the same place differ by a point or two.
+const SCORE_TOLERANCE: f64 = 0.1;
 /// Spacing of the points sampled along a wall, metres.
 const STEP_M: f64 = 0.2;
 /// A point this close to another scan's wall lies on it, metres.
@@ -92,11 +100,17 @@ const NEAR_M: f64 = 0.2;
 /// that scan's free space, metres.
 const MARGIN_M: f64 = 0.4;
 
-/// Samples `walls` every [`STEP_M`] and checks each point against `others`.
-pub(crate) fn agreement(walls: &PlacedWalls, others: &[PlacedWalls]) -> WallAgreement {
-    let mut result = WallAgreement::default();
-    for &(a, b) in &walls.walls {
-        let length = (b - a).norm();
+/// Points every [`STEP_M`] along each of `walls` (sensor frame), each with its wall's unit
+/// direction.
+pub(crate) fn sample_points(walls: &[WallSegment]) -> Vec<(Point2, Point2)> {
+    let mut points = Vec::new();
+    for wall in walls {
+        let along = wall.end - wall.start;
+        let length = along.norm();
+        if !length.is_finite() || length <= 0.0 {
+            continue;
+        }
+        let direction = along / length;
         let n = (length / STEP_M).floor() as usize + 1;
         for k in 0..n {
             let t = if n == 1 {
@@ -104,21 +118,36 @@ pub(crate) fn agreement(walls: &PlacedWalls, others: &[PlacedWalls]) -> WallAgre
             } else {
                 k as f64 / (n - 1) as f64
             };
-            let p = a + (b - a) * t;
-            result.points += 1;
-            if others.iter().any(|o| {
-                o.walls
-                    .iter()
-                    .any(|&(c, d)| segment_distance(p, c, d) <= NEAR_M)
-            }) {
-                result.agree += 1;
-            } else if others.iter().any(|o| {
-                o.walls
-                    .iter()
-                    .any(|&(c, d)| in_free_space(p, o.sensor, c, d))
-            }) {
-                result.conflict += 1;
-            }
+            points.push((wall.start + along * t, direction));
+        }
+    }
+    points
+}
+
+/// Checks `points` (sensor frame, from [`sample_points`]) placed at `pose` against
+/// `others`.
+pub(crate) fn agreement(
+    points: &[(Point2, Point2)],
+    pose: &Pose2,
+    others: &[PlacedWalls],
+) -> WallAgreement {
+    let (s, c) = pose.yaw.sin_cos();
+    let mut result = WallAgreement::default();
+    for (p, _) in points {
+        let p = Point2::new(pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y);
+        result.points += 1;
+        if others.iter().any(|o| {
+            o.walls
+                .iter()
+                .any(|&(c, d)| segment_distance(p, c, d) <= NEAR_M)
+        }) {
+            result.agree += 1;
+        } else if others.iter().any(|o| {
+            o.walls
+                .iter()
+                .any(|&(c, d)| in_free_space(p, o.sensor, c, d))
+        }) {
+            result.conflict += 1;
         }
     }
     result
@@ -180,7 +209,8 @@ mod tests {
     fn points_on_a_wall_agree_and_points_in_its_free_space_conflict() {
         let seen_from = |x: f64, walls: &[WallSegment]| {
             agreement(
-                &PlacedWalls::new(&Pose2::new(x, 0.0, 0.0), walls),
+                &sample_points(walls),
+                &Pose2::new(x, 0.0, 0.0),
                 &[old_scan()],
             )
         };
@@ -206,7 +236,7 @@ mod tests {
     }
 
     #[test]
-    fn a_landing_that_moves_the_walls_off_the_old_ones_is_refused() {
+    fn a_landing_that_takes_the_walls_off_the_old_ones_is_refused() {
         // A corridor 2 m wide and 8 m long along x, seen from its start.
         let corridor = [
             wall(0.5, 1.0, 8.0, 1.0),
@@ -221,16 +251,17 @@ mod tests {
             .iter()
             .map(|w| wall(w.start.x - 1.0, w.start.y, w.end.x - 1.0, w.end.y))
             .collect();
-        // The particle was there; the corners pulled it 0.8 m sideways and 10 degrees: the
-        // walls cross the corridor's free space, refused.
-        let off = Pose2::new(1.0, 0.8, 10f64.to_radians());
+        // The particle was there; the corners pulled it 1.5 m sideways and 15 degrees,
+        // beyond where the walls could settle back: refused.
+        let off = Pose2::new(1.0, 1.5, 15f64.to_radians());
         assert!(!closure_fits(&now, &old, &off, &truth));
-        // The particle had drifted there and the corners bring it back: taken.
+        // The particle had drifted there and the corners bring it back: taken, and so is a
+        // landing a few degrees and decimetres off, which settles onto the old walls.
         assert!(closure_fits(&now, &old, &truth, &off));
-        // Where neither pose fits the old walls (more of the scan in their free space than
-        // on them), the corners are all there is to go by.
-        let lost = Pose2::new(1.0, -0.5, 25f64.to_radians());
-        assert!(closure_fits(&now, &old, &off, &lost));
+        let near = Pose2::new(1.3, 0.2, 5f64.to_radians());
+        assert!(closure_fits(&now, &old, &near, &off));
+        // A small correction of a particle that was in place: both settle into one place.
+        assert!(closure_fits(&now, &old, &near, &truth));
         // Without walls on either side there is no evidence against the corners.
         assert!(closure_fits(&[], &old, &off, &truth));
         assert!(closure_fits(&now, &[], &off, &truth));

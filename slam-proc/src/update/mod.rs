@@ -6,3 +6,4 @@ pub(crate) mod drift;
 pub(crate) mod free_space;
 pub(crate) mod jcbb;
 pub(crate) mod kalman;
+pub(crate) mod wall_alignment;
