@@ -109,8 +109,8 @@ impl WallIndex {
 }
 
 /// The pose near `start` that lays `points` (along a scan's walls, sensor frame, with their
-/// walls' directions: [`crate::update::free_space::sample_points`]) on the walls of `tied` best; `start` itself when
-/// too few of them pair with those walls.
+/// walls' directions: [`crate::update::free_space::sample_points`]) on the walls of `tied`
+/// best; `start` itself when too few of them pair with those walls.
 pub(crate) fn settle(points: &[(Point2, Point2)], tied: &[PlacedWalls], start: Pose2) -> Pose2 {
     let index = WallIndex::new(tied);
     let mut pose = start;
