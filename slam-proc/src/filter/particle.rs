@@ -46,6 +46,8 @@ pub(crate) struct Particle {
 /// metres: the ties saw the corners the closure landed on, the scans around them the walls
 /// between those corners and beside them.
 const TIED_WALLS_REACH_M: f64 = 3.0;
+/// The most scans whose walls judge a closure, so that its cost is bounded.
+const TIED_WALLS_MAX_SCANS: usize = 24;
 
 /// What every particle's update reads, the same for all particles of a scan.
 #[derive(Debug, Clone, Copy)]
@@ -435,9 +437,12 @@ impl Particle {
         let Some(landed) = self.posterior_pose(pose, wide, &Vector3::zeros()) else {
             return true;
         };
-        let around = context
-            .wall_memory
-            .around(ties, context.path_length, TIED_WALLS_REACH_M);
+        let around = context.wall_memory.around(
+            ties,
+            context.path_length,
+            TIED_WALLS_REACH_M,
+            TIED_WALLS_MAX_SCANS,
+        );
         let scans: Vec<usize> = around.iter().map(|(scan, _)| *scan).collect();
         let tied: Vec<PlacedWalls> = self
             .path

@@ -24,12 +24,14 @@ impl WallMemory {
 
     /// The kept scans whose path length is within `reach` metres of one of `ties`' (scan
     /// numbers; `path_length` by scan, non-decreasing), each once, in increasing order,
-    /// with their walls.
+    /// with their walls; at most `at_most` of them, evenly spread over those, where the
+    /// robot turned on the spot or crept and updated many times within the reach.
     pub fn around<'a>(
         &'a self,
         ties: &[usize],
         path_length: &[f64],
         reach: f64,
+        at_most: usize,
     ) -> Vec<(usize, &'a [WallSegment])> {
         let mut found: Vec<usize> = Vec::new();
         for &tie in ties {
@@ -44,8 +46,10 @@ impl WallMemory {
         }
         found.sort_unstable();
         found.dedup();
+        let stride = found.len().div_ceil(at_most.max(1)).max(1);
         found
             .into_iter()
+            .step_by(stride)
             .map(|k| (self.scans[k], self.walls[k].as_slice()))
             .collect()
     }
@@ -73,7 +77,7 @@ mod tests {
         }
         let scans = |ties: &[usize], reach: f64| -> Vec<usize> {
             memory
-                .around(ties, &path_length, reach)
+                .around(ties, &path_length, reach, usize::MAX)
                 .iter()
                 .map(|(s, _)| *s)
                 .collect()
@@ -83,7 +87,14 @@ mod tests {
         // Overlapping reaches give each scan once.
         assert_eq!(scans(&[3, 4, 9], 1.0), vec![2, 4, 8]);
         assert_eq!(scans(&[20], 1.0), Vec::<usize>::new());
-        let found = memory.around(&[6], &path_length, 0.5);
+        let found = memory.around(&[6], &path_length, 0.5, 10);
         assert_eq!(found, vec![(6, wall(6.0).as_slice())]);
+        // At most so many, spread over the reach.
+        let spread: Vec<usize> = memory
+            .around(&[4], &path_length, 10.0, 2)
+            .iter()
+            .map(|(s, _)| *s)
+            .collect();
+        assert_eq!(spread, vec![0, 6]);
     }
 }

@@ -12,7 +12,7 @@
 
 use slam_geom::{Point2, Pose2};
 
-use crate::update::wall_alignment::settle;
+use crate::update::wall_alignment::{OldWalls, settle};
 
 /// A stretch of wall in the sensor frame: the first and last point of a fitted line.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,7 +85,8 @@ pub(crate) fn closure_fits(
         return true;
     }
     let points = sample_points(walls);
-    let fit = |pose: &Pose2| agreement(&points, &settle(&points, tied, *pose), tied).score();
+    let old = OldWalls::new(tied);
+    let fit = |pose: &Pose2| agreement(&points, &settle(&points, &old, *pose), tied).score();
     fit(landed) >= fit(predicted) - SCORE_TOLERANCE
 }
 
@@ -94,15 +95,21 @@ pub(crate) fn closure_fits(
 const SCORE_TOLERANCE: f64 = 0.1;
 /// Spacing of the points sampled along a wall, metres.
 const STEP_M: f64 = 0.2;
+/// About the most points sampled along a scan's walls.
+const MAX_POINTS: usize = 200;
 /// A point this close to another scan's wall lies on it, metres.
 const NEAR_M: f64 = 0.2;
 /// A point this far or farther in front of the wall another scan's beams ended on is in
 /// that scan's free space, metres.
 const MARGIN_M: f64 = 0.4;
 
-/// Points every [`STEP_M`] along each of `walls` (sensor frame), each with its wall's unit
-/// direction.
+/// Points along each of `walls` (sensor frame), each with its wall's unit direction: every
+/// [`STEP_M`], or farther apart where that would make more than [`MAX_POINTS`], so that a
+/// cluttered scan costs no more than a plain one.
 pub(crate) fn sample_points(walls: &[WallSegment]) -> Vec<(Point2, Point2)> {
+    let length = |wall: &WallSegment| (wall.end - wall.start).norm();
+    let total: f64 = walls.iter().map(length).filter(|l| l.is_finite()).sum();
+    let step = STEP_M.max(total / MAX_POINTS as f64);
     let mut points = Vec::new();
     for wall in walls {
         let along = wall.end - wall.start;
@@ -111,7 +118,7 @@ pub(crate) fn sample_points(walls: &[WallSegment]) -> Vec<(Point2, Point2)> {
             continue;
         }
         let direction = along / length;
-        let n = (length / STEP_M).floor() as usize + 1;
+        let n = (length / step).floor() as usize + 1;
         for k in 0..n {
             let t = if n == 1 {
                 0.5

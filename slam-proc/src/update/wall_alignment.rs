@@ -38,7 +38,7 @@ struct OldWall {
 }
 
 /// The old walls, indexed by the cells within the widest gate of them.
-struct WallIndex {
+pub(crate) struct OldWalls {
     walls: Vec<OldWall>,
     cells: HashMap<(i64, i64), Vec<u32>>,
 }
@@ -47,8 +47,8 @@ fn cell(p: Point2) -> (i64, i64) {
     ((p.x / CELL_M).floor() as i64, (p.y / CELL_M).floor() as i64)
 }
 
-impl WallIndex {
-    fn new(tied: &[PlacedWalls]) -> Self {
+impl OldWalls {
+    pub fn new(tied: &[PlacedWalls]) -> Self {
         let mut walls = Vec::new();
         let mut cells: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
         let reach = GATES_M[0];
@@ -109,10 +109,9 @@ impl WallIndex {
 }
 
 /// The pose near `start` that lays `points` (along a scan's walls, sensor frame, with their
-/// walls' directions: [`crate::update::free_space::sample_points`]) on the walls of `tied`
-/// best; `start` itself when too few of them pair with those walls.
-pub(crate) fn settle(points: &[(Point2, Point2)], tied: &[PlacedWalls], start: Pose2) -> Pose2 {
-    let index = WallIndex::new(tied);
+/// walls' directions: [`crate::update::free_space::sample_points`]) on the old walls best;
+/// `start` itself when too few of them pair with those walls.
+pub(crate) fn settle(points: &[(Point2, Point2)], index: &OldWalls, start: Pose2) -> Pose2 {
     let mut pose = start;
     for gate in GATES_M {
         let (s, c) = pose.yaw.sin_cos();
@@ -182,14 +181,17 @@ mod tests {
         let tied = [PlacedWalls::new(&Pose2::IDENTITY, &room(0.0))];
         let truth = Pose2::new(1.0, 0.0, 0.0);
         let start = Pose2::new(1.3, -0.25, 6f64.to_radians());
-        let settled = settle(&sample_points(&room(1.0)), &tied, start);
+        let settled = settle(&sample_points(&room(1.0)), &OldWalls::new(&tied), start);
         let error = truth.between(&settled);
         assert!(
             error.translation_norm() < 0.01 && error.yaw.abs() < 0.002,
             "{settled:?}"
         );
         // With nothing to pair with, the pose stays.
-        assert_eq!(settle(&sample_points(&room(1.0)), &[], start), start);
+        assert_eq!(
+            settle(&sample_points(&room(1.0)), &OldWalls::new(&[]), start),
+            start
+        );
     }
 
     #[test]
@@ -200,7 +202,7 @@ mod tests {
         let tied = [PlacedWalls::new(&Pose2::IDENTITY, &corridor)];
         let seen = [wall(-5.0, 1.0, 5.0, 1.0), wall(5.0, -1.0, -5.0, -1.0)];
         let start = Pose2::new(0.4, 0.2, 2f64.to_radians());
-        let settled = settle(&sample_points(&seen), &tied, start);
+        let settled = settle(&sample_points(&seen), &OldWalls::new(&tied), start);
         assert!((settled.x - 0.4).abs() < 0.01, "{settled:?}");
         assert!(
             settled.y.abs() < 0.01 && settled.yaw.abs() < 0.002,
