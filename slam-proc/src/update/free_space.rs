@@ -14,6 +14,19 @@ use slam_geom::{Point2, Pose2};
 
 use crate::update::wall_alignment::{OldWalls, settle};
 
+/// How much worse than staying a landing may fit and still be taken, as a share of the
+/// points: two poses settled into the same place differ by a point or two.
+const SCORE_TOLERANCE: f64 = 0.1;
+/// Spacing of the points sampled along a wall, metres.
+const STEP_M: f64 = 0.2;
+/// About the most points sampled along a scan's walls.
+const MAX_POINTS: usize = 200;
+/// A point this close to another scan's wall lies on it, metres.
+const NEAR_M: f64 = 0.2;
+/// A point this far or farther in front of the wall another scan's beams ended on is in
+/// that scan's free space, metres.
+const MARGIN_M: f64 = 0.4;
+
 /// A stretch of wall in the sensor frame: the first and last point of a fitted line.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct WallSegment {
@@ -30,14 +43,12 @@ pub(crate) struct PlacedWalls {
 
 impl PlacedWalls {
     pub fn new(pose: &Pose2, walls: &[WallSegment]) -> Self {
-        let (s, c) = pose.yaw.sin_cos();
-        let place =
-            |p: &Point2| Point2::new(pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y);
+        let (rotation, sensor) = (pose.rotation(), pose.position());
         Self {
-            sensor: Point2::new(pose.x, pose.y),
+            sensor,
             walls: walls
                 .iter()
-                .map(|w| (place(&w.start), place(&w.end)))
+                .map(|w| (rotation * w.start + sensor, rotation * w.end + sensor))
                 .collect(),
         }
     }
@@ -46,10 +57,10 @@ impl PlacedWalls {
 /// What the points along one set of walls found in the other set's scans.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct WallAgreement {
-    /// Points within `near` of a wall of the other scans.
+    /// Points within [`NEAR_M`] of a wall of the other scans.
     pub agree: usize,
-    /// Points in the free space of one of the other scans, `margin` or more in front of the
-    /// wall its beams ended on.
+    /// Points in the free space of one of the other scans, [`MARGIN_M`] or more in front of
+    /// the wall its beams ended on.
     pub conflict: usize,
     /// Points sampled.
     pub points: usize,
@@ -90,19 +101,6 @@ pub(crate) fn closure_fits(
     fit(landed) >= fit(predicted) - SCORE_TOLERANCE
 }
 
-/// How much worse than staying a landing may fit and still be taken, as a share of the
-/// points: two poses settled into the same place differ by a point or two.
-const SCORE_TOLERANCE: f64 = 0.1;
-/// Spacing of the points sampled along a wall, metres.
-const STEP_M: f64 = 0.2;
-/// About the most points sampled along a scan's walls.
-const MAX_POINTS: usize = 200;
-/// A point this close to another scan's wall lies on it, metres.
-const NEAR_M: f64 = 0.2;
-/// A point this far or farther in front of the wall another scan's beams ended on is in
-/// that scan's free space, metres.
-const MARGIN_M: f64 = 0.4;
-
 /// Points along each of `walls` (sensor frame), each with its wall's unit direction: every
 /// [`STEP_M`], or farther apart where that would make more than [`MAX_POINTS`], so that a
 /// cluttered scan costs no more than a plain one.
@@ -138,10 +136,10 @@ pub(crate) fn agreement(
     pose: &Pose2,
     others: &[PlacedWalls],
 ) -> WallAgreement {
-    let (s, c) = pose.yaw.sin_cos();
+    let (rotation, position) = (pose.rotation(), pose.position());
     let mut result = WallAgreement::default();
     for (p, _) in points {
-        let p = Point2::new(pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y);
+        let p = rotation * p + position;
         result.points += 1;
         if others.iter().any(|o| {
             o.walls

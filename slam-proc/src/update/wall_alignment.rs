@@ -114,15 +114,14 @@ impl OldWalls {
 pub(crate) fn settle(points: &[(Point2, Point2)], index: &OldWalls, start: Pose2) -> Pose2 {
     let mut pose = start;
     for gate in GATES_M {
-        let (s, c) = pose.yaw.sin_cos();
-        let sensor = Point2::new(pose.x, pose.y);
+        let (rotation, sensor) = (pose.rotation(), pose.position());
         let mut h = Matrix3::zeros();
         let mut g = Vector3::zeros();
         let mut paired = 0;
         let mut total = 0.0;
         for (p, d) in points {
-            let world = Point2::new(pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y);
-            let direction = Point2::new(c * d.x - s * d.y, s * d.x + c * d.y);
+            let world = rotation * p + sensor;
+            let direction = rotation * d;
             let Some((k, r)) = index.pair(world, direction, sensor, gate) else {
                 continue;
             };
