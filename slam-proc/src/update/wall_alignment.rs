@@ -29,8 +29,8 @@ const HOLD: f64 = 1e-3;
 /// Side of the cells the old walls are indexed by, metres.
 const CELL_M: f64 = 1.0;
 
-/// An old wall ready for pairing: its ends, the unit normal towards its sensor, and its
-/// direction.
+/// An old wall ready for pairing: its ends and the unit normal towards the sensor that saw
+/// it.
 struct OldWall {
     a: Point2,
     b: Point2,
