@@ -195,10 +195,11 @@ fn in_free_space(p: Point2, o: Point2, a: Point2, b: Point2) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn wall(ax: f64, ay: f64, bx: f64, by: f64) -> WallSegment {
+    /// The wall from `(ax, ay)` to `(bx, by)`.
+    pub(crate) fn wall(ax: f64, ay: f64, bx: f64, by: f64) -> WallSegment {
         WallSegment {
             start: Point2::new(ax, ay),
             end: Point2::new(bx, by),

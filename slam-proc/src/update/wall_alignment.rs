@@ -157,14 +157,8 @@ pub(crate) fn settle(points: &[(Point2, Point2)], index: &OldWalls, start: Pose2
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::update::free_space::{WallSegment, sample_points};
-
-    fn wall(ax: f64, ay: f64, bx: f64, by: f64) -> WallSegment {
-        WallSegment {
-            start: Point2::new(ax, ay),
-            end: Point2::new(bx, by),
-        }
-    }
+    use crate::update::free_space::sample_points;
+    use crate::update::free_space::tests::wall;
 
     #[test]
     fn walls_a_few_degrees_and_decimetres_off_settle_onto_the_old_ones() {
