@@ -268,9 +268,9 @@ impl FastSlam {
     }
 
     /// Updates the filter with one scan: its acquisition time, its corners and wall lines
-    /// in the sensor frame (lines only steady the motion estimate; pass none if the
-    /// extractor gives none) and, when the robot has odometry, the odometry pose at the
-    /// scan. Features that are not usable (non-finite, an angle outside `(0, pi)`, a
+    /// in the sensor frame (lines steady the motion estimate and check loop closures; pass
+    /// none if the extractor gives none) and, when the robot has odometry, the odometry
+    /// pose at the scan. Features that are not usable (non-finite, an angle outside `(0, pi)`, a
     /// covariance that is not positive definite) are ignored.
     pub fn process(
         &mut self,
