@@ -468,12 +468,9 @@ fn summary(out: &Path, m: &Metrics) -> String {
 
 /// `0.580 +- 1.782 m, 2.60 +- 6.04 deg over 1172/1172 relations`.
 fn rpe_text(s: &ScoreSummary) -> String {
-    let errors = match (s.translation_m, s.rotation_deg) {
-        (Some(t), Some(r)) => format!(
-            "{:.3} +- {:.3} m, {:.2} +- {:.2} deg",
-            t.mean, t.std, r.mean, r.std
-        ),
-        _ => "none: no relation has both poses".to_owned(),
-    };
+    let errors = s.errors.map_or_else(
+        || "none: no relation has both poses".to_owned(),
+        |errors| errors.to_string(),
+    );
     format!("{errors} over {}/{} relations", s.used, s.relations)
 }

@@ -27,14 +27,20 @@ pub struct ScanRequest {
     pub intensities: bool,
 }
 
+impl ScanRequest {
+    /// Every step of the sensor's field of view, one beam each, ranges only.
+    pub const WHOLE_FIELD: Self = Self {
+        min_angle: None,
+        max_angle: None,
+        cluster: 1,
+        intensities: false,
+    };
+}
+
+/// What the options and the `[hokuyo]` keys leave out: [`ScanRequest::WHOLE_FIELD`].
 impl Default for ScanRequest {
     fn default() -> Self {
-        Self {
-            min_angle: None,
-            max_angle: None,
-            cluster: 1,
-            intensities: false,
-        }
+        Self::WHOLE_FIELD
     }
 }
 

@@ -1029,13 +1029,10 @@ fn rpe_line(rpe: &RelativePoseErrors) -> String {
         ("front end", &rpe.dead_reckoning),
     ] {
         let Some(summary) = summary else { continue };
-        let errors = match (summary.translation_m, summary.rotation_deg) {
-            (Some(t), Some(r)) => format!(
-                "{:.3} +- {:.3} m, {:.2} +- {:.2} deg",
-                t.mean, t.std, r.mean, r.std
-            ),
-            _ => "no relation with both poses".to_owned(),
-        };
+        let errors = summary.errors.map_or_else(
+            || "no relation with both poses".to_owned(),
+            |errors| errors.to_string(),
+        );
         parts.push(format!(
             "{name} {errors} ({}/{} relations)",
             summary.used, summary.relations

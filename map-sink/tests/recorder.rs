@@ -199,10 +199,10 @@ fn relations_score_every_trajectory_file() -> TestResult {
     );
     // The estimate wobbles by centimetres around the truth in the robot's frame, which
     // turns by 9 degrees over the 5 scans of a relation: errors of about 2 cm.
-    let t = estimate.translation_m.ok_or("no translational error")?;
+    let t = estimate.errors.ok_or("no errors")?.translation_m;
     assert!(t.mean > 0.005 && t.mean < 0.05, "{t:?}");
     let dead_reckoning = rpe.dead_reckoning.ok_or("dead reckoning not scored")?;
-    let r = dead_reckoning.rotation_deg.ok_or("no rotational error")?;
+    let r = dead_reckoning.errors.ok_or("no errors")?.rotation_deg;
     // 0.12 rad over 200 scans: 0.003 rad = 0.17 degrees every 5 scans, beside the wobble.
     assert!((r.mean - 0.17).abs() < 0.05, "{r:?}");
     // Without a final path from the filter, the final trajectory is the online one.
@@ -216,8 +216,9 @@ fn relations_score_every_trajectory_file() -> TestResult {
         .ok_or("no score in metrics.json")?;
     assert_eq!(back.used, estimate.used);
     let back_t = back
-        .translation_m
-        .ok_or("no translational error in metrics.json")?;
+        .errors
+        .ok_or("no errors in metrics.json")?
+        .translation_m;
     assert!((back_t.mean - t.mean).abs() < 1e-12);
     let svg = fs::read_to_string(dir.join(MAP_SVG_FILE))?;
     check_svg(&svg)?;

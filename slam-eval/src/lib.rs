@@ -23,7 +23,7 @@
 //!   standard deviation of the translational (m) and rotational (deg) errors, plain and
 //!   squared, as the paper's tables do.
 //!
-//! [`ScoreSummary`] is what a run's `metrics.json` keeps of a score; [`score_run`] scores
+//! [`ScoreSummary`] is what a run's `metrics.json` keeps of a score (its [`PoseErrors`]); [`score_run`] scores
 //! every trajectory file of a run directory into [`RelativePoseErrors`].
 //!
 //! [`position_gaps`] compares a localization on a saved map with a trajectory in the same
@@ -40,6 +40,7 @@ mod metrics;
 mod path_refinement;
 mod percentile;
 mod pose;
+mod pose_errors;
 mod relations;
 pub mod run_files;
 mod run_score;
@@ -63,6 +64,7 @@ pub use run_score::{RelationsFile, RelativePoseErrors, score_run, score_tum_file
 pub use error::EvalError;
 pub use gap::{Gaps, position_gaps};
 pub use pose::{Pose, from_tum, from_xyz_rpy, magnitude};
+pub use pose_errors::PoseErrors;
 pub use relations::{Relation, read_relations};
 pub use score::{DEFAULT_TOLERANCE_NS, Score, Unmatched, score};
 pub use stats::ErrorStats;

@@ -252,8 +252,9 @@ fn aces_mapped_again_on_its_own_map_stays_in_the_map_frame() {
     let translation = metrics(&again)
         .relative_pose_error
         .and_then(|rpe| rpe.trajectory)
-        .and_then(|score| score.translation_m)
+        .and_then(|score| score.errors)
         .expect("metrics.json scores trajectory.tum")
+        .translation_m
         .mean;
     eprintln!(
         "aces seed 3 on seed 1's map: RPE {translation:.4} m, {} poses {:.3} m from the saved path on average, {:.3} m at most",

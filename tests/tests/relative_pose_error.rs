@@ -28,10 +28,10 @@ const ACES_THIRD_RATE_MAX_ERROR_M: f64 = 0.5;
 const SEED_1_100_PARTICLES: [&str; 4] = ["--seed", "1", "--particles", "100"];
 
 /// The mean of one error of a score that used some relations.
-fn mean(stats: Option<slam_eval::ErrorStats>) -> f64 {
-    stats
+fn errors(score: &slam_eval::ScoreSummary) -> slam_eval::PoseErrors {
+    score
+        .errors
         .expect("a score over some relations has statistics")
-        .mean
 }
 
 /// The score of a run's `trajectory.tum` against the relations, from its `metrics.json`.
@@ -44,7 +44,7 @@ fn trajectory_score(out: &std::path::Path) -> slam_eval::ScoreSummary {
 
 /// The mean translational error of `estimate`, asserted positive and at most `bound`.
 fn translation_within(estimate: &slam_eval::ScoreSummary, bound: f64) -> f64 {
-    let translation = mean(estimate.translation_m);
+    let translation = errors(estimate).translation_m.mean;
     assert!(
         translation > 0.0 && translation <= bound,
         "mean translational error {translation} m > {bound} m: {estimate:?}"
@@ -84,7 +84,7 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
     assert!((150..=300).contains(&estimate.used), "{estimate:?}");
     assert_eq!(estimate.used + estimate.unmatched, estimate.relations);
     let translation = translation_within(&estimate, MIT_CSAIL_400_MAX_TRANSLATION_M);
-    assert!(mean(estimate.rotation_deg) > 0.0);
+    assert!(errors(&estimate).rotation_deg.mean > 0.0);
     // The front end's own estimate is scored over the same relations.
     let used = |score: Option<slam_eval::ScoreSummary>| score.map(|s| s.used);
     assert_eq!(used(rpe.dead_reckoning), Some(estimate.used));
@@ -194,7 +194,7 @@ fn a_loop_closure_onto_corners_that_only_look_alike_is_refused() {
     let estimate = third_rate_run("aces", "2", 2458);
     assert!(estimate.used >= 100, "{estimate:?}");
     translation_within(&estimate, ACES_MAX_TRANSLATION_M);
-    let worst = estimate.translation_m.map_or(f64::INFINITY, |t| t.max);
+    let worst = errors(&estimate).translation_m.max;
     assert!(
         worst <= ACES_THIRD_RATE_MAX_ERROR_M,
         "worst relation {worst} m off"

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use serde::Serialize;
-use slam_eval::{ErrorStats, Metrics, RelativePoseErrors, ScoreSummary};
+use slam_eval::{Metrics, PoseErrors, RelativePoseErrors, ScoreSummary};
 
 use super::published::{Published, SOURCES};
 
@@ -51,25 +51,24 @@ impl Spread {
 pub struct LogResult {
     /// The log's name (file stem), as the published figures know it.
     pub log: String,
+    /// The figures published for the log, if it is one of the benchmark's.
+    pub published: Option<Published>,
     pub file: PathBuf,
     pub relations: PathBuf,
-    /// Scans processed (the most of any seed; every seed processes the whole log).
-    pub scans: u64,
-    /// How long the log took to record, seconds (its scans' stamps, first to last).
-    pub duration_s: Option<f64>,
     /// `trajectory.tum`'s errors over the relations of all seeds together.
-    pub translation_m: Option<ErrorStats>,
-    pub rotation_deg: Option<ErrorStats>,
+    pub estimate: Option<PoseErrors>,
     /// The spread of the seeds' mean translational errors.
     pub seed_means_m: Option<Spread>,
     /// `dead_reckoning.tum` (the front end alone), over all seeds' relations.
-    pub front_end_translation_m: Option<ErrorStats>,
-    pub front_end_rotation_deg: Option<ErrorStats>,
+    pub front_end: Option<PoseErrors>,
+    /// Scans processed (the most of any seed; every seed processes the whole log).
+    pub scans: u64,
     /// Mean wall time of a run, seconds.
     pub wall_s: f64,
+    /// How long the log took to record, seconds (its scans' stamps, first to last).
+    pub duration_s: Option<f64>,
     /// `duration_s / wall_s`: how many times faster than the log was recorded.
     pub real_time: Option<f64>,
-    pub published: Option<Published>,
     pub runs: Vec<SeedRun>,
 }
 
@@ -83,16 +82,16 @@ impl LogResult {
         };
         let estimate = summaries(|rpe| rpe.trajectory);
         let front_end = summaries(|rpe| rpe.dead_reckoning);
-        let pool = |summaries: &[ScoreSummary], pick: fn(&ScoreSummary) -> Option<ErrorStats>| {
-            let parts: Vec<(usize, ErrorStats)> = summaries
+        let pool = |summaries: &[ScoreSummary]| {
+            let parts: Vec<(usize, PoseErrors)> = summaries
                 .iter()
-                .filter_map(|s| Some((s.used, pick(s)?)))
+                .filter_map(|s| Some((s.used, s.errors?)))
                 .collect();
-            ErrorStats::pooled(&parts)
+            PoseErrors::pooled(&parts)
         };
         let seed_means: Vec<f64> = estimate
             .iter()
-            .filter_map(|s| s.translation_m.map(|t| t.mean))
+            .filter_map(|s| s.errors.map(|e| e.translation_m.mean))
             .collect();
         let wall_s = if runs.is_empty() {
             0.0
@@ -105,18 +104,16 @@ impl LogResult {
             log,
             file,
             relations,
+            estimate: pool(&estimate),
+            seed_means_m: Spread::of(&seed_means),
+            front_end: pool(&front_end),
             scans: runs
                 .iter()
                 .map(|r| r.metrics.frames_processed)
                 .max()
                 .unwrap_or(0),
-            duration_s,
-            translation_m: pool(&estimate, |s| s.translation_m),
-            rotation_deg: pool(&estimate, |s| s.rotation_deg),
-            seed_means_m: Spread::of(&seed_means),
-            front_end_translation_m: pool(&front_end, |s| s.translation_m),
-            front_end_rotation_deg: pool(&front_end, |s| s.rotation_deg),
             wall_s,
+            duration_s,
             real_time: duration_s.filter(|_| wall_s > 0.0).map(|d| d / wall_s),
             runs,
         }

@@ -66,11 +66,11 @@ fn row(log: &LogResult, seeds: usize) -> Vec<String> {
     let mut cells = vec![
         log.log.clone(),
         log.scans.to_string(),
-        ours(log.translation_m, 3),
+        ours(log.estimate.map(|e| e.translation_m), 3),
         spread,
-        ours(log.rotation_deg, 2),
-        ours(log.front_end_translation_m, 3),
-        ours(log.front_end_rotation_deg, 2),
+        ours(log.estimate.map(|e| e.rotation_deg), 2),
+        ours(log.front_end.map(|e| e.translation_m), 3),
+        ours(log.front_end.map(|e| e.rotation_deg), 2),
         format!("{:.1}", log.wall_s),
         log.real_time
             .map_or_else(|| "n/a".to_owned(), |x| format!("{x:.0}")),
@@ -83,28 +83,28 @@ fn row(log: &LogResult, seeds: usize) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::bench::report::Spread;
+    use slam_eval::PoseErrors;
 
     fn log(name: &str) -> LogResult {
-        let stats = |mean, std| {
-            Some(ErrorStats {
-                mean,
-                std,
-                ..ErrorStats::default()
-            })
+        let stats = |mean, std| ErrorStats {
+            mean,
+            std,
+            ..ErrorStats::default()
         };
         LogResult {
-            published: crate::bench::published::published(name),
             log: name.to_owned(),
+            published: crate::bench::published::published(name),
             file: format!("{name}.clf").into(),
             relations: format!("{name}.relations").into(),
-            scans: 1988,
-            duration_s: Some(424.0),
-            translation_m: stats(0.5797, 1.7818),
-            rotation_deg: stats(2.604, 6.0411),
+            estimate: Some(PoseErrors {
+                translation_m: stats(0.5797, 1.7818),
+                rotation_deg: stats(2.604, 6.0411),
+            }),
             seed_means_m: Spread::of(&[0.5, 0.58, 0.7]),
-            front_end_translation_m: stats(2.2179, 7.3264),
-            front_end_rotation_deg: None,
+            front_end: None,
+            scans: 1988,
             wall_s: 3.4,
+            duration_s: Some(424.0),
             real_time: Some(124.7),
             runs: Vec::new(),
         }
@@ -126,7 +126,7 @@ mod tests {
         assert_eq!(
             lines[2],
             "| mit-csail | 1988 | 0.580 +- 1.782 | 0.500 / 0.580 / 0.700 | 2.60 +- 6.04 \
-             | 2.218 +- 7.326 | n/a | 3.4 | 125 | 0.106 +- 0.325 | 0.049 +- 0.049 \
+             | n/a | n/a | 3.4 | 125 | 0.106 +- 0.325 | 0.049 +- 0.049 \
              | 0.004 +- 0.009 | 0.0319 +- 0.0363 / 0.369 +- 0.365 |"
         );
         // A log nobody published figures for still gets our columns.

@@ -183,8 +183,11 @@ fn progress(run: &SeedRun) -> String {
         .relative_pose_error
         .as_ref()
         .and_then(|rpe| rpe.trajectory)
-        .and_then(|s| s.translation_m)
-        .map_or_else(|| "no score".to_owned(), |t| format!("{:.3} m", t.mean));
+        .and_then(|s| s.errors)
+        .map_or_else(
+            || "no score".to_owned(),
+            |e| format!("{:.3} m", e.translation_m.mean),
+        );
     format!("{error} in {:.1} s", run.wall_s)
 }
 

@@ -476,8 +476,9 @@ impl Particle {
         association: &Association,
         normal: &Vector3<f64>,
     ) -> Option<Pose2> {
-        let information = pose.information + association.pose_information;
-        let step = sample_information_form3(&information, &association.pose_gradient, normal)?;
+        let evidence = &association.evidence;
+        let information = pose.information + evidence.information;
+        let step = sample_information_form3(&information, &evidence.gradient, normal)?;
         let pose = Pose2::new(
             self.pose.x + step.x,
             self.pose.y + step.y,

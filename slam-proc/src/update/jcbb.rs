@@ -175,10 +175,26 @@ pub(crate) struct Association {
     pub log_likelihood: f64,
     /// Whether the node budget ran out (the result is then the best found so far).
     pub truncated: bool,
-    /// `A = sum G^T D^-1 G` over the pairings: what they tell about the pose.
-    pub pose_information: Matrix3<f64>,
-    /// `b = sum G^T D^-1 nu`: the pose correction `-(P^-1 + A)^-1 b` fits them best.
-    pub pose_gradient: Vector3<f64>,
+    /// What the pairings tell about the pose.
+    pub evidence: PoseEvidence,
+}
+
+/// What a set of pairings tells about the pose, in information form: the pose correction
+/// `-(P^-1 + A)^-1 b` fits them best under a prior of covariance `P`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PoseEvidence {
+    /// `A = sum G^T D^-1 G` over the pairings.
+    pub information: Matrix3<f64>,
+    /// `b = sum G^T D^-1 nu`.
+    pub gradient: Vector3<f64>,
+}
+
+impl PoseEvidence {
+    /// No pairings: nothing known.
+    pub const NONE: Self = Self {
+        information: Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        gradient: Vector3::new(0.0, 0.0, 0.0),
+    };
 }
 
 /// The search, with buffers kept between calls.
@@ -255,8 +271,7 @@ impl Jcbb {
                 nis: 0.0,
                 log_likelihood: 0.0,
                 truncated,
-                pose_information: Matrix3::zeros(),
-                pose_gradient: Vector3::zeros(),
+                evidence: PoseEvidence::NONE,
             };
         };
         // ln det C = sum ln det D_i + ln det P + ln det(P^-1 + A) (matrix determinant lemma).
@@ -268,8 +283,10 @@ impl Jcbb {
             nis: self.best_nis,
             log_likelihood: -0.5 * (self.best_nis + log_det + dims * TAU.ln()),
             truncated,
-            pose_information: sum.a,
-            pose_gradient: sum.b,
+            evidence: PoseEvidence {
+                information: sum.a,
+                gradient: sum.b,
+            },
         }
     }
 
@@ -460,9 +477,10 @@ mod tests {
         let information = g.transpose() * &d_inverse * &g;
         let gradient = g.transpose() * &d_inverse * &nu;
         assert!(
-            (result.pose_information - &information).abs().max() < 1e-6 * information.abs().max()
+            (result.evidence.information - &information).abs().max()
+                < 1e-6 * information.abs().max()
         );
-        assert!((result.pose_gradient - &gradient).abs().max() < 1e-6 * gradient.abs().max());
+        assert!((result.evidence.gradient - &gradient).abs().max() < 1e-6 * gradient.abs().max());
         c += &g * p * g.transpose();
         let chol = nalgebra::Cholesky::new(c).unwrap();
         let nis = nu.dot(&chol.solve(&nu));
