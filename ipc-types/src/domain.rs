@@ -409,8 +409,7 @@ impl Domain {
 
 /// The effective uid of this process: the owner of every file it makes.
 fn effective_uid() -> u32 {
-    // SAFETY: geteuid(2) has no preconditions and cannot fail.
-    unsafe { libc::geteuid() }
+    nix::unistd::geteuid().as_raw()
 }
 
 /// The start of every file name of this user's domains: [`FILE_PREFIX`], `u`, the uid, `_`.

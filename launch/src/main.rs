@@ -28,6 +28,8 @@ fn main() -> ExitCode {
 
 fn run() -> Result<ExitCode> {
     let args = Args::parse();
+    // Started by slam-bench: a killed slam-bench takes this run with it.
+    stage_kit::launcher_watch::stop_with_launcher()?;
     shutdown::install().context("cannot install the Ctrl-C handler")?;
 
     let mut config = args.run_config()?;

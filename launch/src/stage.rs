@@ -64,9 +64,9 @@ pub struct Stage {
 impl Stage {
     /// Starts `program args` as stage `index`; stdout lines become events, stderr goes to
     /// `log_dir/<name>.log` (whole lines; a log that cannot be written, a full disk, stops
-    /// there and says so on the console) and its last lines are kept. The child is sent SIGTERM when the
-    /// calling thread ends (see [`die_with_parent`]): call it from the thread that lives
-    /// as long as the run, the main thread.
+    /// there and says so on the console) and its last lines are kept. The child is sent
+    /// SIGTERM when the calling thread ends (`stage_kit::launcher_watch`): call it from the
+    /// thread that lives as long as the run, the main thread.
     pub fn spawn(
         index: usize,
         name: &str,
@@ -107,7 +107,9 @@ impl Stage {
             // Each stage reports what it took in and sent out (see ipc_types::progress),
             // which is how the supervisor tells which stage has stalled.
             .env(ipc_types::progress::ENV, "1");
-        die_with_parent(&mut command);
+        // The child dies with this process, however it dies (SIGKILL included), so no
+        // stage outlives the launcher holding its shared memory with nobody to stop it.
+        stage_kit::launcher_watch::started_by_this_process(&mut command);
         let mut child = command.spawn().map_err(|source| StageError::Spawn {
             name: name.to_owned(),
             program: program.display().to_string(),
@@ -251,49 +253,15 @@ impl Stage {
     }
 }
 
-/// Has the kernel send the child SIGTERM when this process dies, however it dies (SIGKILL
-/// included), so no stage outlives the launcher holding its shared memory with nobody to
-/// stop it (and no slam-launch outlives slam-bench). SIGTERM, not SIGKILL: every stage and
-/// slam-launch take it as Ctrl-C (`stage_kit::shutdown`), so map-sink still writes its
-/// results from what it received and the others remove their iceoryx2 nodes on the way
-/// out. Linux only (`PR_SET_PDEATHSIG`); it is tied to the thread that forked the child,
-/// not the process: call it on the thread that lives as long as the child should.
-#[cfg(target_os = "linux")]
-pub fn die_with_parent(command: &mut Command) {
-    use std::os::unix::process::CommandExt;
-    // Ours: the child's parent until we die. Always fits a pid_t on Linux.
-    let parent = libc::pid_t::try_from(std::process::id()).unwrap_or(libc::pid_t::MAX);
-    let death_signal = libc::c_ulong::try_from(libc::SIGTERM).unwrap_or(15);
-    // SAFETY: the closure runs in the child between fork and exec; it calls only prctl(2)
-    // and getppid(2), which are async-signal-safe, and makes its errors without allocating.
-    // `pre_exec` itself is unsafe in std (the closure runs in a forked child), so no safe
-    // wrapper of prctl would remove this block.
-    unsafe {
-        command.pre_exec(move || {
-            if libc::prctl(libc::PR_SET_PDEATHSIG, death_signal, 0, 0, 0) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            // We may have died between fork and prctl, before there was a death signal to
-            // send: the child then has another parent already, and must not run.
-            if libc::getppid() != parent {
-                return Err(std::io::Error::from_raw_os_error(libc::ESRCH));
-            }
-            Ok(())
-        });
-    }
-}
-
-/// Elsewhere a child outlives a killed parent; it still stops on Ctrl-C.
-#[cfg(not(target_os = "linux"))]
-pub fn die_with_parent(_command: &mut Command) {}
-
 /// Describes how a child ended, e.g. `exit status 2` or `killed by signal 9`; a SIGBUS with
 /// what /dev/shm has left (see [`crate::shm_room`]).
 pub fn describe(status: ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (status.code(), status.signal()) {
         (Some(code), _) => format!("exit status {code}"),
-        (None, Some(libc::SIGBUS)) => crate::shm_room::sigbus_explanation(),
+        (None, Some(signal)) if signal == nix::sys::signal::Signal::SIGBUS as i32 => {
+            crate::shm_room::sigbus_explanation()
+        }
         (None, Some(signal)) => format!("killed by signal {signal}"),
         _ => status.to_string(),
     }

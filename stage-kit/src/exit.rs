@@ -8,7 +8,8 @@ use anyhow::Context;
 use crate::console::say_err;
 
 /// The `main` of a pipeline stage: parses `A` from the command line (clap prints usage and
-/// exits on a bad argument), installs the Ctrl-C/SIGTERM flag the stage's loops poll
+/// exits on a bad argument), ties the process to its launcher's life
+/// ([`crate::launcher_watch`]), installs the Ctrl-C/SIGTERM flag the stage's loops poll
 /// ([`crate::shutdown`]), runs `run`, and on an error prints `name: error` with its whole
 /// source chain on stderr and exits with a failing status.
 pub fn run_stage<A: clap::Parser>(
@@ -17,6 +18,7 @@ pub fn run_stage<A: clap::Parser>(
 ) -> ExitCode {
     let args = A::parse();
     report(name, || {
+        crate::launcher_watch::stop_with_launcher()?;
         crate::shutdown::install().context("cannot install the Ctrl-C handler")?;
         run(args)
     })
@@ -29,7 +31,10 @@ pub fn run_tool<A: clap::Parser>(
     run: impl FnOnce(A) -> anyhow::Result<()>,
 ) -> ExitCode {
     let args = A::parse();
-    report(name, || run(args))
+    report(name, || {
+        crate::launcher_watch::stop_with_launcher()?;
+        run(args)
+    })
 }
 
 /// Runs `run`; an error becomes one `name: error` line (`{:#}`) and a failing status.

@@ -7,6 +7,8 @@
 //!   the Ctrl-C/SIGTERM flag ([`shutdown`]), runs the stage and turns its error into one
 //!   `name: error` line on stderr (the whole source chain, `{:#}`) and a failing exit status;
 //!   [`run_tool`] the same for a command-line tool that has no loop to stop.
+//! - [`launcher_watch`]: a process started by a launcher gets SIGTERM when the launcher
+//!   dies ([`run_stage`] and [`run_tool`] ask for it), so nothing outlives its launcher.
 //! - [`shutdown`]: the latched Ctrl-C/SIGTERM flag every loop polls. It is defined in
 //!   ipc-types because the transport's blocking waits end on it too; a stage reads it here.
 //! - [`say`] and [`say_err`]: console lines that are dropped, not a panic, when the reader
@@ -50,6 +52,7 @@
 
 mod console;
 mod exit;
+pub mod launcher_watch;
 pub mod odometry_buffer;
 pub mod odometry_covariance;
 pub mod pacing;

@@ -150,7 +150,7 @@ fn run_once(
         command.args(["--frames", &frames.to_string()]);
     }
     // A killed slam-bench takes its run with it, as slam-launch does its stages.
-    launch::stage::die_with_parent(&mut command);
+    stage_kit::launcher_watch::started_by_this_process(&mut command);
     let started = Instant::now();
     let output = command
         .output()
