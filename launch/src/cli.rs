@@ -110,6 +110,12 @@ pub struct Args {
     /// Start the replay at this scan of the log (from 0).
     #[arg(long, value_name = "SCAN")]
     replay_start: Option<u64>,
+    /// Replay every N-th scan of the log (all its odometry): a harder version of the log.
+    #[arg(long, value_name = "N")]
+    replay_every: Option<u64>,
+    /// Replay the log's ranges beyond this many metres as no-returns: a shorter sensor.
+    #[arg(long, value_name = "METRES")]
+    replay_max_range: Option<f64>,
     /// Record every topic into OUT/run.mcap (slam-record), for Foxglove; in lockstep the
     /// run stays lossless and deterministic.
     #[arg(long)]
@@ -142,7 +148,7 @@ impl Args {
             .as_deref()
             .filter(|file| file.extension().is_some_and(|e| e == "mcap"))
             .map(|_| lidar_replay::LogFormat::Mcap.name().to_owned());
-        let given: [(&'static str, Option<Value>); 24] = [
+        let given: [(&'static str, Option<Value>); 26] = [
             (
                 "source",
                 value(
@@ -176,6 +182,8 @@ impl Args {
             ("localize", value(self.localize.then_some(true))?),
             ("initial_pose", value(self.initial_pose.clone())?),
             ("replay.start", value(self.replay_start)?),
+            ("replay.every", value(self.replay_every)?),
+            ("replay.max_range", value(self.replay_max_range)?),
         ];
         Ok(given
             .into_iter()

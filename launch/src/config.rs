@@ -77,6 +77,11 @@ pub struct ReplaySection {
     pub frames: u64,
     /// The log's scan to start at, from 0 (`--replay-start`, lidar-replay's `--skip`).
     pub start: u64,
+    /// Publish every N-th scan of the log (`--replay-every`, lidar-replay's `--every`).
+    pub every: u64,
+    /// Ranges beyond this many metres become no-returns (`--replay-max-range`,
+    /// lidar-replay's `--max-range`).
+    pub max_range: Option<f64>,
     /// Seconds of log time lidar-replay waits for lines written out of time order
     /// (`--reorder-window`); unset = its default.
     pub reorder_window: Option<f64>,
@@ -91,6 +96,8 @@ impl Default for ReplaySection {
             odometry: true,
             frames: 0,
             start: 0,
+            every: 1,
+            max_range: None,
             reorder_window: None,
         }
     }
@@ -319,6 +326,12 @@ impl RunConfig {
             }
             if let Err(e) = lidar_replay::check_rate(self.replay.rate) {
                 return Err(ConfigError::Invalid(format!("[replay] rate (--rate) {e}")));
+            }
+            if let Err(e) = lidar_replay::Degradation::new(self.replay.every, self.replay.max_range)
+            {
+                return Err(ConfigError::Invalid(format!(
+                    "[replay] every / max_range (--replay-every, --replay-max-range): {e}"
+                )));
             }
         }
         if self.map.is_none() && (self.localize || self.initial_pose.is_some()) {
@@ -569,6 +582,26 @@ mod tests {
         // The effective configuration, written beside the run, reads back as itself.
         let effective = toml::to_string(&config).unwrap();
         assert_eq!(toml::from_str::<RunConfig>(&effective).unwrap(), config);
+    }
+
+    #[test]
+    fn a_harder_replay_is_checked_before_anything_starts() {
+        let config: RunConfig = toml::from_str(
+            "source = 'replay'\n[replay]\nfile = 'aces.clf'\nevery = 3\nmax_range = 5.0",
+        )
+        .unwrap();
+        config.validate().unwrap();
+        for (key, value) in [("every", "0"), ("max_range", "-1.0"), ("max_range", "0.0")] {
+            let bad: RunConfig = toml::from_str(&format!(
+                "source = 'replay'\n[replay]\nfile = 'aces.clf'\n{key} = {value}"
+            ))
+            .unwrap();
+            let error = bad.validate().unwrap_err().to_string();
+            assert!(
+                error.contains("--replay-every, --replay-max-range"),
+                "{error}"
+            );
+        }
     }
 
     #[test]

@@ -399,6 +399,12 @@ fn settings_args(
                 if config.replay.start > 0 {
                     args.push(format!("--skip={}", config.replay.start));
                 }
+                if config.replay.every > 1 {
+                    args.push(format!("--every={}", config.replay.every));
+                }
+                if let Some(metres) = config.replay.max_range {
+                    args.push(format!("--max-range={metres}"));
+                }
                 if let Some(window) = config.replay.reorder_window {
                     args.push(format!("--reorder-window={window}"));
                 }

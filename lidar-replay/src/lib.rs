@@ -11,6 +11,8 @@
 //!   log time ([`reorder`], [`ReorderConfig`]); what cannot be placed is dropped and counted.
 //! * [`ReplaySummary`] is the block a replay ends with: everything skipped, reordered or
 //!   dropped, and why.
+//! * A [`Degradation`] makes a harder version of a log on the fly: every n-th scan, ranges
+//!   cut to a shorter sensor's; what it left out is in the summary, not counted as lost.
 //! * [`open_log`] refuses a file that is not of its format ([`check_format`]) before anything
 //!   is published.
 //! * No input can fill the memory or hold up a stop: a line longer than [`MAX_LINE_BYTES`]
@@ -27,6 +29,7 @@
 //!   covariance that grows with the motion ([`OdometryCovariance`]), as the logs give none.
 
 pub mod carmen;
+mod degradation;
 mod error;
 mod fill;
 mod format;
@@ -39,6 +42,7 @@ pub mod seed_csv;
 mod summary;
 
 pub use carmen::CarmenReader;
+pub use degradation::{Degradation, DegradationError};
 pub use error::{CheckError, LineError, Malformation, OpenError, ReadError};
 pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};
 pub use format::{

@@ -10,8 +10,8 @@ use iceoryx2::prelude::{Node, ipc};
 use ipc_types::prelude::*;
 use lidar_replay::reorder::{DEFAULT_REORDER_CAP, DEFAULT_REORDER_WINDOW_NS};
 use lidar_replay::{
-    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError, ReadError, Records,
-    ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
+    Degradation, LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError,
+    ReadError, Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
 };
 use recorder::Recorded;
 use stage_kit::pacing::Pacer;
@@ -56,6 +56,14 @@ struct Args {
     /// at 0 at that scan; stamps stay the log's.
     #[arg(long, value_name = "SCANS", default_value_t = 0)]
     skip: u64,
+    /// Publish the first scan (after --skip) and every N-th after it, all the odometry: a
+    /// harder version of the log, as from a slower sensor. Sequence numbers stay
+    /// consecutive.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    every: u64,
+    /// Make ranges beyond this many metres no-returns, as from a shorter-range sensor.
+    #[arg(long, value_name = "METRES")]
+    max_range: Option<f64>,
     /// Log time (seconds) a record waits for older ones read after it (CARMEN logs that go
     /// back in time); records later than that are dropped. 0 = nothing may go back further
     /// than behind the newest record.
@@ -217,6 +225,7 @@ fn replay_log(args: &Args) -> Result<()> {
         window_ns: (args.reorder_window * 1e9).round() as u64,
         max_held: args.reorder_cap,
     };
+    let degradation = Degradation::new(args.every, args.max_range)?;
     // Refuse a file that is not of the format before anyone sees a port.
     let mut log = match open_log_until(args.format, &args.file, reorder, shutdown::requested) {
         Ok(log) => log,
@@ -231,9 +240,12 @@ fn replay_log(args: &Args) -> Result<()> {
     let mut odometry_covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut summary = ReplaySummary {
         file: args.file.display().to_string(),
+        degradation,
         ..ReplaySummary::default()
     };
     let mut skipped = 0u64;
+    // Scans of the log from the start (after --skip), published or left out.
+    let mut scans_read = 0u64;
     // The newest odometry reading while skipping: it goes out before the first scan, so
     // that scan's stamp has a reading at or before it to pair with.
     let mut odometry_before_start = None;
@@ -279,7 +291,13 @@ fn replay_log(args: &Args) -> Result<()> {
                         fill_odometry(message, seq, &pose, covariance)
                     })?
                 }
-                LogRecord::Scan(scan) => {
+                LogRecord::Scan(mut scan) => {
+                    scans_read += 1;
+                    if !degradation.keeps(scans_read - 1) {
+                        summary.scans_left_out += 1;
+                        continue;
+                    }
+                    summary.beams_shortened += degradation.shorten(&mut scan);
                     let seq = streams.published;
                     let mut fill_error = None;
                     let published = streams.scan(scan.stamp_ns, |message| {
@@ -322,6 +340,11 @@ fn replay_recording(args: &Args) -> Result<()> {
     anyhow::ensure!(
         args.skip == 0,
         "--skip starts a text log part-way; a recording replays whole"
+    );
+    anyhow::ensure!(
+        args.every == 1 && args.max_range.is_none(),
+        "--every and --max-range make a harder version of a text log; a recording replays \
+         as it was published"
     );
     // Refuse a file that is no recording before anyone sees a port.
     let (mut recording, info) = recorder::open_recording(&args.file)?;

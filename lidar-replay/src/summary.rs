@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 use std::fmt;
 
+use crate::degradation::Degradation;
 use crate::error::LineError;
 use crate::reorder::{Records, ReorderConfig, ReorderCounts};
 
@@ -28,6 +29,12 @@ pub struct ReplaySummary {
     pub published: Records,
     /// Odometry poses read but not published (`--no-odometry`).
     pub odometry_unpublished: u64,
+    /// What the replay left out of the log on request (`--every`, `--max-range`).
+    pub degradation: Degradation,
+    /// Scans left out by `--every`.
+    pub scans_left_out: u64,
+    /// Beams made no-returns by `--max-range`.
+    pub beams_shortened: u64,
     /// Why the replay ended before the log did, if it did (`--frames`, Ctrl-C).
     pub stopped: Option<String>,
     /// The reordering window and what it did; `None` for a format read in line order.
@@ -155,6 +162,20 @@ impl fmt::Display for ReplaySummary {
                 self.odometry_unpublished
             )?;
         }
+        if self.degradation.every.get() > 1 {
+            write!(
+                f,
+                "\n  left out:        {} scans (--every {}: {})",
+                self.scans_left_out, self.degradation.every, self.degradation
+            )?;
+        }
+        if let Some(max) = self.degradation.max_range_m {
+            write!(
+                f,
+                "\n  shortened:       {} beams beyond {max} m made no-returns (--max-range)",
+                self.beams_shortened
+            )?;
+        }
         Ok(())
     }
 }
@@ -226,5 +247,30 @@ mod tests {
              \x20 published:       400 scans\n\
              \x20 malformed lines: 0"
         );
+    }
+
+    #[test]
+    fn what_a_degradation_left_out_is_said_and_not_counted_as_lost() {
+        let summary = ReplaySummary {
+            file: "aces.clf".into(),
+            lines_read: 14_762,
+            published: Records {
+                scans: 2458,
+                odometry: 14_693,
+            },
+            degradation: Degradation::new(3, Some(5.0)).unwrap(),
+            scans_left_out: 4916,
+            beams_shortened: 120_000,
+            ..ReplaySummary::default()
+        };
+        assert_eq!(
+            summary.to_string(),
+            "lidar-replay: summary of aces.clf (14762 lines read)\n\
+             \x20 published:       2458 scans, 14693 odometry poses\n\
+             \x20 malformed lines: 0\n\
+             \x20 left out:        4916 scans (--every 3: every 3rd scan, ranges to 5 m)\n\
+             \x20 shortened:       120000 beams beyond 5 m made no-returns (--max-range)"
+        );
+        assert!(summary.losses().iter().all(|(_, n)| *n == 0));
     }
 }

@@ -66,3 +66,57 @@ fn emulated_hokuyo_gives_the_same_map_as_the_replayed_log() {
     assert!(shm_leftovers(&live_domain).is_empty());
     assert!(shm_leftovers(&replay.domain).is_empty());
 }
+
+#[test]
+fn a_replay_made_harder_publishes_every_nth_scan_cut_to_the_shorter_range() {
+    let log = test_data::seed_hall_csv();
+    let run = replayed(
+        "seed-hall-harder",
+        &log,
+        &[
+            "--format",
+            "seed-csv",
+            "--particles",
+            "20",
+            "--replay-every",
+            "4",
+            "--replay-max-range",
+            "8",
+        ],
+    );
+    assert_eq!(metrics(&run.out).frames_processed, 100);
+    // seed-hall is stamped every 0.1 s from 0: the scans kept are 0, 4, 8, ...
+    let stamps: Vec<u64> = read_tum(&run.out.join("trajectory.tum"))
+        .iter()
+        .map(|pose| pose.stamp_ns)
+        .collect();
+    let expected: Vec<u64> = (0..100).map(|i| i * 400_000_000).collect();
+    assert_eq!(stamps, expected);
+    // The replay's summary says what it left out, and nothing counts as lost.
+    let stderr = String::from_utf8_lossy(&run.output.stderr);
+    let line = |head: &str| {
+        stderr
+            .lines()
+            .find_map(|line| line.trim().strip_prefix(head))
+            .unwrap_or_else(|| panic!("no '{head}' line in {stderr}"))
+            .trim()
+            .to_owned()
+    };
+    assert!(
+        line("left out:").starts_with("300 scans (--every 4"),
+        "{stderr}"
+    );
+    let shortened: u64 = line("shortened:")
+        .split_whitespace()
+        .next()
+        .and_then(|count| count.parse().ok())
+        .expect("a count of beams");
+    // Much of the hall lies beyond 8 m, not all of it.
+    assert!((1000..90 * 1081).contains(&shortened), "{shortened} beams");
+    assert!(
+        !stderr.contains("skipped_scans"),
+        "every scan has walls: {stderr}"
+    );
+    assert!(!stderr.contains("lidar-replay: malformed"), "{stderr}");
+    assert!(shm_leftovers(&run.domain).is_empty());
+}

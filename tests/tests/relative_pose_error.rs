@@ -127,47 +127,35 @@ fn aces_closes_its_overlapping_loops_together() {
     assert!(shm_leftovers(&domain).is_empty());
 }
 
-/// `name`'s log (../shared/data/carmen) with only every third scan kept, written to a
-/// scratch directory: the front end has a third of the overlap, loops come back farther
-/// off, and the filter updates on fewer, farther-apart scans.
-fn third_rate_log(name: &str) -> std::path::PathBuf {
-    let full = test_data::carmen_log(name);
-    let log = scratch(&format!("{name}-third-rate-log")).join(format!("{name}-third-rate.clf"));
-    let text = std::fs::read_to_string(&full).unwrap();
-    let mut scans = 0;
-    let kept: String = text
-        .lines()
-        .filter(|line| {
-            if !line.starts_with("FLASER ") {
-                return true;
-            }
-            scans += 1;
-            scans % 3 == 1
-        })
-        .flat_map(|line| [line, "\n"])
-        .collect();
-    std::fs::write(&log, kept).unwrap();
-    log
-}
-
-/// Replays `name`'s third-rate log with `seed` and 100 particles, scored against the full
-/// log's relations; returns the score and checks that the run left no shared memory.
+/// Replays `name`'s log (../shared/data/carmen) with only every third scan published
+/// (`--replay-every 3`), `seed` and 100 particles, scored against the relations beside it:
+/// the front end has a third of the overlap, loops come back farther off, and the filter
+/// updates on fewer, farther-apart scans. Returns the score, and checks that the replay
+/// said what it left out and that the run left no shared memory.
 fn third_rate_run(name: &str, seed: &str, scans: u64) -> slam_eval::ScoreSummary {
-    let log = third_rate_log(name);
-    let relations = test_data::carmen_log(name).with_extension("relations");
-    let Run { domain, out, .. } = replayed(
+    let log = test_data::carmen_log(name);
+    let Run {
+        domain,
+        out,
+        output,
+    } = replayed(
         &format!("{name}-third-rate-seed-{seed}"),
         &log,
-        &[
-            "--relations",
-            relations.to_str().unwrap(),
-            "--seed",
-            seed,
-            "--particles",
-            "100",
-        ],
+        &["--replay-every", "3", "--seed", seed, "--particles", "100"],
     );
     assert_eq!(metrics(&out).frames_processed, scans);
+    // The first scan and every third after it: a log of 3k-2 to 3k scans keeps k of them.
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let left_out = stderr
+        .lines()
+        .find_map(|line| line.trim().strip_prefix("left out:"))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|count| count.parse::<u64>().ok())
+        .unwrap_or_else(|| panic!("no count of scans left out in {stderr}"));
+    assert!(
+        (2 * scans - 2..=2 * scans).contains(&left_out),
+        "{left_out} scans left out, {scans} kept"
+    );
     assert!(shm_leftovers(&domain).is_empty());
     trajectory_score(&out)
 }

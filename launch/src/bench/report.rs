@@ -129,6 +129,10 @@ pub struct BenchReport {
     pub config: Option<PathBuf>,
     /// Scans per log, if limited.
     pub frames: Option<u64>,
+    /// Every how many scans of a log were replayed, if not all (`--every`).
+    pub every: Option<u64>,
+    /// Ranges beyond this were replayed as no-returns, metres (`--max-range`).
+    pub max_range_m: Option<f64>,
     /// Where the published figures come from.
     pub published_sources: &'static str,
     pub logs: Vec<LogResult>,
@@ -147,6 +151,8 @@ impl BenchReport {
             seeds,
             config,
             frames,
+            every: None,
+            max_range_m: None,
             published_sources: SOURCES,
             logs,
         }

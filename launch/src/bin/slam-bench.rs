@@ -42,6 +42,14 @@ struct Args {
     /// Scans to replay of each log (default: all).
     #[arg(long)]
     frames: Option<u64>,
+    /// Replay every N-th scan of each log (all its odometry): harder versions of the logs,
+    /// as from a slower sensor.
+    #[arg(long, value_name = "N")]
+    every: Option<u64>,
+    /// Replay the logs' ranges beyond this many metres as no-returns, as from a
+    /// shorter-range sensor.
+    #[arg(long, value_name = "METRES")]
+    max_range: Option<f64>,
 }
 
 /// The log format slam-bench knows, by extension, and its name for slam-launch.
@@ -57,6 +65,10 @@ fn main() -> ExitCode {
 fn run(args: Args) -> Result<()> {
     let seeds = parse_seeds(&args.seeds).context("--seeds")?;
     anyhow::ensure!(args.particles > 0, "--particles must be at least 1");
+    let degradation = lidar_replay::Degradation::new(args.every.unwrap_or(1), args.max_range)?;
+    if !degradation.is_none() {
+        eprintln!("slam-bench: the logs replayed harder: {degradation}");
+    }
     let launcher = std::env::current_exe()
         .context("cannot find this program's path")?
         .with_file_name("slam-launch");
@@ -81,13 +93,17 @@ fn run(args: Args) -> Result<()> {
         results.push(LogResult::new(name, log, relations, runs));
     }
 
-    let report = BenchReport::new(
-        args.particles,
-        seeds,
-        args.config.clone(),
-        args.frames,
-        results,
-    );
+    let report = BenchReport {
+        every: args.every,
+        max_range_m: args.max_range,
+        ..BenchReport::new(
+            args.particles,
+            seeds,
+            args.config.clone(),
+            args.frames,
+            results,
+        )
+    };
     print!("{}", table::render(&report));
     let path = args.out.join(REPORT_FILE);
     let mut json = serde_json::to_string_pretty(&report).context("cannot format the report")?;
@@ -145,6 +161,12 @@ fn run_once(
         .arg(out);
     if let Some(config) = &args.config {
         command.arg("--config").arg(config);
+    }
+    if let Some(every) = args.every {
+        command.args(["--replay-every", &every.to_string()]);
+    }
+    if let Some(metres) = args.max_range {
+        command.args(["--replay-max-range", &metres.to_string()]);
     }
     if let Some(frames) = args.frames {
         command.args(["--frames", &frames.to_string()]);
