@@ -18,7 +18,8 @@ pub struct FrontEndConfig {
     /// Edge of the voxels that thin scans and the local map, metres. A few times the range
     /// noise: finer adds points that carry the same information, coarser loses corners.
     pub voxel_size: f64,
-    /// A scan with fewer usable points (valid, with a surface normal) is not matched.
+    /// A scan with fewer usable points (valid, with a surface normal) is not matched, and
+    /// a fit with fewer inliers does not overrule the odometry.
     pub min_points: usize,
     /// Widest gate between a scan point and its map neighbour, metres. Wider than any
     /// prior's plausible error at this rate; matches beyond it are clutter. Registration

@@ -439,11 +439,18 @@ impl FrontEnd {
         Ok(found)
     }
 
-    /// Whether a fit that contradicts the odometry step overrules it: a clear fit always;
-    /// a weak one only if the scan lies on the map clearly better at the fit's pose than
-    /// at the odometry's (a stale odometry catching up, say), since a weak fit is the more
-    /// likely of the two to be wrong.
+    /// Whether a fit that contradicts the odometry step overrules it. Never one with fewer
+    /// inliers than a scan needs points to be registered at all (`min_points`): a few dozen
+    /// points (a short-range sensor's scan, most of its beams no-returns) can line up with
+    /// the map tens of degrees from where the wheels put the robot, and a strong share of
+    /// a small scan is still small evidence against the wheels. Otherwise a clear fit
+    /// always; a weak one only if the scan lies on the map clearly better at the fit's pose
+    /// than at the odometry's (a stale odometry catching up, say), since a weak fit is the
+    /// more likely of the two to be wrong.
     fn overrules(&self, found: &Registration, step: &Step, points: &[SurfacePoint]) -> bool {
+        if found.inliers < self.config.min_points {
+            return false;
+        }
         if found.inliers as f64 >= self.config.strong_inlier_fraction * points.len() as f64 {
             return true;
         }
