@@ -4,8 +4,8 @@
 use nalgebra::{Matrix4, SMatrix};
 
 use crate::config::FeatureConfig;
-use crate::features::{Corner, Line};
-use slam_geom::wrap_angle;
+use crate::features::Line;
+use slam_geom::{MeasuredCorner, wrap_angle};
 
 /// The corner where `first` meets `second` (next in scan order), if they are two walls that
 /// truly meet: the near ends close to each other and to the intersection, both arms long
@@ -14,7 +14,7 @@ pub(crate) fn corner_between(
     first: &Line,
     second: &Line,
     config: &FeatureConfig,
-) -> Option<Corner> {
+) -> Option<MeasuredCorner> {
     if distance(first.end, second.start) > config.corner_max_gap {
         return None;
     }
@@ -75,7 +75,7 @@ pub(crate) fn corner_between(
         .fixed_view_mut::<2, 2>(2, 2)
         .copy_from(&second.covariance);
     let covariance: SMatrix<f64, 4, 4> = jacobian * lines * jacobian.transpose();
-    Some(Corner {
+    Some(MeasuredCorner {
         x: tip[0],
         y: tip[1],
         heading,

@@ -1,6 +1,7 @@
 //! What the extractor reports for one scan: lines and corners in the sensor frame.
 
-use nalgebra::{Matrix2, Matrix4};
+use nalgebra::Matrix2;
+use slam_geom::MeasuredCorner;
 
 /// A line in normal form `x cos(theta) + y sin(theta) = rho`, fitted by total least squares.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,22 +27,9 @@ impl Line {
     }
 }
 
-/// Where two walls meet (docs/CONVENTIONS.md): the intersection of two fitted lines.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Corner {
-    pub x: f64,
-    pub y: f64,
-    /// Direction of the bisector towards the tip, `atan2(-(d1 + d2))`, in `[-pi, pi)`.
-    pub heading: f64,
-    /// Opening angle `acos(d1 . d2)` between the arms, in `(0, pi)`.
-    pub angle: f64,
-    /// Covariance of `(x, y, heading, angle)`.
-    pub covariance: Matrix4<f64>,
-}
-
 /// The features of one scan, lines and corners each in scan order.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FeatureSet {
     pub lines: Vec<Line>,
-    pub corners: Vec<Corner>,
+    pub corners: Vec<MeasuredCorner>,
 }

@@ -378,7 +378,7 @@ fn publish_features(
     match extractor.extract(&input) {
         Ok(found) => {
             lines.extend(found.lines.iter().map(to_line));
-            corners.extend(found.corners.iter().map(to_corner));
+            corners.extend(found.corners.iter().map(|&c| Corner::from(c)));
         }
         Err(e) => {
             // A malformed scan is counted and dropped; the slot still goes downstream
@@ -434,21 +434,5 @@ fn to_line(line: &feature_proc::Line) -> Line {
         end: line.end,
         point_count: u32::try_from(line.point_count).unwrap_or(u32::MAX),
         reserved: 0,
-    }
-}
-
-fn to_corner(corner: &feature_proc::Corner) -> Corner {
-    let mut covariance = [0.0; 16];
-    for r in 0..4 {
-        for c in 0..4 {
-            covariance[r * 4 + c] = corner.covariance[(r, c)];
-        }
-    }
-    Corner {
-        x: corner.x,
-        y: corner.y,
-        heading: corner.heading,
-        angle: corner.angle,
-        covariance,
     }
 }

@@ -5,7 +5,8 @@ mod common;
 
 use common::eval::{MatchParams, estimate_motion, redetected};
 use common::recorded::scan_input;
-use feature_proc::{Corner, Extractor, FeatureConfig};
+use feature_proc::{Extractor, FeatureConfig};
+use slam_geom::MeasuredCorner;
 use test_data::{ScanRecord, seed_hall_scans};
 
 struct Stats {
@@ -16,7 +17,7 @@ struct Stats {
 
 fn run(scans: &[ScanRecord], config: FeatureConfig) -> Stats {
     let mut extractor = Extractor::new(config);
-    let corners: Vec<Vec<Corner>> = scans
+    let corners: Vec<Vec<MeasuredCorner>> = scans
         .iter()
         .map(|scan| {
             let found = extractor.extract(&scan_input(scan));

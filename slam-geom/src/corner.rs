@@ -43,6 +43,21 @@ impl TrueCorner {
     }
 }
 
+/// A corner as one scan measured it, in the sensor frame: the extractor's output and the
+/// filter's input, with the covariance of `(x, y, heading, angle)` (symmetric positive
+/// definite) propagated from the two fitted lines.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredCorner {
+    pub x: f64,
+    pub y: f64,
+    /// Bisector towards the tip, in `[-pi, pi)`.
+    pub heading: f64,
+    /// Opening angle between the walls, in `(0, pi)`.
+    pub angle: f64,
+    /// Covariance of `(x, y, heading, angle)`.
+    pub covariance: Matrix4<f64>,
+}
+
 /// A corner of a SLAM map, in the map frame: the estimate of a [`TrueCorner`] with its
 /// covariance and the number of scans that saw it.
 #[derive(Debug, Clone, Copy, PartialEq)]

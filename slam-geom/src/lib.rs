@@ -24,7 +24,7 @@ mod tum;
 
 pub use align::{Se2Alignment, WeightedPair, align_se2};
 pub use angle::wrap_angle;
-pub use corner::{MapCorner, TrueCorner};
+pub use corner::{MapCorner, MeasuredCorner, TrueCorner};
 pub use pose::Pose2;
 pub use scan_geometry::{ScanGeometry, ScanGeometryError};
 pub use stamp::{StampError, StampProblem, format_stamp, parse_stamp_ns};

@@ -12,7 +12,7 @@ use nalgebra::{Matrix4, Vector4};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use slam_geom::wrap_angle;
-use slam_proc::{FastSlam, MapCorner, Observation, Pose2, SlamConfig};
+use slam_proc::{FastSlam, MapCorner, MeasuredCorner, Pose2, SlamConfig};
 
 use common::{SensorModel, TrueCorner, observe};
 
@@ -21,7 +21,7 @@ const VISIBLE: f64 = 8.0;
 
 struct Scenario {
     map: Vec<MapCorner>,
-    scans: Vec<Vec<Observation>>,
+    scans: Vec<Vec<MeasuredCorner>>,
 }
 
 /// `corners` corners spread uniformly so that about `VISIBLE` are in view, and the scans

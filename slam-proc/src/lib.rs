@@ -23,11 +23,11 @@
 //!
 //! ```
 //! use nalgebra::Matrix4;
-//! use slam_proc::{FastSlam, Observation, SlamConfig};
+//! use slam_proc::{FastSlam, MeasuredCorner, SlamConfig};
 //!
 //! let mut slam = FastSlam::new(SlamConfig::default(), 1)?;
 //! let covariance = Matrix4::identity() * 1e-4;
-//! let corner = Observation { x: 3.0, y: 1.0, heading: 0.5, angle: 1.6, covariance };
+//! let corner = MeasuredCorner { x: 3.0, y: 1.0, heading: 0.5, angle: 1.6, covariance };
 //! let estimate = slam.process(0, &[corner], &[], None);
 //! assert_eq!((estimate.mean.x, estimate.mean.y), (0.0, 0.0));
 //! assert!(slam.best_map().is_empty()); // seen once: tentative, not yet published
@@ -53,7 +53,7 @@ pub use config::SlamConfig;
 pub use filter::estimate::Estimate;
 pub use filter::fast_slam::{FastSlam, FilterStats};
 pub use filter::memory;
-pub use filter::observation::{LineObservation, MeasuredMotion, Observation, OdometryInput};
+pub use filter::observation::{LineObservation, MeasuredMotion, OdometryInput};
 pub use filter::resample::normalised_weights;
 pub use localize::likelihood_field::{BeamModel, LikelihoodField};
 pub use localize::localizer::{
@@ -62,6 +62,7 @@ pub use localize::localizer::{
 pub use localize::pose_arg::{PoseArgError, parse_pose};
 pub use localize_config::LocalizeConfig;
 pub use slam_geom::MapCorner;
+pub use slam_geom::MeasuredCorner;
 pub use slam_geom::Pose2;
 pub use slam_geom::StampedPose;
 pub use stage_kit::SettingError;

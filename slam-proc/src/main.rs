@@ -10,8 +10,8 @@ use clap::Parser;
 use ipc_types::prelude::*;
 use map_sink::SavedMap;
 use slam_proc::{
-    FastSlam, FilterStats, LineObservation, LocalizeStats, Localizer, MeasuredMotion, Observation,
-    OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
+    FastSlam, FilterStats, LineObservation, LocalizeStats, Localizer, MeasuredCorner,
+    MeasuredMotion, OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
 };
 use stage_kit::{say, say_err, shutdown};
 
@@ -161,7 +161,7 @@ fn run(args: Args) -> Result<()> {
                 slam.set_scan(scan.as_ref());
             }
             observations.clear();
-            observations.extend(sample.corners().iter().map(to_observation));
+            observations.extend(sample.corners().iter().map(|&c| MeasuredCorner::from(c)));
             lines.clear();
             lines.extend(sample.lines().iter().map(to_line));
             let stamp = sample.header.stamp_ns;
@@ -315,16 +315,6 @@ fn publish_cloud(
         })?;
     }
     Ok(())
-}
-
-fn to_observation(corner: &Corner) -> Observation {
-    Observation {
-        x: corner.x,
-        y: corner.y,
-        heading: corner.heading,
-        angle: corner.angle,
-        covariance: nalgebra::Matrix4::from_row_slice(&corner.covariance),
-    }
 }
 
 fn to_line(line: &Line) -> LineObservation {

@@ -5,10 +5,10 @@ mod common;
 use std::f64::consts::PI;
 
 use common::{SensorModel, square_loop};
-use slam_proc::{Estimate, FastSlam, MapCorner, Observation, Pose2, SlamConfig};
+use slam_proc::{Estimate, FastSlam, MapCorner, MeasuredCorner, Pose2, SlamConfig};
 
 fn run(
-    scans: &[Vec<Observation>],
+    scans: &[Vec<MeasuredCorner>],
     stamps: &[u64],
     threads: usize,
 ) -> (Vec<Estimate>, Vec<MapCorner>) {

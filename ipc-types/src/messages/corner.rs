@@ -43,6 +43,31 @@ pub struct MapCorner {
     pub reserved: u32,
 }
 
+impl From<slam_geom::MeasuredCorner> for Corner {
+    /// The covariance goes row by row into the message.
+    fn from(c: slam_geom::MeasuredCorner) -> Self {
+        Self {
+            x: c.x,
+            y: c.y,
+            heading: c.heading,
+            angle: c.angle,
+            covariance: std::array::from_fn(|i| c.covariance[(i / 4, i % 4)]),
+        }
+    }
+}
+
+impl From<Corner> for slam_geom::MeasuredCorner {
+    fn from(c: Corner) -> Self {
+        Self {
+            x: c.x,
+            y: c.y,
+            heading: c.heading,
+            angle: c.angle,
+            covariance: nalgebra::Matrix4::from_row_slice(&c.covariance),
+        }
+    }
+}
+
 impl From<slam_geom::TrueCorner> for TrueCorner {
     fn from(c: slam_geom::TrueCorner) -> Self {
         Self {
@@ -120,5 +145,20 @@ mod tests {
             slam_geom::Point2::y(),
         );
         assert_eq!(slam_geom::TrueCorner::from(TrueCorner::from(truth)), truth);
+    }
+
+    #[test]
+    fn a_measured_corner_goes_through_the_message_unchanged() {
+        let measured = slam_geom::MeasuredCorner {
+            x: 3.0,
+            y: -1.5,
+            heading: -2.0,
+            angle: 1.6,
+            covariance: nalgebra::Matrix4::from_fn(|r, k| (1 + 4 * r + k) as f64),
+        };
+        let message = Corner::from(measured);
+        assert_eq!(message.covariance[1], 2.0, "row-major: (0, 1)");
+        assert_eq!(message.covariance[4], 5.0, "row-major: (1, 0)");
+        assert_eq!(slam_geom::MeasuredCorner::from(message), measured);
     }
 }

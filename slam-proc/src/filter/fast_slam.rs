@@ -10,11 +10,9 @@ use crate::config::SlamConfig;
 use crate::filter::estimate::{Estimate, weighted_mean_and_covariance};
 use crate::math::chi2::Gates;
 use crate::update::jcbb::PoseUncertainty;
-use slam_geom::MapCorner;
+use slam_geom::{MapCorner, MeasuredCorner};
 
-use crate::filter::observation::{
-    LineObservation, MeasuredMotion, Observation, OdometryInput, Prepared,
-};
+use crate::filter::observation::{LineObservation, MeasuredMotion, OdometryInput, Prepared};
 use crate::filter::particle::{Particle, ScanContext, Scratch};
 use crate::filter::resample::{
     effective_sample_size, heaviest, log_sum_exp, normalise, systematic,
@@ -275,7 +273,7 @@ impl FastSlam {
     pub fn process(
         &mut self,
         stamp_ns: u64,
-        observations: &[Observation],
+        observations: &[MeasuredCorner],
         lines: &[LineObservation],
         odometry: Option<&OdometryInput>,
     ) -> Estimate {
@@ -295,7 +293,7 @@ impl FastSlam {
     pub fn process_measured(
         &mut self,
         stamp_ns: u64,
-        observations: &[Observation],
+        observations: &[MeasuredCorner],
         lines: &[LineObservation],
         motion: &MeasuredMotion,
     ) -> Estimate {
@@ -310,7 +308,7 @@ impl FastSlam {
     fn step(
         &mut self,
         stamp_ns: u64,
-        observations: &[Observation],
+        observations: &[MeasuredCorner],
         lines: &[LineObservation],
         step: StepMotion<'_>,
     ) -> Estimate {
@@ -596,8 +594,8 @@ mod tests {
     use super::*;
     use nalgebra::{Matrix3, Matrix4};
 
-    fn observation(x: f64, y: f64, heading: f64, angle: f64) -> Observation {
-        Observation {
+    fn observation(x: f64, y: f64, heading: f64, angle: f64) -> MeasuredCorner {
+        MeasuredCorner {
             x,
             y,
             heading,
@@ -606,7 +604,7 @@ mod tests {
         }
     }
 
-    fn scan() -> Vec<Observation> {
+    fn scan() -> Vec<MeasuredCorner> {
         vec![
             observation(3.0, 1.0, 0.5, 1.2),
             observation(5.0, -2.0, 2.0, 1.6),
@@ -689,7 +687,7 @@ mod tests {
             let mut slam = FastSlam::new(config, 4).unwrap();
             for k in 0..40u32 {
                 let x = 0.05 * f64::from(k);
-                let scan: Vec<Observation> = world
+                let scan: Vec<MeasuredCorner> = world
                     .iter()
                     .map(|&(cx, cy, heading, angle)| observation(cx - x, cy, heading, angle))
                     .collect();

@@ -5,21 +5,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{Cholesky, Matrix2, Matrix3, Matrix4, Vector4};
 
-use slam_geom::{Point2, Pose2};
-
-/// A corner feature in the sensor frame (docs/CONVENTIONS.md): the walls' intersection
-/// `(x, y)`, the `heading` of the bisector towards the tip and the opening `angle`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Observation {
-    pub x: f64,
-    pub y: f64,
-    /// Bisector towards the tip, in `[-pi, pi)`.
-    pub heading: f64,
-    /// Opening angle between the walls, in `(0, pi)`.
-    pub angle: f64,
-    /// Covariance of `(x, y, heading, angle)`, symmetric positive definite.
-    pub covariance: Matrix4<f64>,
-}
+use slam_geom::{MeasuredCorner, Point2, Pose2};
 
 /// A wall line in the sensor frame, in normal form `x cos(theta) + y sin(theta) = rho`.
 /// Lines steady the motion estimate (they refine every corner fit and carry it where too
@@ -113,7 +99,7 @@ impl Prepared {
     /// angle outside `(0, pi)`, a covariance that is not positive definite): one bad
     /// feature must not poison every particle's map.
     pub fn new(
-        observation: &Observation,
+        observation: &MeasuredCorner,
         extra_sigma_xy: f64,
         extra_sigma_angle: f64,
     ) -> Option<Self> {
@@ -146,8 +132,8 @@ impl Prepared {
 mod tests {
     use super::*;
 
-    fn observation() -> Observation {
-        Observation {
+    fn observation() -> MeasuredCorner {
+        MeasuredCorner {
             x: 1.0,
             y: 2.0,
             heading: 0.3,

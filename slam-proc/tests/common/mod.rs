@@ -12,7 +12,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use slam_geom::wrap_angle;
-use slam_proc::{Observation, Pose2};
+use slam_proc::{MeasuredCorner, Pose2};
 
 pub use slam_geom::TrueCorner;
 
@@ -55,7 +55,7 @@ pub struct Run {
     pub corners: Vec<TrueCorner>,
     pub truth: Vec<Pose2>,
     pub stamps: Vec<u64>,
-    pub scans: Vec<Vec<Observation>>,
+    pub scans: Vec<Vec<MeasuredCorner>>,
 }
 
 fn normal(rng: &mut impl Rng) -> f64 {
@@ -137,11 +137,11 @@ fn noisy(
     y: f64,
     heading: f64,
     angle: f64,
-) -> Observation {
+) -> MeasuredCorner {
     let range = x.hypot(y);
     let sxy = sensor.sigma_xy_base + sensor.sigma_xy_per_metre * range;
     let sa = sensor.sigma_angle;
-    Observation {
+    MeasuredCorner {
         x: x + sxy * normal(rng),
         y: y + sxy * normal(rng),
         heading: wrap_angle(heading + sa * normal(rng)),
@@ -156,7 +156,7 @@ pub fn observe(
     sensor: &SensorModel,
     pose: &Pose2,
     corners: &[TrueCorner],
-) -> Vec<Observation> {
+) -> Vec<MeasuredCorner> {
     let inverse = pose.inverse();
     let mut scan = Vec::new();
     for c in corners {

@@ -2,12 +2,12 @@
 //! and wall lines from the feature extractor, the scans as `lidar-replay` publishes them.
 
 use feature_proc::{Extractor, FeatureConfig, ScanInput};
-use slam_proc::{LineObservation, Observation};
+use slam_proc::{LineObservation, MeasuredCorner};
 
 /// One scan's features, in the filter's types.
 #[derive(Debug, Clone, Default)]
 pub struct ScanFeatures {
-    pub corners: Vec<Observation>,
+    pub corners: Vec<MeasuredCorner>,
     pub lines: Vec<LineObservation>,
 }
 
@@ -29,7 +29,7 @@ pub fn seed_hall_features(config: FeatureConfig) -> Vec<ScanFeatures> {
                 corners: features
                     .corners
                     .iter()
-                    .map(|c| Observation {
+                    .map(|c| MeasuredCorner {
                         x: c.x,
                         y: c.y,
                         heading: c.heading,

@@ -2,7 +2,7 @@
 //! hypotheses from one or two corner matches of similar opening angle, the one that
 //! explains most corners wins, refined by a least-squares rigid fit of its matches.
 
-use feature_proc::Corner;
+use slam_geom::MeasuredCorner;
 use slam_geom::{Point2, WeightedPair, align_se2, wrap_angle};
 
 /// The pose of the later scan in the earlier scan's frame.
@@ -54,8 +54,8 @@ impl Default for MatchParams {
 
 /// Corners of `earlier` that have a match in `later` after `motion`.
 pub fn redetected(
-    earlier: &[Corner],
-    later: &[Corner],
+    earlier: &[MeasuredCorner],
+    later: &[MeasuredCorner],
     motion: &Motion,
     params: &MatchParams,
 ) -> usize {
@@ -65,7 +65,7 @@ pub fn redetected(
         .count()
 }
 
-fn matches(e: &Corner, l: &Corner, motion: &Motion, params: &MatchParams) -> bool {
+fn matches(e: &MeasuredCorner, l: &MeasuredCorner, motion: &Motion, params: &MatchParams) -> bool {
     let p = motion.apply([l.x, l.y]);
     (p[0] - e.x).hypot(p[1] - e.y) <= params.tolerance
         && similar_angle(e, l, params)
@@ -73,21 +73,21 @@ fn matches(e: &Corner, l: &Corner, motion: &Motion, params: &MatchParams) -> boo
             <= params.heading_tolerance.max(three_sigma(e, l, 2))
 }
 
-fn similar_angle(e: &Corner, l: &Corner, params: &MatchParams) -> bool {
+fn similar_angle(e: &MeasuredCorner, l: &MeasuredCorner, params: &MatchParams) -> bool {
     (e.angle - l.angle).abs() <= params.angle_tolerance.max(three_sigma(e, l, 3))
 }
 
 /// Three standard deviations of the difference of element `k` of two corners: a far corner
 /// with short arms has a loose angle, and its covariance says how loose.
-fn three_sigma(e: &Corner, l: &Corner, k: usize) -> f64 {
+fn three_sigma(e: &MeasuredCorner, l: &MeasuredCorner, k: usize) -> f64 {
     3.0 * (e.covariance[(k, k)] + l.covariance[(k, k)]).sqrt()
 }
 
 /// The motion under which most corners of `earlier` recur in `later`, or `None` when no
 /// plausible motion matches any corner.
 pub fn estimate_motion(
-    earlier: &[Corner],
-    later: &[Corner],
+    earlier: &[MeasuredCorner],
+    later: &[MeasuredCorner],
     params: &MatchParams,
 ) -> Option<Motion> {
     // Candidate matches: similar angle, and a range change the motion can explain.
@@ -191,7 +191,7 @@ fn rigid(pairs: &[([f64; 2], [f64; 2])], yaw: Option<f64>) -> Motion {
     }
 }
 
-fn point(c: &Corner) -> [f64; 2] {
+fn point(c: &MeasuredCorner) -> [f64; 2] {
     [c.x, c.y]
 }
 

@@ -1,6 +1,7 @@
 //! Precision and recall of detected corners against true ones.
 
-use feature_proc::{Corner, Extractor, ScanInput};
+use feature_proc::{Extractor, ScanInput};
+use slam_geom::MeasuredCorner;
 
 use super::world::{TrueCorner, View, World};
 
@@ -49,14 +50,14 @@ fn ratio(part: usize, whole: usize) -> f64 {
 /// against the world's corners. A detection is correct near any true corner, so one that
 /// is real but narrowly outside `in_view` is not held against the detector.
 pub fn score_corners(
-    detected: &[Corner],
+    detected: &[MeasuredCorner],
     pose: [f64; 3],
     true_corners: &[TrueCorner],
     in_view: &[TrueCorner],
     tolerance: f64,
 ) -> CornerScore {
     let (sin, cos) = pose[2].sin_cos();
-    let world = |c: &Corner| {
+    let world = |c: &MeasuredCorner| {
         [
             pose[0] + cos * c.x - sin * c.y,
             pose[1] + sin * c.x + cos * c.y,

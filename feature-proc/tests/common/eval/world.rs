@@ -1,9 +1,10 @@
 //! A world of straight walls: exact ray casting, its true corners, and which of them a
 //! sensor at a pose could be expected to detect.
 
-use feature_proc::{Corner, FeatureConfig};
+use feature_proc::FeatureConfig;
 use lidar_sim::RayCaster;
 use lidar_sim::geometry::Segment;
+use slam_geom::MeasuredCorner;
 use slam_geom::wrap_angle;
 
 use super::score::{CornerScore, score_corners};
@@ -194,7 +195,7 @@ impl World {
     /// corner, recall over those in `view`, each within `tolerance` metres.
     pub fn score(
         &self,
-        detected: &[Corner],
+        detected: &[MeasuredCorner],
         pose: [f64; 3],
         view: &View,
         tolerance: f64,
