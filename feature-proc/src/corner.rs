@@ -4,18 +4,17 @@
 use nalgebra::{Matrix4, SMatrix};
 
 use crate::config::FeatureConfig;
-use crate::features::Line;
-use slam_geom::{MeasuredCorner, wrap_angle};
+use slam_geom::{MeasuredCorner, MeasuredLine, Point2, wrap_angle};
 
 /// The corner where `first` meets `second` (next in scan order), if they are two walls that
 /// truly meet: the near ends close to each other and to the intersection, both arms long
 /// enough and the opening angle within limits.
 pub(crate) fn corner_between(
-    first: &Line,
-    second: &Line,
+    first: &MeasuredLine,
+    second: &MeasuredLine,
     config: &FeatureConfig,
 ) -> Option<MeasuredCorner> {
-    if distance(first.end, second.start) > config.corner_max_gap {
+    if distance(first.end, second.start.into()) > config.corner_max_gap {
         return None;
     }
     let (s1, c1) = first.theta.sin_cos();
@@ -85,16 +84,16 @@ pub(crate) fn corner_between(
 }
 
 /// The line direction `t` or its opposite, whichever points from `tip` towards `far`.
-fn arm(t: [f64; 2], far: [f64; 2], tip: [f64; 2]) -> [f64; 2] {
-    if t[0] * (far[0] - tip[0]) + t[1] * (far[1] - tip[1]) >= 0.0 {
+fn arm(t: [f64; 2], far: Point2, tip: [f64; 2]) -> [f64; 2] {
+    if t[0] * (far.x - tip[0]) + t[1] * (far.y - tip[1]) >= 0.0 {
         t
     } else {
         [-t[0], -t[1]]
     }
 }
 
-fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+fn distance(a: Point2, b: [f64; 2]) -> f64 {
     // Plain square root: `hypot`'s overflow care is not needed for metres and is slow.
-    let (dx, dy) = (a[0] - b[0], a[1] - b[1]);
+    let (dx, dy) = (a.x - b[0], a.y - b[1]);
     (dx * dx + dy * dy).sqrt()
 }

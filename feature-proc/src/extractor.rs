@@ -5,11 +5,12 @@ use std::ops::Range;
 
 use crate::config::FeatureConfig;
 use crate::corner::corner_between;
-use crate::features::{FeatureSet, Line};
+use crate::features::FeatureSet;
 use crate::line_fit::covariance;
 use crate::scan::{BeamDirections, ScanError, ScanInput, ScanPoint, to_points};
 use crate::segment::segment;
 use crate::split_merge::{Piece, absorb_stubs, merge, refine_boundaries, split};
+use slam_geom::MeasuredLine;
 use stage_kit::SettingError;
 
 /// Extracts lines and corners from scans: segments (adaptive breakpoints), split-and-merge,
@@ -86,12 +87,12 @@ impl Extractor {
                 continue;
             };
             let fit = &piece.fit;
-            self.features.lines.push(Line {
+            self.features.lines.push(MeasuredLine {
                 rho: fit.rho,
                 theta: fit.theta(),
                 covariance: covariance(points, fit, config.range_sigma, config.bearing_sigma),
-                start: fit.project(first.x, first.y),
-                end: fit.project(last.x, last.y),
+                start: fit.project(first.x, first.y).into(),
+                end: fit.project(last.x, last.y).into(),
                 point_count: points.len(),
             });
         }

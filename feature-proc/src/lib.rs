@@ -31,6 +31,6 @@ mod split_merge;
 
 pub use config::FeatureConfig;
 pub use extractor::Extractor;
-pub use features::{FeatureSet, Line};
+pub use features::FeatureSet;
 pub use scan::{MAX_BEAMS, ScanError, ScanInput};
 pub use stage_kit::SettingError;

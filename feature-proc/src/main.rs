@@ -377,7 +377,7 @@ fn publish_features(
     corners.clear();
     match extractor.extract(&input) {
         Ok(found) => {
-            lines.extend(found.lines.iter().map(to_line));
+            lines.extend(found.lines.iter().map(|&l| Line::from(l)));
             corners.extend(found.corners.iter().map(|&c| Corner::from(c)));
         }
         Err(e) => {
@@ -418,21 +418,4 @@ fn publish_features(
 
 fn row_major(matrix: &nalgebra::Matrix3<f64>) -> [f64; 9] {
     std::array::from_fn(|i| matrix[(i / 3, i % 3)])
-}
-
-fn to_line(line: &feature_proc::Line) -> Line {
-    Line {
-        rho: line.rho,
-        theta: line.theta,
-        covariance: [
-            line.covariance[(0, 0)],
-            line.covariance[(0, 1)],
-            line.covariance[(1, 0)],
-            line.covariance[(1, 1)],
-        ],
-        start: line.start,
-        end: line.end,
-        point_count: u32::try_from(line.point_count).unwrap_or(u32::MAX),
-        reserved: 0,
-    }
 }

@@ -53,7 +53,7 @@ pub use config::SlamConfig;
 pub use filter::estimate::Estimate;
 pub use filter::fast_slam::{FastSlam, FilterStats};
 pub use filter::memory;
-pub use filter::observation::{LineObservation, MeasuredMotion, OdometryInput};
+pub use filter::observation::{MeasuredMotion, OdometryInput};
 pub use filter::resample::normalised_weights;
 pub use localize::likelihood_field::{BeamModel, LikelihoodField};
 pub use localize::localizer::{
@@ -63,6 +63,7 @@ pub use localize::pose_arg::{PoseArgError, parse_pose};
 pub use localize_config::LocalizeConfig;
 pub use slam_geom::MapCorner;
 pub use slam_geom::MeasuredCorner;
+pub use slam_geom::MeasuredLine;
 pub use slam_geom::Pose2;
 pub use slam_geom::StampedPose;
 pub use stage_kit::SettingError;

@@ -10,8 +10,8 @@ use clap::Parser;
 use ipc_types::prelude::*;
 use map_sink::SavedMap;
 use slam_proc::{
-    FastSlam, FilterStats, LineObservation, LocalizeStats, Localizer, MeasuredCorner,
-    MeasuredMotion, OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
+    FastSlam, FilterStats, LocalizeStats, Localizer, MeasuredCorner, MeasuredLine, MeasuredMotion,
+    OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
 };
 use stage_kit::{say, say_err, shutdown};
 
@@ -163,7 +163,7 @@ fn run(args: Args) -> Result<()> {
             observations.clear();
             observations.extend(sample.corners().iter().map(|&c| MeasuredCorner::from(c)));
             lines.clear();
-            lines.extend(sample.lines().iter().map(to_line));
+            lines.extend(sample.lines().iter().map(|&l| MeasuredLine::from(l)));
             let stamp = sample.header.stamp_ns;
             // feature-proc's front end measured the motion; without it (or with
             // `use_measured_motion = false`) the filter estimates it from the corners and
@@ -315,16 +315,6 @@ fn publish_cloud(
         })?;
     }
     Ok(())
-}
-
-fn to_line(line: &Line) -> LineObservation {
-    LineObservation {
-        rho: line.rho,
-        theta: line.theta,
-        covariance: nalgebra::Matrix2::from_row_slice(&line.covariance),
-        start: line.start.into(),
-        end: line.end.into(),
-    }
 }
 
 fn to_motion(motion: &ScanMotion) -> MeasuredMotion {

@@ -10,9 +10,9 @@ use crate::config::SlamConfig;
 use crate::filter::estimate::{Estimate, weighted_mean_and_covariance};
 use crate::math::chi2::Gates;
 use crate::update::jcbb::PoseUncertainty;
-use slam_geom::{MapCorner, MeasuredCorner};
+use slam_geom::{MapCorner, MeasuredCorner, MeasuredLine};
 
-use crate::filter::observation::{LineObservation, MeasuredMotion, OdometryInput, Prepared};
+use crate::filter::observation::{MeasuredMotion, OdometryInput, Prepared};
 use crate::filter::particle::{Particle, ScanContext, Scratch};
 use crate::filter::resample::{
     effective_sample_size, heaviest, log_sum_exp, normalise, systematic,
@@ -54,7 +54,7 @@ pub struct FastSlam {
     weights: Vec<f64>,
     parents: Vec<usize>,
     /// This scan's usable lines.
-    lines: Vec<LineObservation>,
+    lines: Vec<MeasuredLine>,
     /// This scan's walls, and those of the scans that updated the particles before it.
     walls: Vec<WallSegment>,
     wall_memory: WallMemory,
@@ -274,7 +274,7 @@ impl FastSlam {
         &mut self,
         stamp_ns: u64,
         observations: &[MeasuredCorner],
-        lines: &[LineObservation],
+        lines: &[MeasuredLine],
         odometry: Option<&OdometryInput>,
     ) -> Estimate {
         self.step(
@@ -294,7 +294,7 @@ impl FastSlam {
         &mut self,
         stamp_ns: u64,
         observations: &[MeasuredCorner],
-        lines: &[LineObservation],
+        lines: &[MeasuredLine],
         motion: &MeasuredMotion,
     ) -> Estimate {
         let step = if self.config.use_measured_motion && motion.is_usable() {
@@ -309,7 +309,7 @@ impl FastSlam {
         &mut self,
         stamp_ns: u64,
         observations: &[MeasuredCorner],
-        lines: &[LineObservation],
+        lines: &[MeasuredLine],
         step: StepMotion<'_>,
     ) -> Estimate {
         let start = Instant::now();
@@ -326,7 +326,7 @@ impl FastSlam {
             .collect();
         self.lines.clear();
         self.lines
-            .extend(lines.iter().filter(|l| l.is_usable()).copied());
+            .extend(lines.iter().filter(|l| l.is_well_formed()).copied());
         self.walls.clear();
         self.walls.extend(self.lines.iter().map(|l| WallSegment {
             start: l.start,

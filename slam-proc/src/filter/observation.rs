@@ -3,58 +3,9 @@
 
 use std::f64::consts::PI;
 
-use nalgebra::{Cholesky, Matrix2, Matrix3, Matrix4, Vector4};
+use nalgebra::{Cholesky, Matrix3, Matrix4, Vector4};
 
-use slam_geom::{MeasuredCorner, Point2, Pose2};
-
-/// A wall line in the sensor frame, in normal form `x cos(theta) + y sin(theta) = rho`.
-/// Lines steady the motion estimate (they refine every corner fit and carry it where too
-/// few corners match, as in a corridor), and the stretch of wall they were fitted to tells
-/// where the beams found free space (a loop closure must not put a wall there); the map
-/// holds corners.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LineObservation {
-    pub rho: f64,
-    pub theta: f64,
-    /// Covariance of `(rho, theta)`, symmetric positive definite.
-    pub covariance: Matrix2<f64>,
-    /// The first and last of the points the line was fitted to (projected onto it), in
-    /// scan order, sensor frame.
-    pub start: Point2,
-    pub end: Point2,
-}
-
-impl LineObservation {
-    /// Whether the filter can use it: finite, with a positive definite covariance.
-    pub(crate) fn is_usable(&self) -> bool {
-        let c = &self.covariance;
-        self.rho.is_finite()
-            && self.theta.is_finite()
-            && c.iter().all(|v| v.is_finite())
-            && c[(0, 0)] > 0.0
-            && c[(0, 0)] * c[(1, 1)] - c[(0, 1)] * c[(1, 0)] > 0.0
-            && self
-                .start
-                .iter()
-                .chain(self.end.iter())
-                .all(|v| v.is_finite())
-    }
-
-    /// A line seen along `length` metres of it, centred on the foot of its normal (for
-    /// tests that build lines from their normal form).
-    #[cfg(test)]
-    pub(crate) fn centred(rho: f64, theta: f64, variance: f64, length: f64) -> Self {
-        let normal = Point2::new(theta.cos(), theta.sin());
-        let along = Point2::new(-normal.y, normal.x) * (0.5 * length);
-        Self {
-            rho,
-            theta,
-            covariance: Matrix2::new(variance, 0.0, 0.0, variance),
-            start: normal * rho - along,
-            end: normal * rho + along,
-        }
-    }
-}
+use slam_geom::{MeasuredCorner, Pose2};
 
 /// An odometry reading: `odom_from_robot` in the odometry's own (drifting) frame, with the
 /// covariance of `(x, y, yaw)`. Only increments between consecutive readings are used.

@@ -19,10 +19,11 @@
 use nalgebra::{Cholesky, Matrix3, Matrix4, Matrix4x3, Vector2, Vector3, Vector4};
 
 use crate::config::SlamConfig;
-use crate::filter::observation::{LineObservation, OdometryInput, Prepared};
+use crate::filter::observation::{OdometryInput, Prepared};
 use crate::math::chi2::quantile_even;
 use crate::motion::line_motion;
 use crate::rigid_fit::{Prior, normal_equations, refine};
+use slam_geom::MeasuredLine;
 use slam_geom::Pose2;
 use slam_geom::align_se2;
 use slam_geom::wrap_angle;
@@ -68,7 +69,7 @@ struct Candidate {
 #[derive(Debug, Clone)]
 pub(crate) struct MotionEstimator {
     previous: Option<Vec<Prepared>>,
-    previous_lines: Vec<LineObservation>,
+    previous_lines: Vec<MeasuredLine>,
     last_delta: Pose2,
     last_stamp: Option<u64>,
     last_interval: Option<u64>,
@@ -101,7 +102,7 @@ impl MotionEstimator {
         &mut self,
         stamp_ns: u64,
         observations: &[Prepared],
-        lines: &[LineObservation],
+        lines: &[MeasuredLine],
         odometry: Option<&OdometryInput>,
         config: &SlamConfig,
     ) -> Motion {
@@ -173,7 +174,7 @@ impl MotionEstimator {
         &self,
         estimate: Pose2,
         pairs: &[(&Prepared, &Prepared)],
-        lines: &[LineObservation],
+        lines: &[MeasuredLine],
         prior: &Prior,
         config: &SlamConfig,
     ) -> Option<(Pose2, Matrix3<f64>)> {
@@ -196,7 +197,7 @@ impl MotionEstimator {
     /// The motion from the wall lines of this scan and the previous one, with the prior.
     fn fit_lines(
         &self,
-        lines: &[LineObservation],
+        lines: &[MeasuredLine],
         prior: &Prior,
         prior_source: MotionSource,
         config: &SlamConfig,
@@ -223,7 +224,7 @@ impl MotionEstimator {
         &self,
         previous: &[Prepared],
         current: &[Prepared],
-        lines: &[LineObservation],
+        lines: &[MeasuredLine],
         prior: &Prior,
         config: &SlamConfig,
     ) -> Option<Motion> {
@@ -517,12 +518,12 @@ mod tests {
     }
 
     /// `(rho, theta)` lines (previous frame) as seen from `delta`.
-    fn lines_seen_from(delta: &Pose2, lines: &[(f64, f64)]) -> Vec<LineObservation> {
+    fn lines_seen_from(delta: &Pose2, lines: &[(f64, f64)]) -> Vec<MeasuredLine> {
         lines
             .iter()
             .map(|&(rho, theta)| {
                 let (s, c) = theta.sin_cos();
-                LineObservation::centred(
+                MeasuredLine::centred(
                     rho - delta.x * c - delta.y * s,
                     wrap_angle(theta - delta.yaw),
                     1e-6,

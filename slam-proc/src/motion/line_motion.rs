@@ -13,10 +13,9 @@
 
 use nalgebra::{Cholesky, Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 
-use crate::filter::observation::LineObservation;
 use crate::rigid_fit::{Prior, gauss_newton};
-use slam_geom::Pose2;
 use slam_geom::wrap_angle;
+use slam_geom::{MeasuredLine, Pose2};
 
 /// A line of the current scan in the previous scan's frame.
 struct Moved {
@@ -28,7 +27,7 @@ struct Moved {
     line_jacobian: Matrix2<f64>,
 }
 
-fn moved(line: &LineObservation, t: &Pose2) -> Moved {
+fn moved(line: &MeasuredLine, t: &Pose2) -> Moved {
     let theta = line.theta + t.yaw;
     let (s, c) = theta.sin_cos();
     let turn = -t.x * s + t.y * c;
@@ -45,8 +44,8 @@ fn moved(line: &LineObservation, t: &Pose2) -> Moved {
 /// a wall between scans): the two faces of a thin wall, a few centimetres apart but with
 /// opposite normals, never match each other.
 fn residual(
-    current: &LineObservation,
-    target: &LineObservation,
+    current: &MeasuredLine,
+    target: &MeasuredLine,
     t: &Pose2,
 ) -> (Vector2<f64>, Matrix2x3<f64>, Matrix2<f64>) {
     let m = moved(current, t);
@@ -58,8 +57,8 @@ impl Moved {
     /// `moved - target` and its covariance, for the line `current` this was moved from.
     fn residual(
         &self,
-        current: &LineObservation,
-        target: &LineObservation,
+        current: &MeasuredLine,
+        target: &MeasuredLine,
     ) -> (Vector2<f64>, Matrix2<f64>) {
         let r = Vector2::new(
             self.line.x - target.rho,
@@ -78,7 +77,7 @@ fn distance(r: &Vector2<f64>, covariance: &Matrix2<f64>) -> Option<f64> {
 
 /// Whether two lines of one scan are one wall (pieces of it split by a doorway or a
 /// gap in the points): their normal forms agree within `gate`.
-fn same_wall(a: &LineObservation, b: &LineObservation, gate: f64) -> bool {
+fn same_wall(a: &MeasuredLine, b: &MeasuredLine, gate: f64) -> bool {
     let r = Vector2::new(a.rho - b.rho, wrap_angle(a.theta - b.theta));
     distance(&r, &(a.covariance + b.covariance)).is_some_and(|d| d <= gate)
 }
@@ -89,8 +88,8 @@ fn same_wall(a: &LineObservation, b: &LineObservation, gate: f64) -> bool {
 /// doors along a corridor) alias, and one wrong match moves the robot. Candidates that are
 /// pieces of one wall are one candidate.
 fn associate(
-    previous: &[LineObservation],
-    current: &[LineObservation],
+    previous: &[MeasuredLine],
+    current: &[MeasuredLine],
     prior: &Prior,
     gate: f64,
 ) -> Vec<(usize, usize)> {
@@ -162,8 +161,8 @@ fn prior_terms(
 /// Adds the matched lines' residuals at `t` to normal equations; `None` when a pair's
 /// covariance is not positive definite.
 fn add_line_terms(
-    previous: &[LineObservation],
-    current: &[LineObservation],
+    previous: &[MeasuredLine],
+    current: &[MeasuredLine],
     matches: &[(usize, usize)],
     t: &Pose2,
     information: &mut Matrix3<f64>,
@@ -187,8 +186,8 @@ fn add_line_terms(
 /// 3-dof departure under `around`'s covariance): nearly parallel lines that disagree pull
 /// hard along directions they barely see.
 pub(crate) fn refine(
-    previous: &[LineObservation],
-    current: &[LineObservation],
+    previous: &[MeasuredLine],
+    current: &[MeasuredLine],
     around: &Prior,
     gate: f64,
     departure_gate: f64,
@@ -206,8 +205,8 @@ pub(crate) fn refine(
 
 /// [`refine`] without the departure check.
 fn refine_unchecked(
-    previous: &[LineObservation],
-    current: &[LineObservation],
+    previous: &[MeasuredLine],
+    current: &[MeasuredLine],
     around: &Prior,
     gate: f64,
     others: impl Fn(&Pose2) -> Option<(Matrix3<f64>, Vector3<f64>)>,
@@ -251,8 +250,8 @@ fn refine_unchecked(
 
 /// The motion `previous_from_current` from the scans' lines and the prior alone.
 pub(crate) fn fit(
-    previous: &[LineObservation],
-    current: &[LineObservation],
+    previous: &[MeasuredLine],
+    current: &[MeasuredLine],
     prior: &Prior,
     gate: f64,
     departure_gate: f64,
@@ -270,10 +269,10 @@ mod tests {
     use std::f64::consts::PI;
 
     /// `line` (in the previous frame) as seen from `previous_from_current`.
-    fn seen_from(t: &Pose2, rho: f64, theta: f64) -> LineObservation {
+    fn seen_from(t: &Pose2, rho: f64, theta: f64) -> MeasuredLine {
         // The inverse of `moved`: theta = theta' - yaw, rho = rho' - tx cos(theta') - ty sin(theta').
         let (s, c) = theta.sin_cos();
-        LineObservation::centred(
+        MeasuredLine::centred(
             rho - t.x * c - t.y * s,
             wrap_angle(theta - t.yaw),
             1e-6,
@@ -281,11 +280,11 @@ mod tests {
         )
     }
 
-    fn corridor() -> Vec<LineObservation> {
+    fn corridor() -> Vec<MeasuredLine> {
         // Two walls 1 m either side of the sensor, along x, and the far end wall 20 m ahead.
         [(1.0, PI / 2.0), (1.0, -PI / 2.0), (20.0, 0.0)]
             .iter()
-            .map(|&(rho, theta)| LineObservation::centred(rho, theta, 1e-6, 2.0))
+            .map(|&(rho, theta)| MeasuredLine::centred(rho, theta, 1e-6, 2.0))
             .collect()
     }
 
@@ -350,10 +349,10 @@ mod tests {
         // The previous scan saw the near face of a 10 cm wall 2 m ahead; after a step
         // through a doorway beside it the current scan sees its far face: the same line
         // but for 10 cm and the normal, which now points the other way.
-        let previous = vec![LineObservation::centred(2.0, 0.0, 1e-4, 2.0)];
+        let previous = vec![MeasuredLine::centred(2.0, 0.0, 1e-4, 2.0)];
         let far_face = seen_from(&Pose2::new(2.2, 0.0, 0.0), 2.1, 0.0);
         assert!(far_face.rho < 0.0);
-        let current = vec![LineObservation {
+        let current = vec![MeasuredLine {
             rho: -far_face.rho,
             theta: wrap_angle(far_face.theta + PI),
             ..far_face
@@ -371,7 +370,7 @@ mod tests {
 
     #[test]
     fn pieces_of_one_wall_match_and_parallel_walls_do_not() {
-        let line = |rho: f64, theta: f64| LineObservation::centred(rho, theta, 1e-6, 2.0);
+        let line = |rho: f64, theta: f64| MeasuredLine::centred(rho, theta, 1e-6, 2.0);
         let truth = Pose2::new(0.1, 0.01, 0.0);
         let current = vec![seen_from(&truth, 1.0, PI / 2.0)];
         let belief = prior(Pose2::new(0.1, 0.0, 0.0), 0.05, 0.05);

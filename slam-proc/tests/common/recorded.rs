@@ -2,13 +2,13 @@
 //! and wall lines from the feature extractor, the scans as `lidar-replay` publishes them.
 
 use feature_proc::{Extractor, FeatureConfig, ScanInput};
-use slam_proc::{LineObservation, MeasuredCorner};
+use slam_proc::{MeasuredCorner, MeasuredLine};
 
-/// One scan's features, in the filter's types.
+/// One scan's features: the extractor's output, the filter's input.
 #[derive(Debug, Clone, Default)]
 pub struct ScanFeatures {
     pub corners: Vec<MeasuredCorner>,
-    pub lines: Vec<LineObservation>,
+    pub lines: Vec<MeasuredLine>,
 }
 
 /// Every scan's features, extracted with `config`. Panics without the recording: the
@@ -25,29 +25,10 @@ pub fn seed_hall_features(config: FeatureConfig) -> Vec<ScanFeatures> {
             let Ok(features) = extractor.extract(&input) else {
                 return ScanFeatures::default();
             };
+            // The extractor's features are the filter's input as they are.
             ScanFeatures {
-                corners: features
-                    .corners
-                    .iter()
-                    .map(|c| MeasuredCorner {
-                        x: c.x,
-                        y: c.y,
-                        heading: c.heading,
-                        angle: c.angle,
-                        covariance: c.covariance,
-                    })
-                    .collect(),
-                lines: features
-                    .lines
-                    .iter()
-                    .map(|l| LineObservation {
-                        rho: l.rho,
-                        theta: l.theta,
-                        covariance: l.covariance,
-                        start: l.start.into(),
-                        end: l.end.into(),
-                    })
-                    .collect(),
+                corners: features.corners.clone(),
+                lines: features.lines.clone(),
             }
         })
         .collect()
