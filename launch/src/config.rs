@@ -67,6 +67,12 @@ pub enum SourceKind {
 pub struct ReplaySection {
     /// The log file.
     pub file: Option<PathBuf>,
+    /// Publish every N-th scan of the log (`--replay-every`, lidar-replay's `--every`);
+    /// unset = every scan.
+    pub every: Option<u64>,
+    /// Ranges beyond this many metres become no-returns (`--replay-max-range`,
+    /// lidar-replay's `--max-range`).
+    pub max_range: Option<f64>,
     /// `seed-csv`, `carmen` or `mcap`.
     pub format: String,
     /// Scans per second relative to the log's timing (1 = as recorded); 0 = lockstep.
@@ -75,30 +81,25 @@ pub struct ReplaySection {
     pub odometry: bool,
     /// Scans to publish; 0 = the whole log.
     pub frames: u64,
-    /// The log's scan to start at, from 0 (`--replay-start`, lidar-replay's `--skip`).
-    pub start: u64,
-    /// Publish every N-th scan of the log (`--replay-every`, lidar-replay's `--every`).
-    pub every: u64,
-    /// Ranges beyond this many metres become no-returns (`--replay-max-range`,
-    /// lidar-replay's `--max-range`).
-    pub max_range: Option<f64>,
     /// Seconds of log time lidar-replay waits for lines written out of time order
     /// (`--reorder-window`); unset = its default.
     pub reorder_window: Option<f64>,
+    /// The log's scan to start at, from 0 (`--replay-start`, lidar-replay's `--skip`).
+    pub start: u64,
 }
 
 impl Default for ReplaySection {
     fn default() -> Self {
         Self {
             file: None,
+            every: None,
+            max_range: None,
             format: "carmen".into(),
             rate: 0.0,
             odometry: true,
             frames: 0,
-            start: 0,
-            every: 1,
-            max_range: None,
             reorder_window: None,
+            start: 0,
         }
     }
 }
@@ -327,8 +328,10 @@ impl RunConfig {
             if let Err(e) = lidar_replay::check_rate(self.replay.rate) {
                 return Err(ConfigError::Invalid(format!("[replay] rate (--rate) {e}")));
             }
-            if let Err(e) = lidar_replay::Degradation::new(self.replay.every, self.replay.max_range)
-            {
+            if let Err(e) = lidar_replay::Degradation::new(
+                self.replay.every.unwrap_or(1),
+                self.replay.max_range,
+            ) {
                 return Err(ConfigError::Invalid(format!(
                     "[replay] every / max_range (--replay-every, --replay-max-range): {e}"
                 )));

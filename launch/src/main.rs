@@ -399,8 +399,8 @@ fn settings_args(
                 if config.replay.start > 0 {
                     args.push(format!("--skip={}", config.replay.start));
                 }
-                if config.replay.every > 1 {
-                    args.push(format!("--every={}", config.replay.every));
+                if let Some(every) = config.replay.every {
+                    args.push(format!("--every={every}"));
                 }
                 if let Some(metres) = config.replay.max_range {
                     args.push(format!("--max-range={metres}"));

@@ -16,16 +16,15 @@ pub fn run_stage<A: clap::Parser>(
     name: &str,
     run: impl FnOnce(A) -> anyhow::Result<()>,
 ) -> ExitCode {
-    let args = A::parse();
-    report(name, || {
-        crate::launcher_watch::stop_with_launcher()?;
+    run_tool(name, |args| {
         crate::shutdown::install().context("cannot install the Ctrl-C handler")?;
         run(args)
     })
 }
 
 /// The `main` of a command-line tool that polls no stop flag: as [`run_stage`] without the
-/// Ctrl-C handler, so Ctrl-C ends it at once.
+/// Ctrl-C handler, so Ctrl-C ends it at once. (A stage is a tool that installs the handler
+/// first.)
 pub fn run_tool<A: clap::Parser>(
     name: &str,
     run: impl FnOnce(A) -> anyhow::Result<()>,
