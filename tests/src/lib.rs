@@ -257,6 +257,26 @@ pub fn metrics(out: &Path) -> slam_eval::Metrics {
         .unwrap_or_else(|e| panic!("{} is not the metrics map-sink writes: {e}", path.display()))
 }
 
+/// What follows `head` (e.g. `left out:`) on the first line of a stage's summary block on
+/// the console, trimmed; panics naming the console if no line has it.
+pub fn summary_line(console: &str, head: &str) -> String {
+    console
+        .lines()
+        .find_map(|line| line.trim().strip_prefix(head))
+        .unwrap_or_else(|| panic!("no '{head}' line in {console}"))
+        .trim()
+        .to_owned()
+}
+
+/// The count that starts the summary line `head` (`loops closed: 3 by ...` gives 3).
+pub fn summary_count(console: &str, head: &str) -> u64 {
+    let line = summary_line(console, head);
+    line.split_whitespace()
+        .next()
+        .and_then(|count| count.parse().ok())
+        .unwrap_or_else(|| panic!("'{head} {line}' starts with no count"))
+}
+
 /// The poses of a TUM file, read by [`slam_geom::read_tum`]; panics on an unreadable file
 /// or a malformed line.
 pub fn read_tum(path: &Path) -> Vec<slam_geom::TumPose> {

@@ -94,23 +94,11 @@ fn a_replay_made_harder_publishes_every_nth_scan_cut_to_the_shorter_range() {
     assert_eq!(stamps, expected);
     // The replay's summary says what it left out, and nothing counts as lost.
     let stderr = String::from_utf8_lossy(&run.output.stderr);
-    let line = |head: &str| {
-        stderr
-            .lines()
-            .find_map(|line| line.trim().strip_prefix(head))
-            .unwrap_or_else(|| panic!("no '{head}' line in {stderr}"))
-            .trim()
-            .to_owned()
-    };
     assert!(
-        line("left out:").starts_with("300 scans (--every 4"),
+        summary_line(&stderr, "left out:").starts_with("300 scans (--every 4"),
         "{stderr}"
     );
-    let shortened: u64 = line("shortened:")
-        .split_whitespace()
-        .next()
-        .and_then(|count| count.parse().ok())
-        .expect("a count of beams");
+    let shortened = summary_count(&stderr, "shortened:");
     // Much of the hall lies beyond 8 m, not all of it.
     assert!((1000..90 * 1081).contains(&shortened), "{shortened} beams");
     assert!(

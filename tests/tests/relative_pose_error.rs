@@ -32,7 +32,7 @@ const ACES_SHORT_RANGE_MAX_ERROR_M: f64 = 1.0;
 /// The seed and particle count the bounds were measured with.
 const SEED_1_100_PARTICLES: [&str; 4] = ["--seed", "1", "--particles", "100"];
 
-/// The mean of one error of a score that used some relations.
+/// The errors of a score that used some relations.
 fn errors(score: &slam_eval::ScoreSummary) -> slam_eval::PoseErrors {
     score
         .errors
@@ -119,12 +119,7 @@ fn aces_closes_its_overlapping_loops_together() {
     } = replayed("aces-rpe", &log, &SEED_1_100_PARTICLES);
     // slam-proc's summary block, on the console's stderr.
     let stderr = String::from_utf8_lossy(&output.stderr);
-    let closed = stderr
-        .lines()
-        .find_map(|line| line.trim().strip_prefix("loops closed:"))
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|count| count.parse::<u32>().ok())
-        .unwrap_or_else(|| panic!("no count of loops closed in {stderr}"));
+    let closed = summary_count(&stderr, "loops closed:");
     assert!(closed >= 2, "{closed} loops closed: {stderr}");
     let estimate = trajectory_score(&out);
     assert_eq!(estimate.used, 1279, "{estimate:?}");
@@ -151,12 +146,7 @@ fn third_rate_run(name: &str, seed: &str, scans: u64) -> slam_eval::ScoreSummary
     assert_eq!(metrics(&out).frames_processed, scans);
     // The first scan and every third after it: a log of 3k-2 to 3k scans keeps k of them.
     let stderr = String::from_utf8_lossy(&output.stderr);
-    let left_out = stderr
-        .lines()
-        .find_map(|line| line.trim().strip_prefix("left out:"))
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|count| count.parse::<u64>().ok())
-        .unwrap_or_else(|| panic!("no count of scans left out in {stderr}"));
+    let left_out = summary_count(&stderr, "left out:");
     assert!(
         (2 * scans - 2..=2 * scans).contains(&left_out),
         "{left_out} scans left out, {scans} kept"
