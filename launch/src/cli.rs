@@ -64,7 +64,7 @@ pub struct Args {
     #[arg(long, value_name = "METRES")]
     resolution: Option<f64>,
     /// Passes refining the final path against its own grid before the map is written; 0
-    /// keeps the filter's path as it is. Default 3.
+    /// keeps the filter's path as it is. Default 5.
     #[arg(long, value_name = "N")]
     refine_passes: Option<usize>,
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
