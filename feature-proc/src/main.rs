@@ -8,11 +8,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use feature_proc::{Extractor, FeatureConfig, ScanInput};
+use feature_proc::{Extractor, FeatureConfig, ScanInput, scan_motion};
 use ipc_types::prelude::*;
-use scan_match::{
-    FrontEnd, FrontEndConfig, FrontEndOutput, FrontEndStats, MatchStatus, OdometryStatus,
-};
+use scan_match::{FrontEnd, FrontEndConfig, FrontEndStats};
 use slam_geom::ScanGeometry;
 use stage_kit::odometry_buffer::{OdometryBuffer, OdometryReading, RefusedReading};
 use stage_kit::{say, say_err};
@@ -138,10 +136,7 @@ fn run(args: Args) -> Result<()> {
                 counts.without_odometry += 1;
             }
             let motion = register(&mut front_end, &scan, reading.as_ref(), &mut counts);
-            let paired = reading.map(|reading| OdometryAtScan {
-                pose: reading.pose.into(),
-                covariance: row_major(&reading.covariance),
-            });
+            let paired = reading.as_ref().map(OdometryAtScan::from);
             let work = Work {
                 extractor: &mut extractor,
                 lines: &mut lines,
@@ -253,12 +248,7 @@ fn drain_odometry(
             track.end();
             continue;
         }
-        let reading = OdometryReading {
-            stamp_ns: sample.header.stamp_ns,
-            pose: sample.pose.into(),
-            covariance: nalgebra::Matrix3::from_row_slice(&sample.covariance),
-        };
-        match track.push(reading) {
+        match track.push(OdometryReading::from(&*sample)) {
             Ok(()) => {}
             Err(RefusedReading::NotFinite) => counts.odometry_not_finite += 1,
             Err(RefusedReading::OutOfOrder | RefusedReading::Duplicate) => {
@@ -296,28 +286,6 @@ fn register(
             ));
             None
         }
-    }
-}
-
-fn scan_motion(output: &FrontEndOutput) -> ScanMotion {
-    ScanMotion {
-        pose: output.odom_from_robot.into(),
-        increment: output.increment.into(),
-        increment_covariance: row_major(&output.increment_covariance),
-        match_status: match output.status {
-            MatchStatus::First => ScanMotion::MATCH_FIRST,
-            MatchStatus::Matched => ScanMotion::MATCH_OK,
-            MatchStatus::Degenerate { .. } => ScanMotion::MATCH_DEGENERATE,
-            MatchStatus::Failed(_) => ScanMotion::MATCH_FAILED,
-        },
-        odometry_status: match output.odometry {
-            OdometryStatus::Absent => ScanMotion::ODOMETRY_ABSENT,
-            OdometryStatus::Started => ScanMotion::ODOMETRY_STARTED,
-            OdometryStatus::Used => ScanMotion::ODOMETRY_USED,
-            OdometryStatus::Rejected(_) => ScanMotion::ODOMETRY_REJECTED,
-        },
-        points: u32::try_from(output.points).unwrap_or(u32::MAX),
-        inliers: u32::try_from(output.inliers).unwrap_or(u32::MAX),
     }
 }
 
@@ -414,8 +382,4 @@ fn publish_features(
     }
     counts.processed += 1;
     Ok(())
-}
-
-fn row_major(matrix: &nalgebra::Matrix3<f64>) -> [f64; 9] {
-    std::array::from_fn(|i| matrix[(i / 3, i % 3)])
 }

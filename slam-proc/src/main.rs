@@ -170,11 +170,14 @@ fn run(args: Args) -> Result<()> {
             // lines, on the odometry feature-proc paired with the scan.
             let front_end = sample.motion();
             let estimate = match &front_end {
-                Some(motion) if slam.config().use_measured_motion => {
-                    slam.process_measured(stamp, &observations, &lines, &to_motion(motion))
-                }
+                Some(motion) if slam.config().use_measured_motion => slam.process_measured(
+                    stamp,
+                    &observations,
+                    &lines,
+                    &MeasuredMotion::from(motion),
+                ),
                 _ => {
-                    let odometry_input = sample.odometry().map(to_odometry);
+                    let odometry_input = sample.odometry().map(OdometryInput::from);
                     slam.process(stamp, &observations, &lines, odometry_input.as_ref())
                 }
             };
@@ -317,20 +320,6 @@ fn publish_cloud(
     Ok(())
 }
 
-fn to_motion(motion: &ScanMotion) -> MeasuredMotion {
-    MeasuredMotion {
-        increment: motion.increment.into(),
-        covariance: nalgebra::Matrix3::from_row_slice(&motion.increment_covariance),
-    }
-}
-
-fn to_odometry(odometry: OdometryAtScan) -> OdometryInput {
-    OdometryInput {
-        pose: odometry.pose.into(),
-        covariance: nalgebra::Matrix3::from_row_slice(&odometry.covariance),
-    }
-}
-
 /// The estimate's fields of a pose message.
 fn fill_estimate(pose: &mut PoseEstimate, estimate: &slam_proc::Estimate) {
     pose.best = estimate.best.into();
@@ -451,13 +440,11 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
             let scan = wait_for_scan(&scans, &mut held, sample.header.seq, delivery)?
                 .map(HeldScan::ranges);
             // A first scan, or a source without a front end, brings no step: stand still.
-            let motion = sample.motion().map_or(
-                MeasuredMotion {
-                    increment: Pose2::IDENTITY,
-                    covariance: nalgebra::Matrix3::zeros(),
-                },
-                |m| to_motion(&m),
-            );
+            let motion = sample
+                .motion()
+                .map_or(MeasuredMotion::standing_still(), |m| {
+                    MeasuredMotion::from(&m)
+                });
             let located = localizer.step(&motion, scan.as_ref());
             step_ms.push(located.estimate.timing.total_ns as f64 * 1e-6);
             let front_end = sample.motion().map(|m| m.pose);

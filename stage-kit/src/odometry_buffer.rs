@@ -28,6 +28,27 @@ pub struct OdometryReading {
     pub covariance: Matrix3<f64>,
 }
 
+impl From<&ipc_types::Odometry> for OdometryReading {
+    /// The reading an odometry message carries, stamped with its header's stamp.
+    fn from(message: &ipc_types::Odometry) -> Self {
+        Self {
+            stamp_ns: message.header.stamp_ns,
+            pose: message.pose.into(),
+            covariance: ipc_types::covariance_from_row_major(&message.covariance),
+        }
+    }
+}
+
+impl From<&OdometryReading> for ipc_types::OdometryAtScan {
+    /// The reading as a features message carries it beside its scan (the scan's stamp).
+    fn from(reading: &OdometryReading) -> Self {
+        Self {
+            pose: reading.pose.into(),
+            covariance: ipc_types::covariance_to_row_major(&reading.covariance),
+        }
+    }
+}
+
 /// Why [`OdometryBuffer::push`] refused a reading.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum RefusedReading {
@@ -205,6 +226,22 @@ mod tests {
             pose: Pose2::new(x, 0.0, yaw),
             covariance: Matrix3::identity() * x.abs().max(0.01),
         }
+    }
+
+    #[test]
+    fn a_reading_comes_from_its_message_and_goes_beside_its_scan_unchanged() {
+        let mut message = <ipc_types::Odometry as ipc_types::Zeroable>::boxed_zeroed();
+        message.header.stamp_ns = 42 * MS;
+        message.pose = Pose2::new(1.0, -2.0, 0.5).into();
+        message.covariance = [0.1, 0.01, 0.0, 0.01, 0.2, 0.0, 0.0, 0.0, 0.03];
+        let reading = OdometryReading::from(&*message);
+        assert_eq!(reading.stamp_ns, 42 * MS);
+        assert_eq!(reading.pose, Pose2::new(1.0, -2.0, 0.5));
+        assert_eq!(reading.covariance[(0, 1)], 0.01);
+        assert_eq!(reading.covariance[(2, 2)], 0.03);
+        let at_scan = ipc_types::OdometryAtScan::from(&reading);
+        assert_eq!(at_scan.pose, message.pose);
+        assert_eq!(at_scan.covariance, message.covariance);
     }
 
     fn push(buffer: &mut OdometryBuffer, reading: OdometryReading) {

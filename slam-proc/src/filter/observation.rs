@@ -37,6 +37,37 @@ impl MeasuredMotion {
     }
 }
 
+impl MeasuredMotion {
+    /// No motion, known exactly: the step of a first scan, or of a source without a front
+    /// end.
+    pub fn standing_still() -> Self {
+        Self {
+            increment: Pose2::IDENTITY,
+            covariance: Matrix3::zeros(),
+        }
+    }
+}
+
+impl From<&ipc_types::ScanMotion> for MeasuredMotion {
+    /// The step a features message carries; its pose in the front end's frame, statuses
+    /// and counts are not the filter's business.
+    fn from(motion: &ipc_types::ScanMotion) -> Self {
+        Self {
+            increment: motion.increment.into(),
+            covariance: ipc_types::covariance_from_row_major(&motion.increment_covariance),
+        }
+    }
+}
+
+impl From<ipc_types::OdometryAtScan> for OdometryInput {
+    fn from(odometry: ipc_types::OdometryAtScan) -> Self {
+        Self {
+            pose: odometry.pose.into(),
+            covariance: ipc_types::covariance_from_row_major(&odometry.covariance),
+        }
+    }
+}
+
 /// An observation checked and made ready for the filter: its vector and a covariance that
 /// is symmetric, inflated by the configured floor, and known to be positive definite.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,6 +122,25 @@ mod tests {
             angle: 1.5,
             covariance: Matrix4::identity() * 1e-4,
         }
+    }
+
+    #[test]
+    fn the_messages_steps_and_odometry_reach_the_filter_unchanged() {
+        let mut motion = <ipc_types::ScanMotion as ipc_types::Zeroable>::boxed_zeroed();
+        motion.increment = Pose2::new(0.3, -0.01, 0.02).into();
+        motion.increment_covariance = [4e-4, 1e-5, 0.0, 1e-5, 2e-4, 0.0, 0.0, 0.0, 1e-5];
+        let measured = MeasuredMotion::from(&*motion);
+        assert_eq!(measured.increment, Pose2::new(0.3, -0.01, 0.02));
+        assert_eq!(measured.covariance[(1, 0)], 1e-5);
+        assert_eq!(measured.covariance[(1, 1)], 2e-4);
+        let odometry = OdometryInput::from(ipc_types::OdometryAtScan {
+            pose: Pose2::new(5.0, 6.0, -1.0).into(),
+            covariance: [1.0, 0.0, 0.5, 0.0, 2.0, 0.0, 0.5, 0.0, 3.0],
+        });
+        assert_eq!(odometry.pose, Pose2::new(5.0, 6.0, -1.0));
+        assert_eq!(odometry.covariance[(2, 0)], 0.5);
+        assert_eq!(odometry.covariance[(2, 2)], 3.0);
+        assert!(MeasuredMotion::standing_still().is_usable());
     }
 
     #[test]
