@@ -408,17 +408,30 @@ impl FrontEnd {
         let n = points.len() as f64;
         let weak = (found.inliers as f64) < self.config.strong_inlier_fraction * n;
         let failed = (found.inliers as f64) < self.config.min_inlier_fraction * n;
-        if clipped && (failed || (gap && weak)) {
-            // The prior allowed more than the window searched (a gap in the data, a fast
-            // turn without odometry) and the fit is poor: look wider. Not for a merely
-            // weak fit between regular scans: a corridor's repeating doors would tempt
-            // the wide search along it.
+        // Look wider where the prior allowed more than the window searched and the fit is
+        // poor (a gap in the data, a fast turn without odometry), over the prior's reach.
+        // Not for a merely weak fit between regular scans: a corridor's repeating doors
+        // would tempt the wide search along it. Except over turns: without odometry a weak
+        // fit whose constant-velocity prior allowed a wider turn than the window searched
+        // may be a wrong basin of a turn that reversed, and the wide search over turns
+        // only, at the window's reach in translation, keeps the doors out.
+        let turned_past = !from_odometry && prior_window.yaw > window.yaw;
+        let wide_translation = if clipped && (failed || (gap && weak)) {
+            Some(
+                prior_window
+                    .translation
+                    .min(self.config.recovery_translation),
+            )
+        } else if turned_past && weak {
+            Some(window.translation)
+        } else {
+            None
+        };
+        if let Some(translation) = wide_translation {
             let how = RecoveryWindow {
                 seed: prediction.pose,
                 window: Window {
-                    translation: prior_window
-                        .translation
-                        .min(self.config.recovery_translation),
+                    translation,
                     yaw: prior_window.yaw.min(self.config.recovery_yaw),
                 },
                 coarse_radius: 3.0 * radius,

@@ -1,6 +1,7 @@
-//! Recovery after a gap in the data: when the prior is far too uncertain for the
-//! correlative search's window (seconds without scans, a turn of a radian or more in
-//! them) and the match from that window is weak, a wide coarse search (up to a full turn)
+//! Recovery after a gap in the data or a fast turn: when the prior is far too uncertain for
+//! the correlative search's window (seconds without scans, a turn of a radian or more in
+//! them; without odometry, a turn that reverses between two slow scans) and the match from
+//! that window is weak, a wide coarse search (up to a full turn, or over turns only)
 //! proposes a few distinct poses, each is refined (fine search, then registration), and
 //! the registered fits are ranked by how much of the scan they explain and how tightly,
 //! not by the coarse score alone: a coarse grid scores a wrong but symmetric pose about
