@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use nalgebra::{Matrix3, Vector3};
-use slam_geom::Pose2;
+use slam_geom::{Pose2, wrap_angle};
 
 use crate::config::FrontEndConfig;
 use crate::error::InputError;
@@ -415,19 +415,22 @@ impl FrontEnd {
         // fit whose constant-velocity prior allowed a wider turn than the window searched
         // may be a wrong basin of a turn that reversed, and the wide search over turns
         // only, at the window's reach in translation, keeps the doors out.
+        // The wide search's reach in translation, and for the search over turns the turn
+        // the window already searched.
         let turned_past = !from_odometry && prior_window.yaw > window.yaw;
-        let wide_translation = if clipped && (failed || (gap && weak)) {
-            Some(
+        let wide = if clipped && (failed || (gap && weak)) {
+            Some((
                 prior_window
                     .translation
                     .min(self.config.recovery_translation),
-            )
+                None,
+            ))
         } else if turned_past && weak {
-            Some(window.translation)
+            Some((window.translation, Some(window.yaw)))
         } else {
             None
         };
-        if let Some(translation) = wide_translation {
+        if let Some((translation, searched_yaw)) = wide {
             let how = RecoveryWindow {
                 seed: prediction.pose,
                 window: Window {
@@ -437,7 +440,14 @@ impl FrontEnd {
                 coarse_radius: 3.0 * radius,
                 fine_radius: radius,
             };
+            // Over turns, only a turn beyond what the window searched is news: a better
+            // fit within it would be the window's own search second-guessed.
+            let beyond = |other: &Registration| {
+                searched_yaw
+                    .is_none_or(|yaw| wrap_angle(other.pose.yaw - prediction.pose.yaw).abs() > yaw)
+            };
             if let Some(other) = recover(&self.map, points, &sample, &how, &params)
+                && beyond(&other)
                 && rank(&other, &params) > rank(&found, &params) * RECOVERY_MARGIN
             {
                 found = other;
