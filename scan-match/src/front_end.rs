@@ -414,9 +414,9 @@ impl FrontEnd {
         // would tempt the wide search along it. Except over turns: without odometry a weak
         // fit whose constant-velocity prior allowed a wider turn than the window searched
         // may be a wrong basin of a turn that reversed, and the wide search over turns
-        // only, at the window's reach in translation, keeps the doors out.
-        // The wide search's reach in translation, and for the search over turns the turn
-        // the window already searched.
+        // only, at the window's reach in translation, keeps the doors out. `wide` is the
+        // search's reach in translation and, searching over turns, the turn the window
+        // already searched.
         let turned_past = !from_odometry && prior_window.yaw > window.yaw;
         let wide = if clipped && (failed || (gap && weak)) {
             Some((
