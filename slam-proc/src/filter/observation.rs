@@ -25,6 +25,15 @@ pub struct MeasuredMotion {
 }
 
 impl MeasuredMotion {
+    /// No motion, known exactly: the step of a first scan, or of a source without a front
+    /// end.
+    pub fn standing_still() -> Self {
+        Self {
+            increment: Pose2::IDENTITY,
+            covariance: Matrix3::zeros(),
+        }
+    }
+
     /// Whether the filter can use it: finite, with a covariance that has no negative
     /// variance.
     pub(crate) fn is_usable(&self) -> bool {
@@ -34,17 +43,6 @@ impl MeasuredMotion {
             .chain(self.covariance.iter())
             .all(|v| v.is_finite())
             && (0..3).all(|i| self.covariance[(i, i)] >= 0.0)
-    }
-}
-
-impl MeasuredMotion {
-    /// No motion, known exactly: the step of a first scan, or of a source without a front
-    /// end.
-    pub fn standing_still() -> Self {
-        Self {
-            increment: Pose2::IDENTITY,
-            covariance: Matrix3::zeros(),
-        }
     }
 }
 
