@@ -51,6 +51,24 @@ const WEAK_SHARE: f64 = 0.1;
 /// by chance is no reason to jump.
 const RECOVERY_MARGIN: f64 = 1.2;
 
+/// What seeded a registration, which decides how far it may look beyond its window.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Seed {
+    /// The wheels' step.
+    Odometry,
+    /// Constant velocity, the only prior there is.
+    ConstantVelocity,
+    /// Constant velocity as a second opinion beside wheels (that turned by `wheels_turn`,
+    /// radians) whose seed found a poor or contradicting fit. Its wide search takes only a
+    /// turn the wheels can have misjudged: by as much as they turned (they slip in a fast
+    /// turn: mit-csail's wheels gave two thirds of a 1.7 rad turn), or by what the window
+    /// searches anyway. A wheel does not invent or miss a larger turn, and a fit there is
+    /// the wrong basin of a scan that sees little: with 4 m of range, after two seconds of
+    /// scans too sparse to register, a fit turning 67 degrees where the wheels turned 6,
+    /// with 36 of its 55 points on the map, overruled them and bent the rest of the path.
+    SecondOpinion { wheels_turn: f64 },
+}
+
 /// Registers every scan against a local map of recent keyframes, fused with odometry.
 /// Feed it every scan in order with [`FrontEnd::process`].
 #[derive(Debug, Clone)]
@@ -206,12 +224,20 @@ impl FrontEnd {
         // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
         let gap = elapsed_s > MAX_EXTRAPOLATION_S;
         let mut prior = odometry.unwrap_or(cv);
-        let mut registration = self.register(points, &prior, gap, odometry.is_ok());
+        let seeded_by = if odometry.is_ok() {
+            Seed::Odometry
+        } else {
+            Seed::ConstantVelocity
+        };
+        let mut registration = self.register(points, &prior, gap, seeded_by);
         if let Ok(step) = odometry {
+            let second_opinion = Seed::SecondOpinion {
+                wheels_turn: step.increment.yaw,
+            };
             if registration.is_err() {
                 // The odometry may have put the scan where it finds no map: try the
                 // other prior before believing it.
-                if let Ok(other) = self.register(points, &cv, gap, false) {
+                if let Ok(other) = self.register(points, &cv, gap, second_opinion) {
                     registration = Ok(other);
                 }
             }
@@ -221,7 +247,7 @@ impl FrontEnd {
                     // The odometry's seed may have led the fit astray: the scan gets a
                     // second chance from constant velocity, and the better of the two fits
                     // is compared with the odometry.
-                    if let Ok(other) = self.register(points, &cv, gap, false)
+                    if let Ok(other) = self.register(points, &cv, gap, second_opinion)
                         && rank(&other, &self.params) > rank(found, &self.params)
                     {
                         registration = Ok(other);
@@ -343,18 +369,19 @@ impl FrontEnd {
         Ok(self.finish(output, start))
     }
 
-    /// Registration seeded by `step`, judged: enough points, enough of them matched, at
-    /// least one direction constrained. After a `gap` in the data, or when the fit fails
-    /// outright, a prior wider than the search window gets a wide search as well.
+    /// Registration seeded by `step` (from what `seeded_by` says), judged: enough points,
+    /// enough of them matched, at least one direction constrained. After a `gap` in the
+    /// data, or when the fit fails outright, a prior wider than the search window gets a
+    /// wide search as well.
     fn register(
         &self,
         points: &[SurfacePoint],
         step: &Step,
         gap: bool,
-        from_odometry: bool,
+        seeded_by: Seed,
     ) -> Result<Registration, MatchFailure> {
         let params = RegistrationParams {
-            weak_steps: !from_odometry,
+            weak_steps: seeded_by != Seed::Odometry,
             ..self.params
         };
         if points.len() < self.config.min_points {
@@ -417,7 +444,7 @@ impl FrontEnd {
         // only, at the window's reach in translation, keeps the doors out. `wide` is the
         // search's reach in translation and, searching over turns, the turn the window
         // already searched.
-        let turned_past = !from_odometry && prior_window.yaw > window.yaw;
+        let turned_past = seeded_by == Seed::ConstantVelocity && prior_window.yaw > window.yaw;
         let wide = if clipped && (failed || (gap && weak)) {
             Some((
                 prior_window
@@ -446,8 +473,17 @@ impl FrontEnd {
                 searched_yaw
                     .is_none_or(|yaw| wrap_angle(other.pose.yaw - prediction.pose.yaw).abs() > yaw)
             };
+            let plausible = |other: &Registration| match seeded_by {
+                Seed::SecondOpinion { wheels_turn } => {
+                    let turn = wrap_angle(other.pose.yaw - self.pose.yaw);
+                    wrap_angle(turn - wheels_turn).abs()
+                        <= wheels_turn.abs().max(self.config.max_search_yaw)
+                }
+                Seed::Odometry | Seed::ConstantVelocity => true,
+            };
             if let Some(other) = recover(&self.map, points, &sample, &how, &params)
                 && beyond(&other)
+                && plausible(&other)
                 && rank(&other, &params) > rank(&found, &params) * RECOVERY_MARGIN
             {
                 found = other;

@@ -7,7 +7,8 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use lidar_replay::{
-    LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, ReorderConfig, open_log,
+    Degradation, LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, ReorderConfig,
+    open_log,
 };
 use nalgebra::Matrix3;
 use scan_match::{OdometryInput, ScanInput};
@@ -37,11 +38,24 @@ impl LoggedScan {
 /// Reads at most `limit` scans of a log, each with the odometry at its stamp and that
 /// odometry's covariance as lidar-replay publishes it (a random walk with the motion).
 pub fn load(path: &Path, format: LogFormat, limit: usize) -> Result<Vec<LoggedScan>> {
+    load_degraded(path, format, limit, Degradation::NONE)
+}
+
+/// [`load`] for the harder version of the log that lidar-replay makes with `degradation`:
+/// the scans it leaves out are not read, the ranges beyond its reach are no-returns (all
+/// the odometry is kept).
+pub fn load_degraded(
+    path: &Path,
+    format: LogFormat,
+    limit: usize,
+    degradation: Degradation,
+) -> Result<Vec<LoggedScan>> {
     let reader = open_log(format, path, ReorderConfig::default())
         .with_context(|| format!("opening {}", path.display()))?;
     let mut covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut odometry: Option<OdometryInput> = None;
     let mut scans = Vec::new();
+    let mut index = 0;
     for record in reader {
         let Ok(record) = record else { continue };
         match record {
@@ -52,7 +66,12 @@ pub fn load(path: &Path, format: LogFormat, limit: usize) -> Result<Vec<LoggedSc
                     covariance: Matrix3::from_row_slice(&c),
                 });
             }
-            LogRecord::Scan(s) => {
+            LogRecord::Scan(mut s) => {
+                index += 1;
+                if !degradation.keeps(index - 1) {
+                    continue;
+                }
+                degradation.shorten(&mut s);
                 scans.push(LoggedScan {
                     stamp_ns: s.stamp_ns,
                     geometry: s.geometry,
