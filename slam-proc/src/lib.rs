@@ -55,9 +55,10 @@ pub use filter::fast_slam::{FastSlam, FilterStats};
 pub use filter::memory;
 pub use filter::observation::{MeasuredMotion, OdometryInput};
 pub use filter::resample::normalised_weights;
+pub use localize::hill_climb::HillClimb;
 pub use localize::likelihood_field::{BeamModel, LikelihoodField};
 pub use localize::localizer::{
-    Localization, LocalizeError, LocalizeStats, Localizer, ScanRanges, Start,
+    Localization, LocalizeError, LocalizeStats, Localizer, ScanRanges, Start, sample_beam_ends,
 };
 pub use localize::pose_arg::{PoseArgError, parse_pose};
 pub use localize_config::LocalizeConfig;

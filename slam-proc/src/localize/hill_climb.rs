@@ -11,7 +11,7 @@ use crate::localize::likelihood_field::LikelihoodField;
 
 /// How a pose climbs: its first steps, and how often they halve.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct HillClimb {
+pub struct HillClimb {
     /// First step in x and in y, metres.
     pub xy: f64,
     /// First step in yaw, radians.

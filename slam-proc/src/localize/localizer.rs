@@ -34,11 +34,7 @@ const CLIMB_PARTICLES_PER_TASK: usize = 256;
 /// Fills `points` with the ends (sensor frame) of at most `beams` of the scan's valid
 /// beams, spread evenly over them, the first and the last included; false when the scan
 /// has no valid beam.
-pub(crate) fn sample_beam_ends(
-    scan: &ScanRanges<'_>,
-    beams: usize,
-    points: &mut Vec<[f64; 2]>,
-) -> bool {
+pub fn sample_beam_ends(scan: &ScanRanges<'_>, beams: usize, points: &mut Vec<[f64; 2]>) -> bool {
     points.clear();
     let valid: Vec<usize> = scan
         .ranges

@@ -1,0 +1,217 @@
+//! How well a saved map agrees with the path that drew it, as the localizer sees the map.
+//! Every scan of the log that the run's path holds is placed at its pose, moved uphill on
+//! its likelihood over the saved grid (the localizer's likelihood field and beam model, its
+//! beams), and the distance from the pose to that best fit is the scan's disagreement with
+//! the map. Where the passes of a building agree, each scan's best fit lies within a few
+//! centimetres of its pose; where two passes along a corridor part, the scans of one fit the
+//! walls the others drew some decimetres away, and a localizer on the map parts from the
+//! mapping path there by as much. No ground truth is needed.
+//!
+//!     cargo run --release -p slam-proc --example map_consistency -- \
+//!         runs/aces ../shared/data/carmen/aces.clf [--trajectory FILE] [--out FILE]
+//!
+//! `--trajectory` checks another path on the same map (a localization run's, say) instead of
+//! the map's own `trajectory.tum`; `--out` writes a line per scan: stamp, the best fit's
+//! offset in x, y (metres) and yaw (radians), and its distance.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use clap::Parser;
+use lidar_replay::{LogFormat, LogRecord, ReorderConfig, open_log};
+use map_sink::SavedMap;
+use slam_geom::{Pose2, read_tum, wrap_angle};
+use slam_proc::{BeamModel, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges};
+
+/// The climb from each pose: first steps of 0.1 m and 0.02 rad, halved four times (to 6 mm
+/// and 1.3 mrad). A scan within a few decimetres of its best fit finds it; one further off
+/// is off by more than any of these figures needs to tell.
+const CLIMB: HillClimb = HillClimb {
+    xy: 0.1,
+    yaw: 0.02,
+    levels: 5,
+    passes: 4,
+};
+
+/// Disagreements the summary counts the scans beyond, metres.
+const BEYOND_M: [f64; 3] = [0.05, 0.10, 0.20];
+
+/// A stretch is scans beyond this, metres, ...
+const STRETCH_M: f64 = 0.10;
+
+/// ... ending after this long within it, seconds; the summary lists the stretches that
+/// reach `SHOWN_M`.
+const STRETCH_GAP_S: f64 = 2.0;
+
+const SHOWN_M: f64 = 0.20;
+
+#[derive(Parser)]
+#[command(about = "How far each scan's best fit on a saved map lies from its pose")]
+struct Args {
+    /// The saved map: a run's output directory.
+    map: PathBuf,
+    /// The log the run replayed.
+    log: PathBuf,
+    /// The path to check (default: the map's own trajectory.tum).
+    #[arg(long)]
+    trajectory: Option<PathBuf>,
+    /// The log's format: carmen or seed-csv.
+    #[arg(long, default_value = "carmen")]
+    format: String,
+    /// Write a line per scan here: stamp, offset x, y, yaw and its distance.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    match run(&Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("map_consistency: {error:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(args: &Args) -> Result<()> {
+    let format: LogFormat = args.format.parse().map_err(anyhow::Error::msg)?;
+    if format == LogFormat::Mcap {
+        bail!("--format: carmen or seed-csv (a run.mcap holds no saved map to check)");
+    }
+    let map = SavedMap::load(&args.map)
+        .with_context(|| format!("cannot use the map in {}", args.map.display()))?;
+    let Some(grid) = map.grid else {
+        bail!("{} has no occupancy grid", args.map.display());
+    };
+    let config = LocalizeConfig::default();
+    let field = LikelihoodField::new(
+        &grid,
+        config.max_distance,
+        BeamModel {
+            sigma_hit: config.sigma_hit,
+            floor: config.beam_floor,
+        },
+    );
+    let path_file = args
+        .trajectory
+        .clone()
+        .unwrap_or_else(|| args.map.join("trajectory.tum"));
+    let poses: HashMap<u64, Pose2> = read_tum(&path_file)
+        .with_context(|| format!("reading {}", path_file.display()))?
+        .into_iter()
+        .map(|(_, p)| {
+            let pose = Pose2::new(p.position[0], p.position[1], p.yaw());
+            (p.stamp_ns, pose)
+        })
+        .collect();
+
+    let reader = open_log(format, &args.log, ReorderConfig::default())
+        .with_context(|| format!("opening {}", args.log.display()))?;
+    let mut points = Vec::new();
+    let mut fits: Vec<(u64, Pose2, f64)> = Vec::new();
+    for record in reader {
+        let LogRecord::Scan(scan) = record? else {
+            continue;
+        };
+        let Some(pose) = poses.get(&scan.stamp_ns) else {
+            continue;
+        };
+        let ranges = ScanRanges {
+            angle_min: scan.geometry.angle_min,
+            angle_increment: scan.geometry.angle_increment,
+            range_min: scan.geometry.range_min,
+            range_max: scan.geometry.range_max,
+            ranges: &scan.ranges,
+        };
+        if !slam_proc::sample_beam_ends(&ranges, config.beams, &mut points) {
+            continue;
+        }
+        let best = CLIMB.climb(&field, &points, *pose);
+        let offset = Pose2::new(
+            best.x - pose.x,
+            best.y - pose.y,
+            wrap_angle(best.yaw - pose.yaw),
+        );
+        fits.push((scan.stamp_ns, offset, offset.x.hypot(offset.y)));
+    }
+    if fits.is_empty() {
+        bail!(
+            "no scan of {} has a pose in {}",
+            args.log.display(),
+            path_file.display()
+        );
+    }
+    println!("{}", summary(&fits));
+    if let Some(out) = &args.out {
+        let mut text = String::from("# stamp dx dy dyaw distance\n");
+        for (stamp_ns, offset, distance) in &fits {
+            writeln!(
+                text,
+                "{} {:.4} {:.4} {:.5} {:.4}",
+                slam_geom::format_stamp(*stamp_ns),
+                offset.x,
+                offset.y,
+                offset.yaw,
+                distance
+            )?;
+        }
+        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+    }
+    Ok(())
+}
+
+/// The distribution of the disagreements and the worst stretches.
+fn summary(fits: &[(u64, Pose2, f64)]) -> String {
+    let mut distances: Vec<f64> = fits.iter().map(|(_, _, d)| *d).collect();
+    distances.sort_by(f64::total_cmp);
+    let n = distances.len();
+    let at = |q: f64| distances[((n - 1) as f64 * q).round() as usize];
+    let mean = distances.iter().sum::<f64>() / n as f64;
+    let mut text = format!(
+        "{n} scans: best fit {mean:.3} m from the pose on average, median {:.3} m, 95 % {:.3} m, at most {:.3} m",
+        at(0.5),
+        at(0.95),
+        at(1.0)
+    );
+    for beyond in BEYOND_M {
+        let count = distances.iter().filter(|d| **d > beyond).count();
+        let share = 100.0 * count as f64 / n as f64;
+        let _ = write!(text, "\n  beyond {beyond:.2} m: {count} ({share:.1} %)");
+    }
+    let mut stretch: Option<(u64, u64, f64)> = None;
+    let mut stretches = Vec::new();
+    for (stamp_ns, _, distance) in fits {
+        if *distance <= STRETCH_M {
+            if let Some((_, last, _)) = stretch
+                && stamp_ns.saturating_sub(last) as f64 * 1e-9 > STRETCH_GAP_S
+            {
+                stretches.extend(stretch.take());
+            }
+            continue;
+        }
+        stretch = Some(match stretch {
+            Some((first, _, worst)) => (first, *stamp_ns, worst.max(*distance)),
+            None => (*stamp_ns, *stamp_ns, *distance),
+        });
+    }
+    stretches.extend(stretch);
+    stretches.retain(|(_, _, worst)| *worst > SHOWN_M);
+    if !stretches.is_empty() {
+        let _ = write!(
+            text,
+            "\n  stretches beyond {STRETCH_M:.2} m that reach {SHOWN_M:.2} m (stamps, s):"
+        );
+        for (first, last, worst) in stretches {
+            let _ = write!(
+                text,
+                "\n    {} - {}: up to {worst:.2} m",
+                slam_geom::format_stamp(first),
+                slam_geom::format_stamp(last)
+            );
+        }
+    }
+    text
+}
