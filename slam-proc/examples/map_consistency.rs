@@ -25,6 +25,7 @@ use lidar_replay::{LogFormat, LogRecord, ReorderConfig, open_log};
 use map_sink::SavedMap;
 use slam_geom::{Pose2, read_tum, wrap_angle};
 use slam_proc::{BeamModel, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges};
+use stage_kit::{say, say_err};
 
 /// The climb from each pose: first steps of 0.1 m and 0.02 rad, halved four times (to 6 mm
 /// and 1.3 mrad). A scan within a few decimetres of its best fit finds it; one further off
@@ -70,7 +71,7 @@ fn main() -> ExitCode {
     match run(&Args::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("map_consistency: {error:#}");
+            say_err(&format!("map_consistency: {error:#}"));
             ExitCode::from(2)
         }
     }
@@ -144,7 +145,7 @@ fn run(args: &Args) -> Result<()> {
             path_file.display()
         );
     }
-    println!("{}", summary(&fits));
+    say(&summary(&fits));
     if let Some(out) = &args.out {
         let mut text = String::from("# stamp dx dy dyaw distance\n");
         for (stamp_ns, offset, distance) in &fits {
