@@ -12,7 +12,10 @@
 //!
 //! `--trajectory` checks another path on the same map (a localization run's, say) instead of
 //! the map's own `trajectory.tum`; `--out` writes a line per scan: stamp, the best fit's
-//! offset in x, y (metres) and yaw (radians), and its distance.
+//! offset in x, y (metres) and yaw (radians), its distance, and how much more likely a beam
+//! is there than at the pose (log-likelihood per beam). A scan that sees only a corridor's
+//! two walls fixes nothing along it: its best fit may slide there for a gain of next to
+//! nothing, and the distance alone overstates what the map disagrees with.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -112,7 +115,7 @@ fn run(args: &Args) -> Result<()> {
     let reader = open_log(format, &args.log, ReorderConfig::default())
         .with_context(|| format!("opening {}", args.log.display()))?;
     let mut points = Vec::new();
-    let mut fits: Vec<(u64, Pose2, f64)> = Vec::new();
+    let mut fits: Vec<Fit> = Vec::new();
     for record in reader {
         let LogRecord::Scan(scan) = record? else {
             continue;
@@ -136,7 +139,14 @@ fn run(args: &Args) -> Result<()> {
             best.y - pose.y,
             wrap_angle(best.yaw - pose.yaw),
         );
-        fits.push((scan.stamp_ns, offset, offset.x.hypot(offset.y)));
+        let gain =
+            (score(&field, &points, &best) - score(&field, &points, pose)) / points.len() as f64;
+        fits.push(Fit {
+            stamp_ns: scan.stamp_ns,
+            offset,
+            distance: offset.x.hypot(offset.y),
+            gain,
+        });
     }
     if fits.is_empty() {
         bail!(
@@ -147,16 +157,17 @@ fn run(args: &Args) -> Result<()> {
     }
     say(&summary(&fits));
     if let Some(out) = &args.out {
-        let mut text = String::from("# stamp dx dy dyaw distance\n");
-        for (stamp_ns, offset, distance) in &fits {
+        let mut text = String::from("# stamp dx dy dyaw distance gain_per_beam\n");
+        for fit in &fits {
             writeln!(
                 text,
-                "{} {:.4} {:.4} {:.5} {:.4}",
-                slam_geom::format_stamp(*stamp_ns),
-                offset.x,
-                offset.y,
-                offset.yaw,
-                distance
+                "{} {:.4} {:.4} {:.5} {:.4} {:.4}",
+                slam_geom::format_stamp(fit.stamp_ns),
+                fit.offset.x,
+                fit.offset.y,
+                fit.offset.yaw,
+                fit.distance,
+                fit.gain
             )?;
         }
         std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
@@ -164,9 +175,39 @@ fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
+/// One scan's best fit on the map.
+struct Fit {
+    stamp_ns: u64,
+    /// From the pose to the best fit, in the map's frame.
+    offset: Pose2,
+    /// Of the offset's translation, metres.
+    distance: f64,
+    /// How much more likely a beam is at the best fit than at the pose (log-likelihood).
+    gain: f64,
+}
+
+/// The log-likelihood of beam ends `points` (sensor frame) seen from `pose`.
+fn score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
+    let (s, c) = pose.yaw.sin_cos();
+    points
+        .iter()
+        .map(|[x, y]| field.score(pose.x + c * x - s * y, pose.y + s * x + c * y))
+        .sum()
+}
+
+/// Scans in a row whose best fits lie beyond `STRETCH_M`.
+struct Stretch {
+    first_ns: u64,
+    last_ns: u64,
+    /// The farthest best fit, metres ...
+    worst_m: f64,
+    /// ... and the largest gain per beam.
+    best_gain: f64,
+}
+
 /// The distribution of the disagreements and the worst stretches.
-fn summary(fits: &[(u64, Pose2, f64)]) -> String {
-    let mut distances: Vec<f64> = fits.iter().map(|(_, _, d)| *d).collect();
+fn summary(fits: &[Fit]) -> String {
+    let mut distances: Vec<f64> = fits.iter().map(|fit| fit.distance).collect();
     distances.sort_by(f64::total_cmp);
     let n = distances.len();
     let at = |q: f64| distances[((n - 1) as f64 * q).round() as usize];
@@ -182,35 +223,43 @@ fn summary(fits: &[(u64, Pose2, f64)]) -> String {
         let share = 100.0 * count as f64 / n as f64;
         let _ = write!(text, "\n  beyond {beyond:.2} m: {count} ({share:.1} %)");
     }
-    let mut stretch: Option<(u64, u64, f64)> = None;
+    let mut stretch: Option<Stretch> = None;
     let mut stretches = Vec::new();
-    for (stamp_ns, _, distance) in fits {
-        if *distance <= STRETCH_M {
-            if let Some((_, last, _)) = stretch
-                && stamp_ns.saturating_sub(last) as f64 * 1e-9 > STRETCH_GAP_S
+    for fit in fits {
+        if fit.distance <= STRETCH_M {
+            if let Some(open) = &stretch
+                && fit.stamp_ns.saturating_sub(open.last_ns) as f64 * 1e-9 > STRETCH_GAP_S
             {
                 stretches.extend(stretch.take());
             }
             continue;
         }
-        stretch = Some(match stretch {
-            Some((first, _, worst)) => (first, *stamp_ns, worst.max(*distance)),
-            None => (*stamp_ns, *stamp_ns, *distance),
+        let open = stretch.get_or_insert(Stretch {
+            first_ns: fit.stamp_ns,
+            last_ns: fit.stamp_ns,
+            worst_m: 0.0,
+            best_gain: 0.0,
         });
+        open.last_ns = fit.stamp_ns;
+        open.worst_m = open.worst_m.max(fit.distance);
+        open.best_gain = open.best_gain.max(fit.gain);
     }
     stretches.extend(stretch);
-    stretches.retain(|(_, _, worst)| *worst > SHOWN_M);
+    stretches.retain(|stretch| stretch.worst_m > SHOWN_M);
     if !stretches.is_empty() {
         let _ = write!(
             text,
-            "\n  stretches beyond {STRETCH_M:.2} m that reach {SHOWN_M:.2} m (stamps, s):"
+            "\n  stretches beyond {STRETCH_M:.2} m that reach {SHOWN_M:.2} m (stamps in s; the most \
+             a beam gained at a best fit, in log-likelihood):"
         );
-        for (first, last, worst) in stretches {
+        for stretch in stretches {
             let _ = write!(
                 text,
-                "\n    {} - {}: up to {worst:.2} m",
-                slam_geom::format_stamp(first),
-                slam_geom::format_stamp(last)
+                "\n    {} - {}: up to {:.2} m, gain up to {:.2}",
+                slam_geom::format_stamp(stretch.first_ns),
+                slam_geom::format_stamp(stretch.last_ns),
+                stretch.worst_m,
+                stretch.best_gain
             );
         }
     }
