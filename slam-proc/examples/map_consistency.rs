@@ -27,12 +27,14 @@ use clap::Parser;
 use lidar_replay::{LogFormat, LogRecord, ReorderConfig, open_log};
 use map_sink::SavedMap;
 use slam_geom::{Pose2, read_tum, wrap_angle};
-use slam_proc::{BeamModel, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges};
+use slam_proc::{
+    BeamModel, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges, sample_beam_ends, scan_score,
+};
 use stage_kit::{say, say_err};
 
 /// The climb from each pose: first steps of 0.1 m and 0.02 rad, halved four times (to 6 mm
-/// and 1.3 mrad). A scan within a few decimetres of its best fit finds it; one further off
-/// is off by more than any of these figures needs to tell.
+/// and 1.3 mrad), which reach a best fit some decimetres away; a scan farther off than that
+/// is beyond every threshold the summary counts anyway.
 const CLIMB: HillClimb = HillClimb {
     xy: 0.1,
     yaw: 0.02,
@@ -46,10 +48,10 @@ const BEYOND_M: [f64; 3] = [0.05, 0.10, 0.20];
 /// A stretch is scans beyond this, metres, ...
 const STRETCH_M: f64 = 0.10;
 
-/// ... ending after this long within it, seconds; the summary lists the stretches that
-/// reach `SHOWN_M`.
+/// ... that ends after this long within it, seconds.
 const STRETCH_GAP_S: f64 = 2.0;
 
+/// The summary lists the stretches that reach this, metres.
 const SHOWN_M: f64 = 0.20;
 
 #[derive(Parser)]
@@ -65,7 +67,8 @@ struct Args {
     /// The log's format: carmen or seed-csv.
     #[arg(long, default_value = "carmen")]
     format: String,
-    /// Write a line per scan here: stamp, offset x, y, yaw and its distance.
+    /// Write a line per scan here: stamp, offset x, y, yaw, its distance and the gain per
+    /// beam.
     #[arg(long)]
     out: Option<PathBuf>,
 }
@@ -116,9 +119,16 @@ fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("opening {}", args.log.display()))?;
     let mut points = Vec::new();
     let mut fits: Vec<Fit> = Vec::new();
+    let mut unreadable = 0_usize;
     for record in reader {
-        let LogRecord::Scan(scan) = record? else {
-            continue;
+        let scan = match record {
+            Ok(LogRecord::Scan(scan)) => scan,
+            Ok(_) => continue,
+            Err(error) => {
+                unreadable += 1;
+                say_err(&format!("map_consistency: skipped: {error:#}"));
+                continue;
+            }
         };
         let Some(pose) = poses.get(&scan.stamp_ns) else {
             continue;
@@ -130,7 +140,7 @@ fn run(args: &Args) -> Result<()> {
             range_max: scan.geometry.range_max,
             ranges: &scan.ranges,
         };
-        if !slam_proc::sample_beam_ends(&ranges, config.beams, &mut points) {
+        if !sample_beam_ends(&ranges, config.beams, &mut points) {
             continue;
         }
         let best = CLIMB.climb(&field, &points, *pose);
@@ -139,8 +149,8 @@ fn run(args: &Args) -> Result<()> {
             best.y - pose.y,
             wrap_angle(best.yaw - pose.yaw),
         );
-        let gain =
-            (score(&field, &points, &best) - score(&field, &points, pose)) / points.len() as f64;
+        let gain = (scan_score(&field, &points, &best) - scan_score(&field, &points, pose))
+            / points.len() as f64;
         fits.push(Fit {
             stamp_ns: scan.stamp_ns,
             offset,
@@ -156,6 +166,11 @@ fn run(args: &Args) -> Result<()> {
         );
     }
     say(&summary(&fits));
+    if unreadable > 0 {
+        say(&format!(
+            "  {unreadable} records of the log could not be read (skipped)"
+        ));
+    }
     if let Some(out) = &args.out {
         let mut text = String::from("# stamp dx dy dyaw distance gain_per_beam\n");
         for fit in &fits {
@@ -184,15 +199,6 @@ struct Fit {
     distance: f64,
     /// How much more likely a beam is at the best fit than at the pose (log-likelihood).
     gain: f64,
-}
-
-/// The log-likelihood of beam ends `points` (sensor frame) seen from `pose`.
-fn score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
-    let (s, c) = pose.yaw.sin_cos();
-    points
-        .iter()
-        .map(|[x, y]| field.score(pose.x + c * x - s * y, pose.y + s * x + c * y))
-        .sum()
 }
 
 /// Scans in a row whose best fits lie beyond `STRETCH_M`.

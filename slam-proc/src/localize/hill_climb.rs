@@ -67,7 +67,7 @@ impl HillClimb {
 }
 
 /// The log-likelihood of beam ends `points` (sensor frame) seen from `pose`.
-pub(crate) fn scan_score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
+pub fn scan_score(field: &LikelihoodField, points: &[[f64; 2]], pose: &Pose2) -> f64 {
     let (s, c) = pose.yaw.sin_cos();
     points
         .iter()
