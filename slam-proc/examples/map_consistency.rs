@@ -168,7 +168,7 @@ fn run(args: &Args) -> Result<()> {
     say(&summary(&fits));
     if unreadable > 0 {
         say(&format!(
-            "  {unreadable} records of the log could not be read (skipped)"
+            "  records of the log not read (skipped): {unreadable}"
         ));
     }
     if let Some(out) = &args.out {
