@@ -26,6 +26,7 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use lidar_replay::{LogFormat, LogRecord, ReorderConfig, open_log};
 use map_sink::SavedMap;
+use slam_eval::{ErrorStats, percentile};
 use slam_geom::{Pose2, read_tum, wrap_angle};
 use slam_proc::{
     BeamModel, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges, sample_beam_ends, scan_score,
@@ -213,16 +214,16 @@ struct Stretch {
 
 /// The distribution of the disagreements and the worst stretches.
 fn summary(fits: &[Fit]) -> String {
-    let mut distances: Vec<f64> = fits.iter().map(|fit| fit.distance).collect();
-    distances.sort_by(f64::total_cmp);
+    let distances: Vec<f64> = fits.iter().map(|fit| fit.distance).collect();
     let n = distances.len();
-    let at = |q: f64| distances[((n - 1) as f64 * q).round() as usize];
-    let mean = distances.iter().sum::<f64>() / n as f64;
+    let stats = ErrorStats::of(&distances);
+    let at = |p: f64| percentile(&distances, p).unwrap_or(f64::NAN);
     let mut text = format!(
-        "{n} scans: best fit {mean:.3} m from the pose on average, median {:.3} m, 95 % {:.3} m, at most {:.3} m",
-        at(0.5),
-        at(0.95),
-        at(1.0)
+        "{n} scans: best fit {:.3} m from the pose on average, median {:.3} m, 95 % {:.3} m, at most {:.3} m",
+        stats.mean,
+        at(50.0),
+        at(95.0),
+        stats.max
     );
     for beyond in BEYOND_M {
         let count = distances.iter().filter(|d| **d > beyond).count();
