@@ -52,7 +52,7 @@ const WEAK_SHARE: f64 = 0.1;
 const RECOVERY_MARGIN: f64 = 1.2;
 
 /// What seeded a registration, which decides how far it may look beyond its window.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 enum Seed {
     /// The wheels' step.
     Odometry,
@@ -381,7 +381,7 @@ impl FrontEnd {
         seeded_by: Seed,
     ) -> Result<Registration, MatchFailure> {
         let params = RegistrationParams {
-            weak_steps: seeded_by != Seed::Odometry,
+            weak_steps: !matches!(seeded_by, Seed::Odometry),
             ..self.params
         };
         if points.len() < self.config.min_points {
@@ -444,7 +444,8 @@ impl FrontEnd {
         // only, at the window's reach in translation, keeps the doors out. `wide` is the
         // search's reach in translation and, searching over turns, the turn the window
         // already searched.
-        let turned_past = seeded_by == Seed::ConstantVelocity && prior_window.yaw > window.yaw;
+        let turned_past =
+            matches!(seeded_by, Seed::ConstantVelocity) && prior_window.yaw > window.yaw;
         let wide = if clipped && (failed || (gap && weak)) {
             Some((
                 prior_window
