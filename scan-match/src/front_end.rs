@@ -234,7 +234,9 @@ impl FrontEnd {
             let second_opinion = Seed::SecondOpinion {
                 wheels_turn: step.increment.yaw,
             };
-            if registration.is_err() {
+            // Whether `registration` is already the second opinion's.
+            let asked = registration.is_err();
+            if asked {
                 // The odometry may have put the scan where it finds no map: try the
                 // other prior before believing it.
                 if let Ok(other) = self.register(points, &cv, gap, second_opinion) {
@@ -247,7 +249,8 @@ impl FrontEnd {
                     // The odometry's seed may have led the fit astray: the scan gets a
                     // second chance from constant velocity, and the better of the two fits
                     // is compared with the odometry.
-                    if let Ok(other) = self.register(points, &cv, gap, second_opinion)
+                    if !asked
+                        && let Ok(other) = self.register(points, &cv, gap, second_opinion)
                         && rank(&other, &self.params) > rank(found, &self.params)
                     {
                         registration = Ok(other);
