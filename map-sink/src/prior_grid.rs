@@ -4,8 +4,9 @@
 //! the run that drew it was. So an occupied pixel counts as one return's worth of evidence
 //! and a free one as three passes' worth: each just past its threshold, so that a cell the
 //! new run does not see keeps the state it was saved with, and one it sees is decided by
-//! what it sees there a few times. A saved wall that the new run's beams pass through twice
-//! becomes unknown and five times free (a door that was closed and is open now); a saved
+//! what it sees there a few times. A saved wall that the new run's beams pass through three
+//! times becomes unknown and twelve times free (a door that was closed and is open now: a
+//! pass lowers a wall cell less than a free one, see [`crate::occupancy_grid`]); a saved
 //! free cell that its returns hit three times becomes occupied (a new wall).
 //!
 //! The saved grid is laid onto this run's cells, which line up with multiples of the run's
@@ -349,17 +350,25 @@ mod tests {
         let map = saved(0.1, [0.0, 0.0], &[".....#....."]);
         let at = |grid: &OccupancyGrid| (state_at(grid, 0.55, 0.05), state_at(grid, 1.05, 0.05));
         assert_eq!(at(&merged(&map, 0)), (CellState::Occupied, CellState::Free));
-        // One pass: neither saved state stands unchallenged.
+        // One pass: the saved floor is in doubt; a wall is lowered less by a pass than floor
+        // is, and still stands.
         assert_eq!(
             at(&merged(&map, 1)),
-            (CellState::Unknown, CellState::Unknown)
+            (CellState::Occupied, CellState::Unknown)
         );
-        // Three: the new wall is there; the old one is still in doubt.
+        // Three: the new wall is there; the old one is in doubt.
         assert_eq!(
             at(&merged(&map, 3)),
             (CellState::Unknown, CellState::Occupied)
         );
-        // Five: the old wall is free floor.
-        assert_eq!(at(&merged(&map, 5)), (CellState::Free, CellState::Occupied));
+        // Eleven: still in doubt; twelve: the old wall is free floor.
+        assert_eq!(
+            at(&merged(&map, 11)),
+            (CellState::Unknown, CellState::Occupied)
+        );
+        assert_eq!(
+            at(&merged(&map, 12)),
+            (CellState::Free, CellState::Occupied)
+        );
     }
 }
