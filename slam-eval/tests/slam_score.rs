@@ -100,6 +100,44 @@ fn the_text_report_names_both_errors() {
 }
 
 #[test]
+fn only_the_relations_spanning_long_enough_are_scored() {
+    // Spans of 0.1, 0.2 and 0.4 s; errors 0.1, 0.2 and 0.4 m.
+    let relations = "1134864629.895182 1134864629.995182 1 0 0 0 0 0\n\
+                     1134864629.995182 1134864630.195182 2 0 0 0 0 0\n\
+                     1134864629.895182 1134864630.295182 4 0 0 0 0 0\n";
+    let run = score_stretched("span", relations, &["--min-span-s", "0.15", "--json"]);
+    assert!(run.success, "{}", run.stderr);
+    let score: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(score["used"], 2);
+    let mean = score["translation_m"]["mean"].as_f64().unwrap();
+    assert!((mean - 0.3).abs() < 1e-9, "{score}");
+    assert!(
+        run.stderr
+            .contains("2 of the 3 relations span 0.15 s or more"),
+        "{}",
+        run.stderr
+    );
+
+    let none = score_stretched("span-none", relations, &["--min-span-s", "1"]);
+    assert!(!none.success);
+    assert!(
+        none.stderr.contains("none of the 3 relations in")
+            && none.stderr.contains("spans 1 s or more"),
+        "{}",
+        none.stderr
+    );
+    let negative = score_stretched("span-negative", relations, &["--min-span-s=-1"]);
+    assert!(!negative.success);
+    assert!(
+        negative
+            .stderr
+            .contains("--min-span-s must be a non-negative number, not -1"),
+        "{}",
+        negative.stderr
+    );
+}
+
+#[test]
 fn malformed_lines_are_named() {
     let relations = fixture(
         "bad.relations",
