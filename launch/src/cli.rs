@@ -63,8 +63,9 @@ pub struct Args {
     /// Edge of the occupancy grid's cells (map.pgm), metres; default 0.05.
     #[arg(long, value_name = "METRES")]
     resolution: Option<f64>,
-    /// Passes refining the final path against its own grid before the map is written; 0
-    /// keeps the filter's path as it is. Default 5.
+    /// Passes refining the final path against its own grid before the map is written, the
+    /// last of two or more aligning every scan to every wall; 0 keeps the filter's path as
+    /// it is. Default 6.
     #[arg(long, value_name = "N")]
     refine_passes: Option<usize>,
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
