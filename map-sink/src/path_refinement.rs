@@ -190,37 +190,18 @@ pub fn refine_path_within(
             world_ends,
             guesses: on_path.iter().map(|(i, _, _)| poses[*i]).collect(),
         };
-        let alignments = if !to_every_wall {
-            let Some(alignments) =
-                align_to_other_passes(&grid, &pass_scans, &travelled, config, &saved, has_time)
-            else {
+        let alignments = if to_every_wall {
+            align_to_every_wall(&grid, &pass_scans, &config.alignment, &saved, has_time)
+        } else {
+            align_to_other_passes(&grid, &pass_scans, &travelled, config, &saved, has_time)
+        };
+        let alignments = match alignments {
+            Aligned::Scans(alignments) => alignments,
+            Aligned::NoWalls => break,
+            Aligned::OutOfTime => {
                 report.cut_short = true;
                 break;
-            };
-            alignments
-        } else {
-            let Some(walls) = WallField::new(
-                &grid,
-                &[pass_scans.world_ends.concat(), saved.clone()].concat(),
-                config.alignment.inlier_distance_m,
-                config.alignment.coarse_distance_m,
-            ) else {
-                break;
-            };
-            pass_scans
-                .sensor_ends
-                .iter()
-                .zip(&pass_scans.guesses)
-                .map(|(ends, guess)| {
-                    align_scan(
-                        &walls,
-                        ends,
-                        *guess,
-                        &config.alignment,
-                        WeakDirections::Follow,
-                    )
-                })
-                .collect()
+            }
         };
         let priors: Vec<PosePrior> = on_path
             .iter()
@@ -296,9 +277,72 @@ const TILE_M: f64 = 1.0;
 /// the times it went round.
 const MAX_OTHER_RETURNS: usize = 200_000;
 
+/// What aligning a pass's scans came to.
+enum Aligned {
+    /// Each scan's alignment, `None` where it is not trusted.
+    Scans(Vec<Option<ScanAlignment>>),
+    /// The grid holds no wall to align to.
+    NoWalls,
+    /// `has_time` said no before the pass was done.
+    OutOfTime,
+}
+
+/// Scans aligned to every wall per parallel task; the stop clock is asked before each
+/// task, so a pass is abandoned at most one task's work after time runs out.
+const EVERY_WALL_SCANS_PER_TASK: usize = 32;
+
+/// Aligns each scan (`sensor_ends` from `guesses`; `world_ends` the returns placed at the
+/// guesses) to every wall, its own pass's too: one field of every return, which costs as
+/// much as the returns, however often the robot went round.
+fn align_to_every_wall(
+    grid: &OccupancyGrid,
+    scans: &PassScans<'_>,
+    config: &ScanAlignmentConfig,
+    saved: &[SeenReturn],
+    has_time: &(dyn Fn() -> bool + Sync),
+) -> Aligned {
+    let every: Vec<SeenReturn> = scans
+        .world_ends
+        .iter()
+        .flatten()
+        .chain(saved)
+        .copied()
+        .collect();
+    let Some(walls) = WallField::new(
+        grid,
+        &every,
+        config.inlier_distance_m,
+        config.coarse_distance_m,
+    ) else {
+        return Aligned::NoWalls;
+    };
+    let tasks: Option<Vec<Vec<Option<ScanAlignment>>>> = scans
+        .sensor_ends
+        .par_chunks(EVERY_WALL_SCANS_PER_TASK)
+        .zip(scans.guesses.par_chunks(EVERY_WALL_SCANS_PER_TASK))
+        .map(|(ends, guesses)| {
+            if !has_time() {
+                return None;
+            }
+            Some(
+                ends.iter()
+                    .zip(guesses)
+                    .map(|(ends, guess)| {
+                        align_scan(&walls, ends, *guess, config, WeakDirections::Follow)
+                    })
+                    .collect(),
+            )
+        })
+        .collect();
+    match tasks {
+        Some(tasks) => Aligned::Scans(tasks.concat()),
+        None => Aligned::OutOfTime,
+    }
+}
+
 /// Aligns each scan (`sensor_ends` from `guesses`; `world_ends` the returns placed at the
 /// guesses) to the walls that the scans of other passes drew, block by block of the path;
-/// `None` when `has_time` said no before a block.
+/// out of time when `has_time` said no before a block.
 fn align_to_other_passes(
     grid: &OccupancyGrid,
     scans: &PassScans<'_>,
@@ -306,7 +350,7 @@ fn align_to_other_passes(
     refinement: &PathRefinementConfig,
     saved: &[SeenReturn],
     has_time: &(dyn Fn() -> bool + Sync),
-) -> Option<Vec<Option<ScanAlignment>>> {
+) -> Aligned {
     let config = &refinement.alignment;
     let world_ends = &scans.world_ends;
     // Scan and return indices, as u32: the index holds every return of the run.
@@ -357,11 +401,14 @@ fn align_to_other_passes(
             Some(pass.align_block(block, members))
         })
         .collect();
+    let Some(aligned) = aligned else {
+        return Aligned::OutOfTime;
+    };
     let mut alignments = vec![None; world_ends.len()];
-    for (k, alignment) in aligned?.into_iter().flatten() {
+    for (k, alignment) in aligned.into_iter().flatten() {
         alignments[k] = alignment;
     }
-    Some(alignments)
+    Aligned::Scans(alignments)
 }
 
 /// The kept scans of one pass, at the path's poses as the pass found them.
@@ -691,24 +738,30 @@ mod tests {
         assert!(report.aligned_per_pass.is_empty());
     }
 
-    #[test]
-    fn time_running_out_mid_pass_keeps_the_passes_done_as_they_were() {
+    /// Refines the drifting laps with `config` twice: once with all the time it needs, once
+    /// with the clock saying no halfway through the second pass; the cut refinement must
+    /// be the first pass's path, bit for bit.
+    fn assert_cut_mid_second_pass_keeps_the_first(config: PathRefinementConfig) {
         let (path, scans) = drifting_laps();
-        let config = PathRefinementConfig::default();
+        let grid = GridConfig::default();
+        let refine = |has_time: &(dyn Fn() -> bool + Sync)| {
+            refine_path_within(&path, &stamped(&scans), &grid, &config, None, has_time)
+                .expect("fits")
+        };
         // How often a whole refinement asks, and how often one pass does.
         let asked = AtomicUsize::new(0);
         let count = || {
             asked.fetch_add(1, Ordering::Relaxed);
             true
         };
-        let (whole, report) = refine_by_default(&path, &scans, &count);
+        let (whole, report) = refine(&count);
         assert!(!report.cut_short);
         let asked = asked.load(Ordering::Relaxed);
         let per_pass = asked / config.passes;
-        assert!(per_pass >= 2, "asked {asked} times");
+        assert!(per_pass >= 3, "asked {asked} times");
         // Time runs out halfway through the second pass.
-        // The blocks of a pass ask from all cores: which block is told no first does not
-        // matter, the pass is abandoned either way.
+        // The tasks of a pass ask from all cores: which is told no first does not matter,
+        // the pass is abandoned either way.
         let left = AtomicUsize::new(per_pass + per_pass / 2);
         let has_time = || {
             let before = left
@@ -718,18 +771,33 @@ mod tests {
                 .unwrap_or(0);
             before > 1
         };
-        let (cut, report) = refine_by_default(&path, &scans, &has_time);
+        let (cut, report) = refine(&has_time);
         assert!(report.cut_short);
         assert_eq!(report.aligned_per_pass.len(), 1);
         let one_pass = PathRefinementConfig {
             passes: 1,
             ..config
         };
-        let grid = GridConfig::default();
         let (expected, _) =
             refine_path(&path, &stamped(&scans), &grid, &one_pass, None).expect("fits");
         assert_eq!(cut, expected, "the first pass's path, bit for bit");
         assert_ne!(cut, whole);
+    }
+
+    #[test]
+    fn time_running_out_mid_pass_keeps_the_passes_done_as_they_were() {
+        assert_cut_mid_second_pass_keeps_the_first(PathRefinementConfig::default());
+    }
+
+    #[test]
+    fn a_pass_to_every_wall_asks_for_time_as_it_goes_too() {
+        // Every pass aligns each scan to every wall: each must still be abandoned part way
+        // once time runs out, not only before it starts.
+        assert_cut_mid_second_pass_keeps_the_first(PathRefinementConfig {
+            own_pass_m: 0.0,
+            passes: 2,
+            ..PathRefinementConfig::default()
+        });
     }
 
     #[test]
