@@ -55,6 +55,7 @@ pub use filter::fast_slam::{FastSlam, FilterStats};
 pub use filter::memory;
 pub use filter::observation::{MeasuredMotion, OdometryInput};
 pub use filter::resample::normalised_weights;
+pub use localize::faced_field::{FacedField, faced_scan_score};
 pub use localize::hill_climb::{HillClimb, scan_score};
 pub use localize::likelihood_field::{BeamModel, LikelihoodField};
 pub use localize::localizer::{

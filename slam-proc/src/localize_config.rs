@@ -27,6 +27,12 @@ pub struct LocalizeConfig {
     pub sigma_hit: f64,
     /// ... and while they search.
     pub search_sigma_hit: f64,
+    /// Once converged, a beam end is scored against the wall faces a beam going its way
+    /// can end on (an occupied cell with free space on the side it comes from, and the
+    /// cell behind it), not against every occupied cell: ends that sink into a thick wall
+    /// would otherwise score as well as ends on its face, and a forward-looking scanner
+    /// would be drawn ahead of its pose.
+    pub faced_walls: bool,
     /// A beam end far from every wall still scores this (relative to one on a wall at 1):
     /// unmapped things and people in the way cost a bounded amount.
     pub beam_floor: f64,
@@ -86,6 +92,7 @@ impl Default for LocalizeConfig {
             beams: 120,
             sigma_hit: 0.05,
             search_sigma_hit: 0.2,
+            faced_walls: true,
             beam_floor: 0.1,
             beam_exponent: 0.3,
             min_effective_fraction: 0.1,

@@ -4,6 +4,8 @@
 
 use map_sink::{CellState, GridMap};
 
+use crate::localize::cell_frame::CellFrame;
+
 /// A beam end's likelihood by its distance `d` to the nearest wall: a Gaussian hit plus a
 /// floor for what the map does not hold, `exp(-d^2 / (2 sigma^2)) + floor`, scaled so that
 /// a beam on a wall scores 1.
@@ -24,11 +26,7 @@ impl BeamModel {
 /// Distances to the nearest occupied cell over a grid, capped, and the grid's free cells.
 #[derive(Debug, Clone)]
 pub struct LikelihoodField {
-    /// The lower-left corner of cell (0, 0), map frame.
-    origin: [f64; 2],
-    resolution: f64,
-    width: usize,
-    height: usize,
+    frame: CellFrame,
     /// Metres to the nearest occupied cell's centre, at most `max_distance`; row 0 the
     /// lowest y.
     distance: Vec<f32>,
@@ -78,10 +76,7 @@ impl LikelihoodField {
             .map(|c| *c != CellState::Unknown)
             .collect();
         Self {
-            origin: [grid.yaml.origin[0], grid.yaml.origin[1]],
-            resolution,
-            width,
-            height,
+            frame: CellFrame::of(grid),
             distance,
             max_distance,
             score,
@@ -95,14 +90,14 @@ impl LikelihoodField {
     /// ending there can be judged by the field, one ending in unknown space cannot.
     #[inline]
     pub fn is_known(&self, x: f64, y: f64) -> bool {
-        self.index(x, y).is_some_and(|i| self.known[i])
+        self.frame.index(x, y).is_some_and(|i| self.known[i])
     }
 
     /// Metres from `(x, y)` (map frame) to the nearest occupied cell; `max_distance` off
     /// the grid.
     #[inline]
     pub fn distance(&self, x: f64, y: f64) -> f64 {
-        match self.index(x, y) {
+        match self.frame.index(x, y) {
             Some(i) => f64::from(self.distance[i]),
             None => self.max_distance,
         }
@@ -111,21 +106,9 @@ impl LikelihoodField {
     /// The log-likelihood of a beam ending at `(x, y)` (map frame), at most 0.
     #[inline]
     pub fn score(&self, x: f64, y: f64) -> f64 {
-        match self.index(x, y) {
+        match self.frame.index(x, y) {
             Some(i) => f64::from(self.score[i]),
             None => self.far_score,
-        }
-    }
-
-    #[inline]
-    fn index(&self, x: f64, y: f64) -> Option<usize> {
-        let col = ((x - self.origin[0]) / self.resolution).floor();
-        let row = ((y - self.origin[1]) / self.resolution).floor();
-        // Written so that NaN fails every comparison.
-        if col >= 0.0 && row >= 0.0 && col < self.width as f64 && row < self.height as f64 {
-            Some(row as usize * self.width + col as usize)
-        } else {
-            None
         }
     }
 
@@ -137,20 +120,13 @@ impl LikelihoodField {
     /// The centre of the `k`-th free cell and the cell's edge, for spreading particles.
     pub fn free_cell(&self, k: usize) -> Option<([f64; 2], f64)> {
         let index = *self.free.get(k)? as usize;
-        let (col, row) = (index % self.width, index / self.width);
-        Some((
-            [
-                self.origin[0] + (col as f64 + 0.5) * self.resolution,
-                self.origin[1] + (row as f64 + 0.5) * self.resolution,
-            ],
-            self.resolution,
-        ))
+        Some((self.frame.centre(index), self.frame.resolution))
     }
 }
 
 /// Squared Euclidean distance transform in place (Felzenszwalb and Huttenlocher 2012):
 /// `f` holds 0 at the sites and a large value elsewhere; columns, then rows.
-fn distance_transform_2d(f: &mut [f64], width: usize, height: usize) {
+pub(crate) fn distance_transform_2d(f: &mut [f64], width: usize, height: usize) {
     let n = width.max(height);
     let mut line = vec![0.0; n];
     let mut out = vec![0.0; n];

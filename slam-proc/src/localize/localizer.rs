@@ -1,7 +1,8 @@
 //! Localization on a saved map: Monte Carlo localization (AMCL's scheme) over the map's
 //! occupancy grid. The particles move by the front end's measured steps, the scan's beams
-//! weight them through the grid's likelihood field, and KLD-sampling sizes the particle set
-//! at each resampling: many while the pose is uncertain, few once it is not. The map is
+//! weight them through the grid's likelihood field (once converged, against the wall faces
+//! a beam going their way can end on: [`FacedField`]), and KLD-sampling sizes the particle
+//! set at each resampling: many while the pose is uncertain, few once it is not. The map is
 //! shared and never changes.
 
 use std::f64::consts::PI;
@@ -16,6 +17,7 @@ use crate::filter::estimate::{Estimate, weighted_mean_and_covariance};
 use crate::filter::observation::MeasuredMotion;
 use crate::filter::resample::{effective_sample_size, heaviest, normalise};
 use crate::filter::rng::Streams;
+use crate::localize::faced_field::{FacedField, faced_scan_score};
 use crate::localize::hill_climb::{HillClimb, scan_score};
 use crate::localize::kld::{Bins, kld_count};
 use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
@@ -114,7 +116,7 @@ pub struct LocalizeStats {
 pub struct Localizer {
     config: LocalizeConfig,
     /// The grid's field for tracking, sharp ...
-    field: LikelihoodField,
+    field: TrackingField,
     /// ... and for the search, smooth: a particle some way off the true pose still scores
     /// well there, and a map's small flaws do not decide between places that look alike.
     search_field: LikelihoodField,
@@ -127,8 +129,10 @@ pub struct Localizer {
     /// and forth, never adds up to a move (AMCL measures its odometry the same way).
     since_weighted: Pose2,
     dead_reckoning: Pose2,
-    /// This scan's beam ends in the sensor frame.
+    /// This scan's beam ends in the sensor frame ...
     points: Vec<[f64; 2]>,
+    /// ... and the bearings of their beams.
+    bearings: Vec<f64>,
     /// Each particle's log-likelihood of this scan's beams.
     scan_log_likelihoods: Vec<f64>,
     bins: Bins,
@@ -137,6 +141,15 @@ pub struct Localizer {
     stats: LocalizeStats,
     /// Whether the last estimate had converged.
     converged: bool,
+}
+
+/// The field the particles are weighted on once converged.
+#[derive(Debug, Clone)]
+enum TrackingField {
+    /// Every occupied cell is a wall, seen from any side.
+    Plain(LikelihoodField),
+    /// A beam end counts against the faces a beam going its way can end on.
+    Faced(FacedField),
 }
 
 /// Error of [`Localizer::new`].
@@ -163,7 +176,19 @@ impl Localizer {
             sigma_hit,
             floor: config.beam_floor,
         };
-        let field = LikelihoodField::new(grid, config.max_distance, model(config.sigma_hit));
+        let field = if config.faced_walls {
+            TrackingField::Faced(FacedField::new(
+                grid,
+                config.max_distance,
+                model(config.sigma_hit),
+            ))
+        } else {
+            TrackingField::Plain(LikelihoodField::new(
+                grid,
+                config.max_distance,
+                model(config.sigma_hit),
+            ))
+        };
         let search_field =
             LikelihoodField::new(grid, config.max_distance, model(config.search_sigma_hit));
         let streams = Streams::new(seed);
@@ -180,13 +205,14 @@ impl Localizer {
                     .collect()
             }
             Start::Global => {
-                let cells = field.free_cells();
+                let cells = search_field.free_cells();
                 if cells == 0 {
                     return Err(LocalizeError::NoFreeSpace);
                 }
                 let mut poses = Vec::with_capacity(config.max_particles);
                 while poses.len() < config.max_particles {
-                    let Some((centre, edge)) = field.free_cell(rng.random_range(0..cells)) else {
+                    let Some((centre, edge)) = search_field.free_cell(rng.random_range(0..cells))
+                    else {
                         continue;
                     };
                     poses.push(Pose2::new(
@@ -208,6 +234,7 @@ impl Localizer {
             since_weighted: Pose2::IDENTITY,
             dead_reckoning: Pose2::IDENTITY,
             points: Vec::new(),
+            bearings: Vec::new(),
             scan_log_likelihoods: Vec::new(),
             bins: Bins::default(),
             map_corners,
@@ -318,24 +345,44 @@ impl Localizer {
             self.stats.scans_without_valid_beams += 1;
             return false;
         }
-        let field = if self.converged {
-            &self.field
-        } else {
-            &self.search_field
-        };
-        if self.config.refine_while_searching && !self.converged {
-            let points = &self.points;
-            let stride = self.config.refine_beam_stride.max(1);
-            let coarse: Vec<[f64; 2]> = points.iter().step_by(stride).copied().collect();
-            self.poses
-                .par_iter_mut()
-                .with_min_len(CLIMB_PARTICLES_PER_TASK)
-                .for_each(|pose| *pose = HillClimb::SEARCH.climb(field, &coarse, *pose));
-        }
         self.scan_log_likelihoods.clear();
-        for pose in &self.poses {
-            self.scan_log_likelihoods
-                .push(scan_score(field, &self.points, pose));
+        if self.converged {
+            match &self.field {
+                TrackingField::Plain(field) => {
+                    for pose in &self.poses {
+                        self.scan_log_likelihoods
+                            .push(scan_score(field, &self.points, pose));
+                    }
+                }
+                TrackingField::Faced(field) => {
+                    self.bearings.clear();
+                    self.bearings
+                        .extend(self.points.iter().map(|[x, y]| y.atan2(*x)));
+                    for pose in &self.poses {
+                        self.scan_log_likelihoods.push(faced_scan_score(
+                            field,
+                            &self.points,
+                            &self.bearings,
+                            pose,
+                        ));
+                    }
+                }
+            }
+        } else {
+            let field = &self.search_field;
+            if self.config.refine_while_searching {
+                let points = &self.points;
+                let stride = self.config.refine_beam_stride.max(1);
+                let coarse: Vec<[f64; 2]> = points.iter().step_by(stride).copied().collect();
+                self.poses
+                    .par_iter_mut()
+                    .with_min_len(CLIMB_PARTICLES_PER_TASK)
+                    .for_each(|pose| *pose = HillClimb::SEARCH.climb(field, &coarse, *pose));
+            }
+            for pose in &self.poses {
+                self.scan_log_likelihoods
+                    .push(scan_score(field, &self.points, pose));
+            }
         }
         let exponent = self.tempering();
         for (log_weight, ll) in self.log_weights.iter_mut().zip(&self.scan_log_likelihoods) {
