@@ -1,8 +1,8 @@
 //! How well a saved map agrees with the path that drew it, as the localizer sees the map.
 //! Every scan of the log that the run's path holds is placed at its pose, moved uphill on
-//! its likelihood over the saved grid (the localizer's likelihood field and beam model, its
-//! beams), and the distance from the pose to that best fit is the scan's disagreement with
-//! the map. Where the passes of a building agree, each scan's best fit lies within a few
+//! its likelihood over the saved grid (the converged localizer's field, by the wall faces a
+//! beam can end on, its beam model and its beams), and the distance from the pose to that
+//! best fit is the scan's disagreement with the map. Where the passes of a building agree, each scan's best fit lies within a few
 //! centimetres of its pose; where two passes along a corridor part, the scans of one fit the
 //! walls the others drew some decimetres away, and a localizer on the map parts from the
 //! mapping path there by as much. No ground truth is needed.
@@ -29,7 +29,8 @@ use map_sink::SavedMap;
 use slam_eval::{ErrorStats, percentile};
 use slam_geom::{Pose2, read_tum, wrap_angle};
 use slam_proc::{
-    BeamModel, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges, sample_beam_ends, scan_score,
+    BeamModel, FacedField, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges,
+    faced_scan_score, sample_beam_ends, scan_score,
 };
 use stage_kit::{say, say_err};
 
@@ -95,14 +96,16 @@ fn run(args: &Args) -> Result<()> {
         bail!("{} has no occupancy grid", args.map.display());
     };
     let config = LocalizeConfig::default();
-    let field = LikelihoodField::new(
-        &grid,
-        config.max_distance,
-        BeamModel {
-            sigma_hit: config.sigma_hit,
-            floor: config.beam_floor,
-        },
-    );
+    let model = BeamModel {
+        sigma_hit: config.sigma_hit,
+        floor: config.beam_floor,
+    };
+    // The field a converged localizer weighs its particles on.
+    let field = if config.faced_walls {
+        Field::Faced(FacedField::new(&grid, config.max_distance, model))
+    } else {
+        Field::Plain(LikelihoodField::new(&grid, config.max_distance, model))
+    };
     let path_file = args
         .trajectory
         .clone()
@@ -119,6 +122,7 @@ fn run(args: &Args) -> Result<()> {
     let reader = open_log(format, &args.log, ReorderConfig::default())
         .with_context(|| format!("opening {}", args.log.display()))?;
     let mut points = Vec::new();
+    let mut bearings = Vec::new();
     let mut fits: Vec<Fit> = Vec::new();
     let mut unreadable = 0_usize;
     for record in reader {
@@ -144,14 +148,19 @@ fn run(args: &Args) -> Result<()> {
         if !sample_beam_ends(&ranges, config.beams, &mut points) {
             continue;
         }
-        let best = CLIMB.climb(&field, &points, *pose);
+        bearings.clear();
+        bearings.extend(points.iter().map(|[x, y]| y.atan2(*x)));
+        let score = |pose: &Pose2| match &field {
+            Field::Plain(field) => scan_score(field, &points, pose),
+            Field::Faced(field) => faced_scan_score(field, &points, &bearings, pose),
+        };
+        let best = CLIMB.climb_on(score, *pose);
         let offset = Pose2::new(
             best.x - pose.x,
             best.y - pose.y,
             wrap_angle(best.yaw - pose.yaw),
         );
-        let gain = (scan_score(&field, &points, &best) - scan_score(&field, &points, pose))
-            / points.len() as f64;
+        let gain = (score(&best) - score(pose)) / points.len() as f64;
         fits.push(Fit {
             stamp_ns: scan.stamp_ns,
             offset,
@@ -189,6 +198,12 @@ fn run(args: &Args) -> Result<()> {
         std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
     }
     Ok(())
+}
+
+/// The localizer's field: by the faces a beam can end on, or every occupied cell.
+enum Field {
+    Plain(LikelihoodField),
+    Faced(FacedField),
 }
 
 /// One scan's best fit on the map.

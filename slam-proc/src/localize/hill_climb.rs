@@ -34,8 +34,13 @@ impl HillClimb {
 
     /// `pose` moved uphill on the likelihood of beam ends `points` (sensor frame).
     pub fn climb(&self, field: &LikelihoodField, points: &[[f64; 2]], pose: Pose2) -> Pose2 {
+        self.climb_on(|pose| scan_score(field, points, pose), pose)
+    }
+
+    /// `pose` moved uphill on `score`, a scan's log-likelihood from a pose.
+    pub fn climb_on(&self, score: impl Fn(&Pose2) -> f64, pose: Pose2) -> Pose2 {
         let mut best = pose;
-        let mut best_score = scan_score(field, points, &best);
+        let mut best_score = score(&best);
         let (mut step_xy, mut step_yaw) = (self.xy, self.yaw);
         for _ in 0..self.levels {
             for _ in 0..self.passes {
@@ -49,9 +54,9 @@ impl HillClimb {
                     (0.0, 0.0, -step_yaw),
                 ] {
                     let candidate = Pose2::new(best.x + dx, best.y + dy, best.yaw + dyaw);
-                    let score = scan_score(field, points, &candidate);
-                    if score > best_score {
-                        (best, best_score) = (candidate, score);
+                    let candidate_score = score(&candidate);
+                    if candidate_score > best_score {
+                        (best, best_score) = (candidate, candidate_score);
                         moved = true;
                     }
                 }
