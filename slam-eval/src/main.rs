@@ -121,4 +121,7 @@ fn print_text(score: &Score) {
     };
     row("translation", "m", &score.translation_m);
     row("rotation", "deg", &score.rotation_deg);
+    if let Some(ratio) = score.length_ratio {
+        println!("{:<12} estimate / truth {ratio:.4}", "length");
+    }
 }
