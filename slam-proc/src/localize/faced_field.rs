@@ -5,8 +5,8 @@
 //! several cells thick (a door frame seen from both rooms, a corner seen from afar) scores
 //! as well as one on the wall's face. A scanner that looks forward then scores better a
 //! little ahead of its pose, where more of its ends sink into the walls in front of it, and
-//! a localizer on such a field runs ahead of the path that drew the map by a centimetre or
-//! two on average and by a decimetre along corridors whose only walls across are far ahead.
+//! a localizer on such a field runs ahead of the path that drew the map, most along
+//! corridors whose only walls across are far ahead.
 //! Here a cell is a face for a beam when free space borders it on the side the beam comes
 //! from, and so is the cell behind such a face (a wall a pass drew two cells thick is hit in
 //! both); the map-sink's alignment of scans to walls holds returns to faces seen from their
