@@ -34,8 +34,8 @@ pub(crate) fn normalise(log_weights: &[f64], weights: &mut Vec<f64>) {
     }
 }
 
-/// The normalised weights of `log_weights`, as [`normalise`] makes them: the particles'
-/// weights as a viewer shows them.
+/// The normalised weights of `log_weights`, as the filter makes them (all `-inf` or NaN:
+/// uniform): the particles' weights as a viewer shows them.
 pub fn normalised_weights(log_weights: &[f64]) -> Vec<f64> {
     let mut weights = Vec::with_capacity(log_weights.len());
     normalise(log_weights, &mut weights);
