@@ -29,8 +29,7 @@ use map_sink::SavedMap;
 use slam_eval::{ErrorStats, percentile};
 use slam_geom::{Pose2, read_tum, wrap_angle};
 use slam_proc::{
-    BeamModel, FacedField, HillClimb, LikelihoodField, LocalizeConfig, ScanRanges,
-    faced_scan_score, sample_beam_ends, scan_score,
+    HillClimb, LocalizeConfig, ScanRanges, TrackingField, beam_bearings, sample_beam_ends,
 };
 use stage_kit::{say, say_err};
 
@@ -96,16 +95,7 @@ fn run(args: &Args) -> Result<()> {
         bail!("{} has no occupancy grid", args.map.display());
     };
     let config = LocalizeConfig::default();
-    let model = BeamModel {
-        sigma_hit: config.sigma_hit,
-        floor: config.beam_floor,
-    };
-    // The field a converged localizer weighs its particles on.
-    let field = if config.faced_walls {
-        Field::Faced(FacedField::new(&grid, config.max_distance, model))
-    } else {
-        Field::Plain(LikelihoodField::new(&grid, config.max_distance, model))
-    };
+    let field = TrackingField::new(&grid, &config);
     let path_file = args
         .trajectory
         .clone()
@@ -148,12 +138,8 @@ fn run(args: &Args) -> Result<()> {
         if !sample_beam_ends(&ranges, config.beams, &mut points) {
             continue;
         }
-        bearings.clear();
-        bearings.extend(points.iter().map(|[x, y]| y.atan2(*x)));
-        let score = |pose: &Pose2| match &field {
-            Field::Plain(field) => scan_score(field, &points, pose),
-            Field::Faced(field) => faced_scan_score(field, &points, &bearings, pose),
-        };
+        beam_bearings(&points, &mut bearings);
+        let score = |pose: &Pose2| field.scan_score(&points, &bearings, pose);
         let best = CLIMB.climb_on(score, *pose);
         let offset = Pose2::new(
             best.x - pose.x,
@@ -198,12 +184,6 @@ fn run(args: &Args) -> Result<()> {
         std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
     }
     Ok(())
-}
-
-/// The localizer's field: by the faces a beam can end on, or every occupied cell.
-enum Field {
-    Plain(LikelihoodField),
-    Faced(FacedField),
 }
 
 /// One scan's best fit on the map.

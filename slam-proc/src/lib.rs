@@ -62,6 +62,7 @@ pub use localize::localizer::{
     Localization, LocalizeError, LocalizeStats, Localizer, ScanRanges, Start, sample_beam_ends,
 };
 pub use localize::pose_arg::{PoseArgError, parse_pose};
+pub use localize::tracking_field::{TrackingField, beam_bearings};
 pub use localize_config::LocalizeConfig;
 pub use slam_geom::MapCorner;
 pub use slam_geom::MeasuredCorner;

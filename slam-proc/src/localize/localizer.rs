@@ -17,10 +17,10 @@ use crate::filter::estimate::{Estimate, weighted_mean_and_covariance};
 use crate::filter::observation::MeasuredMotion;
 use crate::filter::resample::{effective_sample_size, heaviest, normalise};
 use crate::filter::rng::Streams;
-use crate::localize::faced_field::{FacedField, faced_scan_score};
 use crate::localize::hill_climb::{HillClimb, scan_score};
 use crate::localize::kld::{Bins, kld_count};
 use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
+use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use crate::localize_config::LocalizeConfig;
 use crate::motion::predict::{self, MotionNoise};
 use map_sink::GridMap;
@@ -143,15 +143,6 @@ pub struct Localizer {
     converged: bool,
 }
 
-/// The field the particles are weighted on once converged.
-#[derive(Debug, Clone)]
-enum TrackingField {
-    /// Every occupied cell is a wall, seen from any side.
-    Plain(LikelihoodField),
-    /// A beam end counts against the faces a beam going its way can end on.
-    Faced(FacedField),
-}
-
 /// Error of [`Localizer::new`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LocalizeError {
@@ -176,19 +167,7 @@ impl Localizer {
             sigma_hit,
             floor: config.beam_floor,
         };
-        let field = if config.faced_walls {
-            TrackingField::Faced(FacedField::new(
-                grid,
-                config.max_distance,
-                model(config.sigma_hit),
-            ))
-        } else {
-            TrackingField::Plain(LikelihoodField::new(
-                grid,
-                config.max_distance,
-                model(config.sigma_hit),
-            ))
-        };
+        let field = TrackingField::new(grid, &config);
         let search_field =
             LikelihoodField::new(grid, config.max_distance, model(config.search_sigma_hit));
         let streams = Streams::new(seed);
@@ -347,26 +326,15 @@ impl Localizer {
         }
         self.scan_log_likelihoods.clear();
         if self.converged {
-            match &self.field {
-                TrackingField::Plain(field) => {
-                    for pose in &self.poses {
-                        self.scan_log_likelihoods
-                            .push(scan_score(field, &self.points, pose));
-                    }
-                }
-                TrackingField::Faced(field) => {
-                    self.bearings.clear();
-                    self.bearings
-                        .extend(self.points.iter().map(|[x, y]| y.atan2(*x)));
-                    for pose in &self.poses {
-                        self.scan_log_likelihoods.push(faced_scan_score(
-                            field,
-                            &self.points,
-                            &self.bearings,
-                            pose,
-                        ));
-                    }
-                }
+            // Only the faced field reads them; a scan's worth of atan2 is nothing beside
+            // the particles' lookups.
+            beam_bearings(&self.points, &mut self.bearings);
+            for pose in &self.poses {
+                self.scan_log_likelihoods.push(self.field.scan_score(
+                    &self.points,
+                    &self.bearings,
+                    pose,
+                ));
             }
         } else {
             let field = &self.search_field;

@@ -8,3 +8,4 @@ pub(crate) mod kld;
 pub(crate) mod likelihood_field;
 pub(crate) mod localizer;
 pub(crate) mod pose_arg;
+pub(crate) mod tracking_field;
