@@ -2,10 +2,11 @@
 //! Every scan of the log that the run's path holds is placed at its pose, moved uphill on
 //! its likelihood over the saved grid (the converged localizer's field, by the wall faces a
 //! beam can end on, its beam model and its beams), and the distance from the pose to that
-//! best fit is the scan's disagreement with the map. Where the passes of a building agree, each scan's best fit lies within a few
-//! centimetres of its pose; where two passes along a corridor part, the scans of one fit the
-//! walls the others drew some decimetres away, and a localizer on the map parts from the
-//! mapping path there by as much. No ground truth is needed.
+//! best fit is the scan's disagreement with the map. Where the passes of a building agree,
+//! each scan's best fit lies within a few centimetres of its pose; where two passes along a
+//! corridor part, the scans of one fit the walls the others drew some decimetres away, and
+//! a localizer on the map parts from the mapping path there by as much. No ground truth is
+//! needed.
 //!
 //!     cargo run --release -p slam-proc --example map_consistency -- \
 //!         runs/aces ../shared/data/carmen/aces.clf [--trajectory FILE] [--out FILE]
