@@ -110,6 +110,11 @@ pub struct SlamConfig {
     pub revisit_max_sigma_xy: f64,
     /// The largest rotation standard deviation a revisit allows for, radians.
     pub revisit_max_sigma_yaw: f64,
+    /// A revisit lands only within this probability region of the drift it allows for:
+    /// its translation from the prediction, chi-square with 2 dof under the allowance's
+    /// covariance. Two or three corners fit the allowance's far edge in a building of
+    /// repeated rooms; a real drift that far is rare.
+    pub revisit_jump_probability: f64,
     /// Smallest translation noise of a fitted step, metres: particles must stay diverse.
     pub noise_xy_floor: f64,
     /// Smallest rotation noise of a fitted step, radians.
@@ -221,6 +226,7 @@ impl Default for SlamConfig {
             revisit_sigma_yaw_per_metre: 0.002,
             revisit_max_sigma_xy: 3.0,
             revisit_max_sigma_yaw: 0.2,
+            revisit_jump_probability: 0.95,
             noise_xy_floor: 0.002,
             noise_yaw_floor: 0.0005,
             fallback_noise_scale: 3.0,
@@ -295,6 +301,7 @@ impl SlamConfig {
             ("motion_gate_probability", self.motion_gate_probability),
             ("motion_inlier_probability", self.motion_inlier_probability),
             ("association_probability", self.association_probability),
+            ("revisit_jump_probability", self.revisit_jump_probability),
         ];
         for (field, value) in probabilities {
             check(
@@ -383,6 +390,10 @@ mod tests {
         assert_eq!(
             refused(|c| c.association_probability = 1.0),
             Some("association_probability")
+        );
+        assert_eq!(
+            refused(|c| c.revisit_jump_probability = 0.0),
+            Some("revisit_jump_probability")
         );
         assert_eq!(refused(|c| c.particles = 0), Some("particles"));
         assert_eq!(

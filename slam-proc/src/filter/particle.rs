@@ -17,7 +17,7 @@ use slam_geom::StampedPose;
 use crate::filter::wall_memory::WallMemory;
 use crate::path::particle_path::{self, Closure, Path};
 use crate::update::corner_model::{PoseTransform, WorldObservation};
-use crate::update::drift::revisit_covariance;
+use crate::update::drift::{jump_within, revisit_covariance};
 use crate::update::free_space::{PlacedWalls, WallSegment, closure_fits};
 use crate::update::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
 use crate::update::kalman;
@@ -158,12 +158,24 @@ impl Particle {
                 config.revisit_search_radius,
                 Some(old),
             );
-            let ties = if wide.pairings >= config.revisit_min_corners.max(association.pairings) {
+            // The landing: the pose posterior's mean given the old corners. Without one (the
+            // information not positive definite) there is no jump to bound, and the update
+            // draws no pose from the old corners either.
+            let landed = self.posterior_pose(&revisit, &wide, &Vector3::zeros());
+            let within = landed.is_none_or(|landed| {
+                let jump = landed.position() - self.pose.position();
+                jump_within(&jump, &revisit.covariance, config.revisit_jump_probability)
+            });
+            let ties = if within
+                && wide.pairings >= config.revisit_min_corners.max(association.pairings)
+            {
                 self.ties(scratch)
             } else {
                 Vec::new()
             };
-            if !ties.is_empty() && self.walls_allow(context, &revisit, &wide, &ties) {
+            if !ties.is_empty()
+                && landed.is_none_or(|landed| self.walls_allow(context, &landed, &ties))
+            {
                 association = wide;
                 pose = revisit;
                 revisit_ties = ties;
@@ -424,19 +436,10 @@ impl Particle {
             .collect()
     }
 
-    /// Whether a revisit's landing (the mean of the pose posterior given the `wide`
-    /// association) fits the walls of the scans around its `ties` about as well as the
+    /// Whether a revisit's `landed` pose (the mean of the pose posterior given the old
+    /// corners) fits the walls of the scans around its `ties` about as well as the
     /// predicted pose does, or better (see [`closure_fits`]).
-    fn walls_allow(
-        &self,
-        context: &ScanContext<'_>,
-        pose: &PoseUncertainty,
-        wide: &Association,
-        ties: &[usize],
-    ) -> bool {
-        let Some(landed) = self.posterior_pose(pose, wide, &Vector3::zeros()) else {
-            return true;
-        };
+    fn walls_allow(&self, context: &ScanContext<'_>, landed: &Pose2, ties: &[usize]) -> bool {
         let around = context.wall_memory.around(
             ties,
             context.path_length,
@@ -451,7 +454,7 @@ impl Particle {
             .zip(&around)
             .filter_map(|(pose, (_, walls))| Some(PlacedWalls::new(pose.as_ref()?, walls)))
             .collect();
-        closure_fits(context.walls, &tied, &landed, &self.pose)
+        closure_fits(context.walls, &tied, landed, &self.pose)
     }
 
     /// A draw from the pose posterior given the associated corners: the Gaussian with
@@ -712,11 +715,21 @@ mod tests {
         assert_eq!(closed.closure, Closure::new(vec![0], predicted));
 
         // Without revisits, or with the corners seen only 5 m ago, the particle stays off.
+        // So it does when the landing must lie closer than the 0.61 m jump: 0.61 sigma of
+        // the drift 50 m allow for, outside the 10 % region (0.46 sigma).
         let no_revisits = SlamConfig {
             revisit_search_radius: 0.0,
             ..SlamConfig::default()
         };
-        for (config, path_length) in [(no_revisits, 50.0), (SlamConfig::default(), 5.0)] {
+        let near_landings_only = SlamConfig {
+            revisit_jump_probability: 0.1,
+            ..SlamConfig::default()
+        };
+        for (config, path_length) in [
+            (no_revisits, 50.0),
+            (SlamConfig::default(), 5.0),
+            (near_landings_only, 50.0),
+        ] {
             let kept = run(&config, path_length);
             assert_eq!(kept.pose, predicted);
             assert_eq!(kept.closure, None);
