@@ -106,7 +106,7 @@ pub use path_refinement::{
     PathRefinementConfig, RefinementReport, refine_path, refine_path_within,
 };
 pub use pgm::{Pgm, PgmError, encode_pgm};
-pub use pose_chain::{PosePrior, solve_pose_chain};
+pub use pose_chain::{PoseLink, PosePrior, solve_pose_chain};
 pub use prior_grid::{PRIOR_FREE_LOG_ODDS, PRIOR_OCCUPIED_LOG_ODDS, PriorGridError, prior_grid};
 pub use recorder::{
     FinishedRun, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions,

@@ -6,8 +6,9 @@
 //! grid from the path, aligns every kept scan to the walls that the *other passes* drew
 //! ([`align_scan`]; a scan's own pass is the path within `own_pass_m` of it, whose returns
 //! would only hold it to its own second wall), and re-solves the path from its own steps
-//! and those alignments ([`solve_pose_chain`]), so a stretch moves towards the walls the
-//! rest of the run saw while each step stays close to what the filter measured. A wall
+//! and those alignments ([`solve_pose_chain`]), each a link from the stretch of path that
+//! drew the walls (see [`ScanTie`]), so a stretch and the walls the rest of the run saw
+//! move towards each other while each step stays close to what the filter measured. A wall
 //! piece is matched only by a return seen from its side: the far face of a wall that
 //! another pass saw from the next room is not where this scan's return ended. The next
 //! pass traces the grid again from the moved path.
@@ -33,9 +34,11 @@ use slam_geom::{Pose2, StampedPose};
 
 use crate::compact_scan::{Beam, CompactScan};
 use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
-use crate::pose_chain::{PosePrior, solve_pose_chain};
+use crate::pose_chain::{PoseLink, PosePrior, solve_pose_chain};
 use crate::prior_grid::saved_walls;
-use crate::scan_alignment::{ScanAlignment, ScanAlignmentConfig, WeakDirections, align_scan};
+use crate::scan_alignment::{
+    ScanAlignment, ScanAlignmentConfig, WeakDirections, align_scan, information_by_tag,
+};
 use crate::wall_field::{CellWindow, SeenReturn, WallField};
 
 /// How the final path is refined.
@@ -82,6 +85,10 @@ impl Default for PathRefinementConfig {
         }
     }
 }
+
+/// The information that holds the path's first pose where it is, in a pass whose ties do
+/// not fix the run's frame: far above any step's or alignment's.
+const HELD_START_INFORMATION: f64 = 1e9;
 
 /// The smallest variance of a step (m^2, rad^2): a stopped robot's step is firm, but a
 /// variance of zero would make the solve singular.
@@ -203,20 +210,40 @@ pub fn refine_path_within(
                 break;
             }
         };
-        let priors: Vec<PosePrior> = on_path
-            .iter()
-            .zip(alignments)
-            .filter_map(|((i, _, _), aligned)| {
-                let aligned = aligned?;
-                Some(PosePrior {
-                    index: *i,
-                    pose: aligned.pose,
-                    information: aligned.information,
-                })
-            })
-            .collect();
-        report.aligned_per_pass.push(priors.len());
-        match solve_pose_chain(&poses, &steps, &step_information, &priors) {
+        report
+            .aligned_per_pass
+            .push(alignments.iter().filter(|a| a.is_some()).count());
+        let mut priors = Vec::new();
+        let mut links = Vec::new();
+        for (k, tie) in alignments.into_iter().enumerate() {
+            let Some(tie) = tie else { continue };
+            let index = on_path[k].0;
+            if let Some(information) = tie.prior {
+                priors.push(PosePrior {
+                    index,
+                    pose: tie.aligned,
+                    information,
+                });
+            }
+            for (anchor, information) in tie.links {
+                links.push(PoseLink {
+                    from: on_path[anchor].0,
+                    to: index,
+                    seen: pass_scans.guesses[anchor].between(&tie.aligned),
+                    information,
+                });
+            }
+        }
+        // Links say only where scans are seen from one another, not where the path lies:
+        // unless a saved map's walls hold it, the pass holds its first pose where it is.
+        if !links.is_empty() && (prior.is_none() || priors.is_empty()) {
+            priors.push(PosePrior {
+                index: 0,
+                pose: poses[0],
+                information: Matrix3::identity() * HELD_START_INFORMATION,
+            });
+        }
+        match solve_pose_chain(&poses, &steps, &step_information, &priors, &links) {
             Some(solved) => poses = solved,
             None => settled = Some(to_every_wall),
         }
@@ -280,11 +307,38 @@ const MAX_OTHER_RETURNS: usize = 200_000;
 /// What aligning a pass's scans came to.
 enum Aligned {
     /// Each scan's alignment, `None` where it is not trusted.
-    Scans(Vec<Option<ScanAlignment>>),
+    Scans(Vec<Option<ScanTie>>),
     /// The grid holds no wall to align to.
     NoWalls,
     /// `has_time` said no before the pass was done.
     OutOfTime,
+}
+
+/// How one scan's alignment ties the path: the pose it was aligned to, held by links from
+/// the scans whose walls it was aligned to, each with the information those walls give it,
+/// and by a prior for the information a saved map's walls give it (or, aligned to every
+/// wall or along the fixed directions only, by a prior alone). The walls another stretch
+/// of the path drew are where that stretch put them: a prior would hold the scan to them
+/// as if that stretch were right, and move it with that stretch's error; a link holds it
+/// where it is seen from that stretch, so that the two move until they agree.
+#[derive(Debug, Clone, PartialEq)]
+struct ScanTie {
+    aligned: Pose2,
+    prior: Option<Matrix3<f64>>,
+    /// The scans (by index among those on the path) that anchor the links, each with the
+    /// information the walls drawn around it give.
+    links: Vec<(usize, Matrix3<f64>)>,
+}
+
+impl ScanTie {
+    /// An alignment held as a prior alone.
+    fn prior(alignment: ScanAlignment) -> Self {
+        Self {
+            aligned: alignment.pose,
+            prior: Some(alignment.information),
+            links: Vec::new(),
+        }
+    }
 }
 
 /// Scans aligned to every wall per parallel task; the stop clock is asked before each
@@ -316,7 +370,7 @@ fn align_to_every_wall(
     ) else {
         return Aligned::NoWalls;
     };
-    let tasks: Option<Vec<Vec<Option<ScanAlignment>>>> = scans
+    let tasks: Option<Vec<Vec<Option<ScanTie>>>> = scans
         .sensor_ends
         .par_chunks(EVERY_WALL_SCANS_PER_TASK)
         .zip(scans.guesses.par_chunks(EVERY_WALL_SCANS_PER_TASK))
@@ -329,6 +383,7 @@ fn align_to_every_wall(
                     .zip(guesses)
                     .map(|(ends, guess)| {
                         align_scan(&walls, ends, *guess, config, WeakDirections::Follow)
+                            .map(ScanTie::prior)
                     })
                     .collect(),
             )
@@ -382,6 +437,7 @@ fn align_to_other_passes(
         grid,
         scans,
         tiles: &tiles,
+        blocks: &blocks,
         block_of: &block_of,
         travelled,
         revisit_detour_m: refinement.revisit_detour_m,
@@ -392,7 +448,7 @@ fn align_to_other_passes(
     // blocks go to all cores, their results are put together in order. A block that finds
     // no time left abandons the pass.
     let aligned: Option<Vec<BlockAlignments>> = blocks
-        .into_par_iter()
+        .par_iter()
         .enumerate()
         .map(|(block, members)| {
             if !has_time() {
@@ -422,7 +478,7 @@ struct PassScans<'a> {
 }
 
 /// The alignments of a block's scans, by scan.
-type BlockAlignments = Vec<(usize, Option<ScanAlignment>)>;
+type BlockAlignments = Vec<(usize, Option<ScanTie>)>;
 
 /// One pass of the path over its grid, indexed for [`OtherPasses::align_block`].
 struct OtherPasses<'a> {
@@ -430,6 +486,8 @@ struct OtherPasses<'a> {
     scans: &'a PassScans<'a>,
     /// The scan and return indices of the returns in each tile.
     tiles: &'a HashMap<(i64, i64), Vec<(u32, u32)>>,
+    /// The scans of each block, in order.
+    blocks: &'a [Vec<usize>],
     block_of: &'a [usize],
     /// How far the path has gone at each scan, metres.
     travelled: &'a [f64],
@@ -442,14 +500,14 @@ struct OtherPasses<'a> {
 impl OtherPasses<'_> {
     /// The alignments of the scans `members` of `block` to the walls the other passes drew
     /// around them.
-    fn align_block(&self, block: usize, members: Vec<usize>) -> BlockAlignments {
+    fn align_block(&self, block: usize, members: &[usize]) -> BlockAlignments {
         let (config, world_ends) = (self.config, &self.scans.world_ends);
         if members.is_empty() {
             return Vec::new();
         }
         let pad = config.inlier_distance_m.max(config.coarse_distance_m) + config.max_shift_m;
         let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for &k in &members {
+        for &k in members {
             let at: [f64; 2] = self.scans.guesses[k].position().into();
             for p in world_ends[k].iter().map(|seen| &seen.at).chain([&at]) {
                 for d in 0..2 {
@@ -487,6 +545,8 @@ impl OtherPasses<'_> {
             .sum();
         let stride = candidates.div_ceil(MAX_OTHER_RETURNS).max(1);
         let mut others = Vec::new();
+        // Who drew each of `others`: the block of its scan, or [`SAVED`].
+        let mut drawers = Vec::new();
         // Whether the walls are another visit's (a saved map's are) or only this pass's
         // seen from farther along it.
         let mut revisited = false;
@@ -496,12 +556,14 @@ impl OtherPasses<'_> {
             for &(k, j) in self.tiles.get(t).into_iter().flatten().step_by(stride) {
                 if k == SAVED {
                     others.push(self.saved[j as usize]);
+                    drawers.push(SAVED);
                     revisited = true;
                     continue;
                 }
                 let (k, j) = (k as usize, j as usize);
                 if self.block_of[k].abs_diff(block) > 2 {
                     others.push(world_ends[k][j]);
+                    drawers.push(self.block_of[k] as u32);
                     if !seen[k] {
                         seen[k] = true;
                         seen_others.push(k);
@@ -510,7 +572,7 @@ impl OtherPasses<'_> {
             }
         }
         if !revisited {
-            revisited = seen_others.iter().any(|&k| self.is_revisit(&members, k));
+            revisited = seen_others.iter().any(|&k| self.is_revisit(members, k));
         }
         let weak = if revisited {
             WeakDirections::Follow
@@ -524,19 +586,47 @@ impl OtherPasses<'_> {
             self.grid,
             window,
             &others,
+            &drawers,
             config.inlier_distance_m,
             config.coarse_distance_m,
         ) else {
             return Vec::new();
         };
         members
-            .into_iter()
-            .map(|k| {
+            .iter()
+            .map(|&k| {
                 let (ends, guess) = (self.scans.sensor_ends[k], self.scans.guesses[k]);
                 let aligned = align_scan(&walls, ends, guess, config, weak);
-                (k, aligned)
+                let tie = aligned.map(|aligned| match weak {
+                    WeakDirections::Follow => self.tie(&walls, ends, aligned),
+                    WeakDirections::Keep => ScanTie::prior(aligned),
+                });
+                (k, tie)
             })
             .collect()
+    }
+
+    /// How the alignment `aligned` of a scan's returns `ends` to `walls` ties the path: by
+    /// a link from the middle scan of each block that drew some of those walls, with the
+    /// information its walls give, and by a prior for a saved map's.
+    fn tie(&self, walls: &WallField, ends: &[[f64; 2]], aligned: ScanAlignment) -> ScanTie {
+        let mut prior: Option<Matrix3<f64>> = None;
+        let mut links = Vec::new();
+        for (drawer, information) in information_by_tag(walls, ends, aligned.pose, self.config) {
+            let anchor = (drawer != SAVED)
+                .then(|| self.blocks.get(drawer as usize))
+                .flatten()
+                .and_then(|scans| scans.get(scans.len() / 2).copied());
+            match anchor {
+                Some(anchor) => links.push((anchor, information)),
+                None => *prior.get_or_insert_with(Matrix3::zeros) += information,
+            }
+        }
+        ScanTie {
+            aligned: aligned.pose,
+            prior,
+            links,
+        }
     }
 
     /// Whether scan `k` sees the block `members` on another visit: the path between them

@@ -169,6 +169,38 @@ pub(crate) fn align_scan(
     trusted.then_some(ScanAlignment { pose, information })
 }
 
+/// The information the returns `ends` (sensor frame) at `pose` take from `walls`, by the
+/// tag of the wall piece each is pulled to, in tag order: the fit's Hessian at `pose`
+/// (without its small diagonal), each return's share given to whoever drew its wall.
+pub(crate) fn information_by_tag(
+    walls: &WallField,
+    ends: &[[f64; 2]],
+    pose: Pose2,
+    config: &ScanAlignmentConfig,
+) -> Vec<(u32, Matrix3<f64>)> {
+    let (s, c) = pose.yaw.sin_cos();
+    let mut by_tag: Vec<(u32, Matrix3<f64>)> = Vec::new();
+    for &[lx, ly] in ends {
+        let point = [pose.x + c * lx - s * ly, pose.y + s * lx + c * ly];
+        let Some(wall) = walls.distance(point, [pose.x, pose.y]) else {
+            continue;
+        };
+        if wall.residual.abs() >= config.inlier_distance_m {
+            continue;
+        }
+        let [gx, gy] = wall.gradient;
+        let jacobian = Vector3::new(gx, gy, gx * (-s * lx - c * ly) + gy * (c * lx - s * ly));
+        let weight = 1.0 / (1.0 + (wall.residual / config.loss_scale_m).powi(2));
+        let share = weight * jacobian * jacobian.transpose();
+        match by_tag.iter_mut().find(|(tag, _)| *tag == wall.tag) {
+            Some((_, information)) => *information += share,
+            None => by_tag.push((wall.tag, share)),
+        }
+    }
+    by_tag.sort_unstable_by_key(|(tag, _)| *tag);
+    by_tag
+}
+
 /// The directions of `x, y, yaw` a fit's Hessian fixes, found in a space where yaw is
 /// measured in metres at the returns' range so that a turn and a shift compare.
 struct FixedDirections {
@@ -238,6 +270,11 @@ mod tests {
     use crate::wall_field::SeenReturn;
 
     fn room_walls() -> WallField {
+        room_walls_drawn_by(|_| 0)
+    }
+
+    /// The room's walls, each return tagged by `tag` of where it ended.
+    fn room_walls_drawn_by(tag: impl Fn([f64; 2]) -> u32) -> WallField {
         let returns = room_returns(Pose2::new(0.0, 0.0, 0.0));
         let scan = scan_of(&returns);
         let scans: Vec<(Pose2, &CompactScan)> =
@@ -253,7 +290,9 @@ mod tests {
                 from: [0.0, 0.0],
             })
             .collect();
-        WallField::new(&grid, &seen, 0.3, 1.0).expect("walls")
+        let tags: Vec<u32> = returns.iter().map(|&p| tag(p)).collect();
+        let window = crate::wall_field::CellWindow::whole(&grid);
+        WallField::within(&grid, window, &seen, &tags, 0.3, 1.0).expect("walls")
     }
 
     #[test]
@@ -296,6 +335,36 @@ mod tests {
                 None
             );
         }
+    }
+
+    #[test]
+    fn the_information_is_split_between_whoever_drew_the_walls_and_adds_up_to_the_fit() {
+        // The room's walls with x < 1 drawn by 1, the rest by 2.
+        let walls = room_walls_drawn_by(|p| 1 + u32::from(p[0] >= 1.0));
+        let pose = Pose2::new(0.4, -0.3, 0.2);
+        let ends = room_returns(pose);
+        let by_tag = information_by_tag(&walls, &ends, pose, &ScanAlignmentConfig::default());
+        assert_eq!(by_tag.iter().map(|(t, _)| *t).collect::<Vec<_>>(), [1, 2]);
+        // The walls at x = -2 (drawn by 1) fix x; the wall at x = 4 (by 2) too.
+        for (_, information) in &by_tag {
+            assert!(information[(0, 0)] > 10.0, "{information}");
+        }
+        let aligned = align_scan(
+            &walls,
+            &ends,
+            pose,
+            &ScanAlignmentConfig::default(),
+            WeakDirections::Follow,
+        )
+        .expect("a room fixes the pose");
+        // At the fit, the shares add up to the information the fit gives.
+        let split = information_by_tag(&walls, &ends, aligned.pose, &Default::default());
+        let at_fit: Matrix3<f64> = split.iter().map(|(_, m)| m).sum();
+        let difference = (at_fit - aligned.information).abs().max();
+        assert!(
+            difference < 1e-3 * aligned.information.abs().max(),
+            "{difference}"
+        );
     }
 
     #[test]

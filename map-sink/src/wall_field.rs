@@ -16,11 +16,13 @@ pub(crate) struct SeenReturn {
 
 /// A wall piece: the mean of the returns in one occupied cell, and the wall's normal there
 /// when the neighbouring pieces line up (`None` at an isolated piece: a post, a leg),
-/// turned towards the side its returns were seen from.
+/// turned towards the side its returns were seen from, and the tag most of its returns
+/// carry.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct WallPiece {
     point: [f64; 2],
     normal: Option<[f64; 2]>,
+    tag: u32,
 }
 
 /// What the returns that fell in one occupied cell add up to.
@@ -32,6 +34,10 @@ struct CellSums {
     /// The vectors from the returns back to the sensors that saw them.
     to_sensors: [f64; 2],
     count: f64,
+    /// The tag most of the returns carry, if one does (a majority vote taken in one
+    /// sweep): its candidate and the votes it holds.
+    tag: u32,
+    votes: u32,
 }
 
 /// The signed distance of a point to the nearest wall piece and its gradient.
@@ -41,6 +47,8 @@ pub(crate) struct WallDistance {
     pub residual: f64,
     /// d residual / d point.
     pub gradient: [f64; 2],
+    /// The tag most of that wall piece's returns carry (0 in a field built untagged).
+    pub tag: u32,
 }
 
 /// A rectangle of a grid's cells.
@@ -207,15 +215,25 @@ impl WallField {
         reach_m: f64,
         far_reach_m: f64,
     ) -> Option<Self> {
-        Self::within(grid, CellWindow::whole(grid), ends, reach_m, far_reach_m)
+        Self::within(
+            grid,
+            CellWindow::whole(grid),
+            ends,
+            &[],
+            reach_m,
+            far_reach_m,
+        )
     }
 
     /// [`new`](Self::new) over the cells of `window` only, from the returns `ends` among
     /// those that built the grid: a wall piece is an occupied cell some of `ends` fell in.
+    /// `tags`, one per return (or none), say who drew each: a distance names the tag most
+    /// returns of its wall piece carry.
     pub fn within(
         grid: &OccupancyGrid,
         window: CellWindow,
         ends: &[SeenReturn],
+        tags: &[u32],
         reach_m: f64,
         far_reach_m: f64,
     ) -> Option<Self> {
@@ -236,8 +254,9 @@ impl WallField {
         // cell of the window to its sums (one more than their index; 0: none).
         let mut slot = vec![0_u32; width * height];
         let mut sums: Vec<CellSums> = Vec::new();
-        for seen in ends {
+        for (k, seen) in ends.iter().enumerate() {
             let p = seen.at;
+            let tag = tags.get(k).copied().unwrap_or(0);
             let Some(i) = cell_of(p) else { continue };
             if slot[i] == 0 {
                 if grid.state(window.col + i % width, window.row + i / width) != CellState::Occupied
@@ -249,6 +268,8 @@ impl WallField {
                     returns: [0.0, 0.0],
                     to_sensors: [0.0, 0.0],
                     count: 0.0,
+                    tag,
+                    votes: 0,
                 });
                 slot[i] = sums.len() as u32;
             }
@@ -258,6 +279,14 @@ impl WallField {
             entry.to_sensors[0] += seen.from[0] - p[0];
             entry.to_sensors[1] += seen.from[1] - p[1];
             entry.count += 1.0;
+            if entry.tag == tag {
+                entry.votes += 1;
+            } else if entry.votes == 0 {
+                entry.tag = tag;
+                entry.votes = 1;
+            } else {
+                entry.votes -= 1;
+            }
         }
         if sums.is_empty() {
             return None;
@@ -298,7 +327,11 @@ impl WallField {
                         n
                     }
                 });
-                WallPiece { point, normal }
+                WallPiece {
+                    point,
+                    normal,
+                    tag: c.tag,
+                }
             })
             .collect();
         let cells: Vec<usize> = sums.iter().map(|c| c.cell).collect();
@@ -348,6 +381,7 @@ impl WallField {
             Some(n) => WallDistance {
                 residual: n[0] * d[0] + n[1] * d[1],
                 gradient: n,
+                tag: piece.tag,
             },
             None => {
                 let norm = d[0].hypot(d[1]);
@@ -359,6 +393,7 @@ impl WallField {
                 WallDistance {
                     residual: norm,
                     gradient,
+                    tag: piece.tag,
                 }
             }
         })
@@ -470,7 +505,7 @@ mod tests {
         let (grid, ends) = wall();
         let whole = WallField::new(&grid, &ends, 0.3, 1.0).expect("a wall");
         let window = CellWindow::around(&grid, [1.5, -0.5], [2.5, 0.5]).expect("on the grid");
-        let part = WallField::within(&grid, window, &ends, 0.3, 1.0).expect("a wall in it");
+        let part = WallField::within(&grid, window, &ends, &[], 0.3, 1.0).expect("a wall in it");
         for y in [-0.4, 0.0, 0.33] {
             assert_eq!(
                 part.distance([1.95, y], [0.0, 0.0]),
@@ -480,6 +515,37 @@ mod tests {
         assert!(whole.distance([1.95, 1.2], [0.0, 0.0]).is_some());
         assert_eq!(part.distance([1.95, 1.2], [0.0, 0.0]), None);
         assert_eq!(CellWindow::around(&grid, [50.0, 50.0], [51.0, 51.0]), None);
+    }
+
+    #[test]
+    fn a_wall_piece_names_the_tag_most_of_its_returns_carry() {
+        let (grid, ends) = wall();
+        // The wall's lower half drawn by 7, its upper by 9, with a few of 8 in among each.
+        let tags: Vec<u32> = ends
+            .iter()
+            .enumerate()
+            .map(|(k, seen)| match (k % 5, seen.at[1] < 0.0) {
+                (0, _) => 8,
+                (_, true) => 7,
+                (_, false) => 9,
+            })
+            .collect();
+        let window = CellWindow::whole(&grid);
+        let field = WallField::within(&grid, window, &ends, &tags, 0.3, 1.0).expect("a wall");
+        let tag_at = |y: f64| field.distance([1.95, y], [0.0, 0.0]).expect("near").tag;
+        assert_eq!(tag_at(-1.2), 7);
+        assert_eq!(tag_at(-0.5), 7);
+        assert_eq!(tag_at(0.5), 9);
+        assert_eq!(tag_at(1.2), 9);
+        // Untagged, every piece is 0.
+        let untagged = WallField::new(&grid, &ends, 0.3, 1.0).expect("a wall");
+        assert_eq!(
+            untagged
+                .distance([1.95, 0.5], [0.0, 0.0])
+                .expect("near")
+                .tag,
+            0
+        );
     }
 
     #[test]
