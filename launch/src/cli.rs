@@ -64,8 +64,8 @@ pub struct Args {
     #[arg(long, value_name = "METRES")]
     resolution: Option<f64>,
     /// Passes refining the final path against its own grid before the map is written, the
-    /// last of two or more aligning every scan to every wall; 0 keeps the filter's path as
-    /// it is. Default 6.
+    /// last two (the last one of two) aligning every scan to every wall; 0 keeps the
+    /// filter's path as it is. Default 7.
     #[arg(long, value_name = "N")]
     refine_passes: Option<usize>,
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.

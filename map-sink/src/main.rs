@@ -42,8 +42,8 @@ struct Args {
     #[arg(long, value_name = "METRES", default_value_t = GridConfig::default().resolution_m)]
     resolution: f64,
     /// Passes refining the final path against the grid its scans trace before it is
-    /// written, the last of two or more aligning every scan to every wall; 0 keeps the
-    /// filter's path as it is.
+    /// written, the last two (the last one of two) aligning every scan to every wall; 0
+    /// keeps the filter's path as it is.
     #[arg(long, value_name = "N", default_value_t = PathRefinementConfig::default().passes)]
     refine_passes: usize,
     /// Once the files are written, publish the final path of trajectory.tum on `map/path`

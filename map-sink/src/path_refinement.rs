@@ -13,12 +13,13 @@
 //! another pass saw from the next room is not where this scan's return ended. The next
 //! pass traces the grid again from the moved path.
 //!
-//! The last pass aligns every scan to every wall, its own pass's too: the grid the map is
-//! saved with, which a localizer on the saved map follows. After the passes before it the
-//! walls are drawn once where the run saw them more than once, and what is left between a
-//! scan and that grid is the path's own inconsistency along a corridor, where scans that
-//! see the far end from afar and from nearby draw it apart; aligned to the whole grid the
-//! saved path is where the saved grid puts its scans.
+//! The last passes (`every_wall_passes`) align every scan to every wall, its own pass's
+//! too: the grid the map is saved with, which a localizer on the saved map follows. After
+//! the passes before them the walls are drawn once where the run saw them more than once,
+//! and what is left between a scan and that grid is the path's own inconsistency along a
+//! corridor, where scans that see the far end from afar and from nearby draw it apart;
+//! aligned to the whole grid the saved path is where the saved grid puts its scans, and a
+//! second such pass aligns them again to the grid the first one's path traces.
 //!
 //! Mapping on a saved map, its walls are one more pass, never a scan's own
 //! ([`crate::prior_grid`]): the grid is traced on top of the saved one, and the scans that
@@ -46,9 +47,9 @@ use crate::wall_field::{CellWindow, SeenReturn, WallField};
 pub struct PathRefinementConfig {
     /// Passes of trace, align and solve; 0 leaves the path as the filter gave it.
     pub passes: usize,
-    /// Whether the last pass, when there are two or more, aligns each scan to every wall,
-    /// its own pass's too, rather than to the other passes'.
-    pub last_pass_to_every_wall: bool,
+    /// How many of the last passes align each scan to every wall, its own pass's too,
+    /// rather than to the other passes': at most all but the first pass.
+    pub every_wall_passes: usize,
     /// How far the filter's steps may bend: the variance of a step's x and y per metre it
     /// travelled, m^2/m. Proportional to the motion, so that a path bends as much over a
     /// metre at any scan rate.
@@ -74,8 +75,8 @@ pub struct PathRefinementConfig {
 impl Default for PathRefinementConfig {
     fn default() -> Self {
         Self {
-            passes: 6,
-            last_pass_to_every_wall: true,
+            passes: 7,
+            every_wall_passes: 2,
             step_xy_variance_per_m: 0.01,
             step_yaw_variance_per_m: 0.002,
             step_yaw_variance_per_rad: 0.002,
@@ -162,9 +163,12 @@ pub fn refine_path_within(
     // A pass whose alignments could not move the path leaves every later pass of its kind
     // the same path to align: only the other kind can still change it.
     let mut settled: Option<bool> = None;
+    let first_to_every_wall = config.passes
+        - config
+            .every_wall_passes
+            .min(config.passes.saturating_sub(1));
     for pass in 0..config.passes {
-        let to_every_wall = config.own_pass_m <= 0.0
-            || (config.last_pass_to_every_wall && config.passes > 1 && pass + 1 == config.passes);
+        let to_every_wall = config.own_pass_m <= 0.0 || pass >= first_to_every_wall;
         if settled == Some(to_every_wall) {
             continue;
         }
@@ -934,12 +938,15 @@ mod tests {
             )
             .expect("fits")
         };
-        // One pass has no other pass to align to; its last pass aligns it to its own walls,
+        // One pass has no other pass to align to; its last passes align it to its own walls,
         // which it agrees with: alone, it stays where it was.
         let (alone, report) = refine(None);
-        let (last, others) = report.aligned_per_pass.split_last().expect("passes done");
+        let done = report.aligned_per_pass.len();
+        let every_wall = PathRefinementConfig::default().every_wall_passes;
+        assert!(done > every_wall, "{report:?}");
+        let (others, last) = report.aligned_per_pass.split_at(done - every_wall);
         assert!(others.iter().all(|&n| n == 0), "{report:?}");
-        assert!(*last > 0, "{report:?}");
+        assert!(last.iter().all(|&n| n > 0), "{report:?}");
         let moved = alone
             .iter()
             .zip(&filter)
@@ -985,22 +992,26 @@ mod tests {
             let truly = truth[0].between(&truth[truth.len() - 1]);
             (seen.position() - truly.position()).norm()
         };
-        let refine = |last_pass_to_every_wall| {
+        let refine = |every_wall_passes| {
             let config = PathRefinementConfig {
-                last_pass_to_every_wall,
+                every_wall_passes,
                 ..PathRefinementConfig::default()
             };
             refine_path(&filter, &by_stamp, &GridConfig::default(), &config, None)
                 .expect("fits")
                 .0
         };
-        assert_eq!(refine(false), filter, "no other pass, nothing to align to");
-        let (before, after) = (gap(&filter), gap(&refine(true)));
+        assert_eq!(refine(0), filter, "no other pass, nothing to align to");
+        let before = gap(&filter);
         assert!(before > 0.06, "{before}");
-        assert!(
-            after < 0.3 * before,
-            "the lap's ends {after} m apart after, {before} m before"
-        );
+        for every_wall_passes in [1, PathRefinementConfig::default().every_wall_passes] {
+            let after = gap(&refine(every_wall_passes));
+            assert!(
+                after < 0.3 * before,
+                "{every_wall_passes} passes to every wall: the lap's ends {after} m apart \
+                 after, {before} m before"
+            );
+        }
     }
 
     #[test]
