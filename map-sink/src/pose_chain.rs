@@ -163,10 +163,13 @@ impl NormalEquations {
     /// The update that cancels the gradient; `None` if the equations are not positive
     /// definite.
     fn solve(self) -> Option<Vec<Vector3<f64>>> {
-        let band = BlockTridiagonal::factor(self.diagonal.clone(), &self.upper)?;
         if self.far.is_empty() {
+            let band = BlockTridiagonal::factor(self.diagonal, &self.upper)?;
             return Some(band.solve(self.gradient));
         }
+        // The conjugate gradients multiply by the whole matrix: the band is factored from
+        // a copy of its diagonal.
+        let band = BlockTridiagonal::factor(self.diagonal.clone(), &self.upper)?;
         Some(self.conjugate_gradients(&band))
     }
 

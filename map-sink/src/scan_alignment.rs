@@ -11,7 +11,7 @@
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use slam_geom::{Pose2, wrap_angle};
 
-use crate::wall_field::WallField;
+use crate::wall_field::{WallDistance, WallField};
 
 /// How a scan is aligned and when the alignment is trusted.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,30 +103,22 @@ pub(crate) fn align_scan(
         } else {
             (config.inlier_distance_m, config.loss_scale_m)
         };
-        let (s, c) = pose.yaw.sin_cos();
+        let within = Reach {
+            coarse,
+            distance,
+            scale,
+        };
+        let sin_cos = pose.yaw.sin_cos();
         let mut h = Matrix3::zeros();
         let mut g = Vector3::zeros();
         let mut inliers = 0;
-        for &[lx, ly] in ends {
-            let point = [pose.x + c * lx - s * ly, pose.y + s * lx + c * ly];
-            let from = [pose.x, pose.y];
-            let wall = if coarse {
-                walls.far_distance(point, from)
-            } else {
-                walls.distance(point, from)
-            };
-            let Some(wall) = wall else {
+        for &end in ends {
+            let Some(pull) = Pull::of(walls, end, pose, sin_cos, &within) else {
                 continue;
             };
-            if wall.residual.abs() >= distance {
-                continue;
-            }
             inliers += 1;
-            let [gx, gy] = wall.gradient;
-            let jacobian = Vector3::new(gx, gy, gx * (-s * lx - c * ly) + gy * (c * lx - s * ly));
-            let weight = 1.0 / (1.0 + (wall.residual / scale).powi(2));
-            h += weight * jacobian * jacobian.transpose();
-            g += weight * wall.residual * jacobian;
+            h += pull.weight * pull.jacobian * pull.jacobian.transpose();
+            g += pull.weight * pull.wall.residual * pull.jacobian;
         }
         if inliers < config.min_inliers {
             return None;
@@ -169,6 +161,56 @@ pub(crate) fn align_scan(
     trusted.then_some(ScanAlignment { pose, information })
 }
 
+/// Which walls a return is pulled to in one step of a fit: those within `distance` (the far
+/// reach of the field when `coarse`), with a Cauchy loss of scale `scale`.
+struct Reach {
+    coarse: bool,
+    distance: f64,
+    scale: f64,
+}
+
+/// One return's pull on a pose: the wall it is pulled to, the Jacobian of its residual in
+/// `x, y, yaw`, and its weight under the loss.
+struct Pull {
+    wall: WallDistance,
+    jacobian: Vector3<f64>,
+    weight: f64,
+}
+
+impl Pull {
+    /// The pull on `pose` (with `sin_cos`, its heading's sine and cosine, worked out once
+    /// for all its returns) of the return `end` (sensor frame); `None` when no wall
+    /// `within` reach faces it.
+    fn of(
+        walls: &WallField,
+        end: [f64; 2],
+        pose: Pose2,
+        sin_cos: (f64, f64),
+        within: &Reach,
+    ) -> Option<Self> {
+        let [lx, ly] = end;
+        let (s, c) = sin_cos;
+        let point = [pose.x + c * lx - s * ly, pose.y + s * lx + c * ly];
+        let from = [pose.x, pose.y];
+        let wall = if within.coarse {
+            walls.far_distance(point, from)
+        } else {
+            walls.distance(point, from)
+        }?;
+        if wall.residual.abs() >= within.distance {
+            return None;
+        }
+        let [gx, gy] = wall.gradient;
+        let jacobian = Vector3::new(gx, gy, gx * (-s * lx - c * ly) + gy * (c * lx - s * ly));
+        let weight = 1.0 / (1.0 + (wall.residual / within.scale).powi(2));
+        Some(Self {
+            wall,
+            jacobian,
+            weight,
+        })
+    }
+}
+
 /// The information the returns `ends` (sensor frame) at `pose` take from `walls`, by the
 /// tag of the wall piece each is pulled to, in tag order: the fit's Hessian at `pose`
 /// (without its small diagonal), each return's share given to whoever drew its wall.
@@ -178,23 +220,21 @@ pub(crate) fn information_by_tag(
     pose: Pose2,
     config: &ScanAlignmentConfig,
 ) -> Vec<(u32, Matrix3<f64>)> {
-    let (s, c) = pose.yaw.sin_cos();
+    let within = Reach {
+        coarse: false,
+        distance: config.inlier_distance_m,
+        scale: config.loss_scale_m,
+    };
+    let sin_cos = pose.yaw.sin_cos();
     let mut by_tag: Vec<(u32, Matrix3<f64>)> = Vec::new();
-    for &[lx, ly] in ends {
-        let point = [pose.x + c * lx - s * ly, pose.y + s * lx + c * ly];
-        let Some(wall) = walls.distance(point, [pose.x, pose.y]) else {
+    for &end in ends {
+        let Some(pull) = Pull::of(walls, end, pose, sin_cos, &within) else {
             continue;
         };
-        if wall.residual.abs() >= config.inlier_distance_m {
-            continue;
-        }
-        let [gx, gy] = wall.gradient;
-        let jacobian = Vector3::new(gx, gy, gx * (-s * lx - c * ly) + gy * (c * lx - s * ly));
-        let weight = 1.0 / (1.0 + (wall.residual / config.loss_scale_m).powi(2));
-        let share = weight * jacobian * jacobian.transpose();
-        match by_tag.iter_mut().find(|(tag, _)| *tag == wall.tag) {
+        let share = pull.weight * pull.jacobian * pull.jacobian.transpose();
+        match by_tag.iter_mut().find(|(tag, _)| *tag == pull.wall.tag) {
             Some((_, information)) => *information += share,
-            None => by_tag.push((wall.tag, share)),
+            None => by_tag.push((pull.wall.tag, share)),
         }
     }
     by_tag.sort_unstable_by_key(|(tag, _)| *tag);
