@@ -58,7 +58,10 @@ pub struct LocalizeConfig {
     /// ... or turned this much, radians, since they last did.
     pub update_min_rotation: f64,
     /// The particles' spread as they move by the front end's steps: translation variance
-    /// per metre travelled (m^2/m) and per radian turned (m^2/rad) ...
+    /// per metre travelled (m^2/m) and per radian turned (m^2/rad) ... Several times what
+    /// the front end's steps are off by on real logs, so that the cloud still covers a step
+    /// it got wrong; not more, or along a corridor, whose walls fix little along it, the
+    /// estimate wanders with the spread.
     pub xy_variance_per_metre: f64,
     pub xy_variance_per_radian: f64,
     /// ... and rotation variance per metre (rad^2/m) and per radian (rad^2/rad).
@@ -101,8 +104,8 @@ impl Default for LocalizeConfig {
             max_distance: 1.0,
             update_min_distance: 0.2,
             update_min_rotation: 0.1,
-            xy_variance_per_metre: 0.005,
-            xy_variance_per_radian: 0.005,
+            xy_variance_per_metre: 0.001,
+            xy_variance_per_radian: 0.002,
             yaw_variance_per_metre: 0.002,
             yaw_variance_per_radian: 0.01,
             initial_sigma_xy: 0.1,
