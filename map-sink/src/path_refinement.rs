@@ -29,7 +29,7 @@
 
 use std::collections::HashMap;
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Matrix3;
 use rayon::prelude::*;
 use slam_geom::{Pose2, StampedPose};
 
@@ -50,10 +50,16 @@ pub struct PathRefinementConfig {
     /// How many of the last passes align each scan to every wall, its own pass's too,
     /// rather than to the other passes': at most all but the first pass.
     pub every_wall_passes: usize,
-    /// How far the filter's steps may bend: the variance of a step's x and y per metre it
-    /// travelled, m^2/m. Proportional to the motion, so that a path bends as much over a
-    /// metre at any scan rate.
-    pub step_xy_variance_per_m: f64,
+    /// How far the filter's steps may bend: the variance of a step's translation along its
+    /// direction of travel per metre it travelled, m^2/m ... Proportional to the motion, so
+    /// that a path bends as much over a metre at any scan rate.
+    pub step_along_variance_per_m: f64,
+    /// ... and across it, m^2/m, in the passes to the other passes' walls: less, because
+    /// scans fix a step across a corridor firmly, while along it they see little but door
+    /// frames at a glance and the filter's steps there may be off by more, so that is
+    /// where a loop closed late is taken out. The passes to every wall hold the steps as
+    /// firmly across as along: they draw the path onto the grid it traces, across too.
+    pub step_across_variance_per_m: f64,
     /// The variance of a step's turn per metre travelled, rad^2/m.
     pub step_yaw_variance_per_m: f64,
     /// The variance of a step's turn per radian turned, rad^2/rad.
@@ -77,7 +83,8 @@ impl Default for PathRefinementConfig {
         Self {
             passes: 7,
             every_wall_passes: 2,
-            step_xy_variance_per_m: 0.01,
+            step_along_variance_per_m: 0.01,
+            step_across_variance_per_m: 0.001,
             step_yaw_variance_per_m: 0.002,
             step_yaw_variance_per_rad: 0.002,
             own_pass_m: 6.0,
@@ -156,9 +163,13 @@ pub fn refine_path_within(
     };
     let mut poses = filter_poses.clone();
     let travelled = distance_travelled(&filter_poses, &on_path);
-    let step_information: Vec<Matrix3<f64>> = steps
+    let loop_step_information: Vec<Matrix3<f64>> = steps
         .iter()
-        .map(|step| step_information(step, config))
+        .map(|step| step_information(step, config, config.step_across_variance_per_m))
+        .collect();
+    let grid_step_information: Vec<Matrix3<f64>> = steps
+        .iter()
+        .map(|step| step_information(step, config, config.step_along_variance_per_m))
         .collect();
     // A pass whose alignments could not move the path leaves every later pass of its kind
     // the same path to align: only the other kind can still change it.
@@ -247,7 +258,12 @@ pub fn refine_path_within(
                 information: Matrix3::identity() * HELD_START_INFORMATION,
             });
         }
-        match solve_pose_chain(&poses, &steps, &step_information, &priors, &links) {
+        let step_information = if to_every_wall {
+            &grid_step_information
+        } else {
+            &loop_step_information
+        };
+        match solve_pose_chain(&poses, &steps, step_information, &priors, &links) {
             Some(solved) => poses = solved,
             None => settled = Some(to_every_wall),
         }
@@ -655,15 +671,33 @@ fn tile(p: [f64; 2]) -> (i64, i64) {
 /// The scan index the tiles give a saved map's walls: no scan's, never a scan's own pass.
 const SAVED: u32 = u32::MAX;
 
-/// The information of one of the filter's steps: its variances grow with the motion, from
-/// a floor that keeps a stopped robot's steps firm but finite.
-fn step_information(step: &Pose2, config: &PathRefinementConfig) -> Matrix3<f64> {
+/// The information of one of the filter's steps, in the frame of the pose it starts from,
+/// with `across_variance_per_m` across its direction of travel (m^2/m): its variances grow
+/// with the motion, from a floor that keeps a stopped robot's steps firm but finite.
+fn step_information(
+    step: &Pose2,
+    config: &PathRefinementConfig,
+    across_variance_per_m: f64,
+) -> Matrix3<f64> {
     let (metres, radians) = (step.translation_norm(), step.yaw.abs());
-    let xy = (config.step_xy_variance_per_m * metres).max(MIN_STEP_VARIANCE);
+    let along = 1.0 / (config.step_along_variance_per_m * metres).max(MIN_STEP_VARIANCE);
+    let across = 1.0 / (across_variance_per_m * metres).max(MIN_STEP_VARIANCE);
     let yaw = (config.step_yaw_variance_per_m * metres
         + config.step_yaw_variance_per_rad * radians)
         .max(MIN_STEP_VARIANCE);
-    Matrix3::from_diagonal(&Vector3::new(1.0 / xy, 1.0 / xy, 1.0 / yaw))
+    // The direction of travel; a step in place (both variances at the floor) has none.
+    let [ux, uy] = if metres > 0.0 {
+        [step.x / metres, step.y / metres]
+    } else {
+        [1.0, 0.0]
+    };
+    // along * u u^T + across * (I - u u^T), in x and y.
+    let (xx, yy, xy) = (
+        along * ux * ux + across * uy * uy,
+        along * uy * uy + across * ux * ux,
+        (along - across) * ux * uy,
+    );
+    Matrix3::new(xx, xy, 0.0, xy, yy, 0.0, 0.0, 0.0, 1.0 / yaw)
 }
 
 /// The returns of a scan as points in the sensor frame.
@@ -683,6 +717,7 @@ fn returns(scan: &CompactScan) -> Vec<[f64; 2]> {
 mod tests {
     use super::*;
     use crate::test_room::{room_returns, scan_of};
+    use nalgebra::Vector3;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// [`refine_path_within`] with the default settings, the scans stamped by index.
@@ -1038,5 +1073,39 @@ mod tests {
         assert_eq!(refined, path);
         assert!(report.aligned_per_pass.is_empty());
         assert_eq!(report.largest_move_m, 0.0);
+    }
+
+    #[test]
+    fn a_step_is_held_less_firmly_along_its_direction_of_travel_than_across_it() {
+        let config = PathRefinementConfig::default();
+        let (along, across) = (
+            config.step_along_variance_per_m,
+            config.step_across_variance_per_m,
+        );
+        // Half a metre at 30 degrees to the pose's heading, turning a little.
+        let heading = 30f64.to_radians();
+        let step = Pose2::new(0.5 * heading.cos(), 0.5 * heading.sin(), 0.05);
+        let information = step_information(&step, &config, across);
+        let u = Vector3::new(heading.cos(), heading.sin(), 0.0);
+        let v = Vector3::new(-heading.sin(), heading.cos(), 0.0);
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b;
+        assert!(close(u.dot(&(information * u)), 1.0 / (along * 0.5)));
+        assert!(close(v.dot(&(information * v)), 1.0 / (across * 0.5)));
+        assert!(close(u.dot(&(information * v)).abs() + 1.0, 1.0));
+        let yaw = config.step_yaw_variance_per_m * 0.5 + config.step_yaw_variance_per_rad * 0.05;
+        assert!(close(information[(2, 2)], 1.0 / yaw));
+        assert_eq!(information, information.transpose());
+        assert!(information.cholesky().is_some());
+
+        // As firmly across as along: the same in every direction.
+        let even = step_information(&step, &config, along);
+        assert!(close(even[(0, 0)], even[(1, 1)]));
+        assert!(even[(0, 1)].abs() <= 1e-9 * even[(0, 0)]);
+
+        // A stopped robot's step is firm in every direction, and finite.
+        let stopped = step_information(&Pose2::IDENTITY, &config, across);
+        assert_eq!(stopped[(0, 0)], 1.0 / MIN_STEP_VARIANCE);
+        assert_eq!(stopped[(1, 1)], 1.0 / MIN_STEP_VARIANCE);
+        assert_eq!(stopped[(0, 1)], 0.0);
     }
 }
