@@ -202,8 +202,12 @@ const NEIGHBOURS: [(i64, i64); 8] = [
 const NORMAL_RADIUS_CELLS: i64 = 2;
 /// A normal needs this many pieces lined up with it, the piece itself included.
 const MIN_NORMAL_PIECES: usize = 3;
-/// The spread across the line must be this much smaller than along it for a wall.
-const MAX_FLATNESS: f64 = 0.2;
+/// The spread across the line must be this much smaller than along it for a wall (as
+/// standard deviations). A wall seen at a slant or from afar is drawn two cells thick, and
+/// its pieces' means lie in two rows: their spread across is over a third of the spread
+/// along the 5 x 5 block, and such a wall still runs along a line. A corner's or a post's
+/// pieces, spread alike both ways, have none.
+const MAX_FLATNESS: f64 = 0.7;
 
 impl WallField {
     /// The walls of `grid`, from the returns `ends` (world frame) that built it; cells
@@ -555,5 +559,15 @@ mod tests {
         assert!((n[0] * 1.0 + n[1] * 2.0).abs() < 1e-9, "{n:?}");
         let blob = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
         assert_eq!(line_normal(&blob), None);
+        // A wall drawn two cells thick (0.05 m) along x: the means of a 5 x 5 block's
+        // pieces in two rows.
+        let thick: Vec<[f64; 2]> = (0..10)
+            .map(|i| [0.05 * (i / 2) as f64 + 0.01, 0.05 * (i % 2) as f64 + 0.02])
+            .collect();
+        let n = line_normal(&thick).expect("a thick wall");
+        assert!(
+            n[0].abs() < 1e-9 && (n[1].abs() - 1.0).abs() < 1e-9,
+            "{n:?}"
+        );
     }
 }
