@@ -60,6 +60,13 @@ pub struct PathRefinementConfig {
     /// where a loop closed late is taken out. The passes to every wall hold the steps as
     /// firmly across as along: they draw the path onto the grid it traces, across too.
     pub step_across_variance_per_m: f64,
+    /// In the passes to every wall, how far a step may also bend per radian it turned,
+    /// m^2/rad, in every direction: a scan taken mid-turn is the one the filter's step is
+    /// least sure of (its fit can land a few centimetres off, and the next scan's takes it
+    /// back), and there the grid every pass drew says better where it was. Not in the
+    /// passes to the other passes' walls, where a step bent at a turn would bend the loop
+    /// being closed.
+    pub every_wall_step_xy_variance_per_rad: f64,
     /// The variance of a step's turn per metre travelled, rad^2/m.
     pub step_yaw_variance_per_m: f64,
     /// The variance of a step's turn per radian turned, rad^2/rad.
@@ -85,6 +92,7 @@ impl Default for PathRefinementConfig {
             every_wall_passes: 2,
             step_along_variance_per_m: 0.01,
             step_across_variance_per_m: 0.001,
+            every_wall_step_xy_variance_per_rad: 0.2,
             step_yaw_variance_per_m: 0.002,
             step_yaw_variance_per_rad: 0.002,
             own_pass_m: 6.0,
@@ -165,11 +173,11 @@ pub fn refine_path_within(
     let travelled = distance_travelled(&filter_poses, &on_path);
     let loop_step_information: Vec<Matrix3<f64>> = steps
         .iter()
-        .map(|step| step_information(step, config, config.step_across_variance_per_m))
+        .map(|step| step_information(step, config, StepHold::to_other_passes(config)))
         .collect();
     let grid_step_information: Vec<Matrix3<f64>> = steps
         .iter()
-        .map(|step| step_information(step, config, config.step_along_variance_per_m))
+        .map(|step| step_information(step, config, StepHold::to_every_wall(config)))
         .collect();
     // A pass whose alignments could not move the path leaves every later pass of its kind
     // the same path to align: only the other kind can still change it.
@@ -671,17 +679,45 @@ fn tile(p: [f64; 2]) -> (i64, i64) {
 /// The scan index the tiles give a saved map's walls: no scan's, never a scan's own pass.
 const SAVED: u32 = u32::MAX;
 
+/// How firmly a pass holds the translation of the filter's steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StepHold {
+    /// Variance along the direction of travel per metre travelled, m^2/m ...
+    along_per_m: f64,
+    /// ... across it, m^2/m ...
+    across_per_m: f64,
+    /// ... and in every direction per radian turned, m^2/rad.
+    per_rad: f64,
+}
+
+impl StepHold {
+    /// In the passes to the other passes' walls.
+    fn to_other_passes(config: &PathRefinementConfig) -> Self {
+        Self {
+            along_per_m: config.step_along_variance_per_m,
+            across_per_m: config.step_across_variance_per_m,
+            per_rad: 0.0,
+        }
+    }
+
+    /// In the passes to every wall.
+    fn to_every_wall(config: &PathRefinementConfig) -> Self {
+        Self {
+            along_per_m: config.step_along_variance_per_m,
+            across_per_m: config.step_along_variance_per_m,
+            per_rad: config.every_wall_step_xy_variance_per_rad,
+        }
+    }
+}
+
 /// The information of one of the filter's steps, in the frame of the pose it starts from,
-/// with `across_variance_per_m` across its direction of travel (m^2/m): its variances grow
-/// with the motion, from a floor that keeps a stopped robot's steps firm but finite.
-fn step_information(
-    step: &Pose2,
-    config: &PathRefinementConfig,
-    across_variance_per_m: f64,
-) -> Matrix3<f64> {
+/// its translation held as `hold` says: its variances grow with the motion, from a floor
+/// that keeps a stopped robot's steps firm but finite.
+fn step_information(step: &Pose2, config: &PathRefinementConfig, hold: StepHold) -> Matrix3<f64> {
     let (metres, radians) = (step.translation_norm(), step.yaw.abs());
-    let along = 1.0 / (config.step_along_variance_per_m * metres).max(MIN_STEP_VARIANCE);
-    let across = 1.0 / (across_variance_per_m * metres).max(MIN_STEP_VARIANCE);
+    let turning = hold.per_rad * radians;
+    let along = 1.0 / (hold.along_per_m * metres + turning).max(MIN_STEP_VARIANCE);
+    let across = 1.0 / (hold.across_per_m * metres + turning).max(MIN_STEP_VARIANCE);
     let yaw = (config.step_yaw_variance_per_m * metres
         + config.step_yaw_variance_per_rad * radians)
         .max(MIN_STEP_VARIANCE);
@@ -1085,7 +1121,7 @@ mod tests {
         // Half a metre at 30 degrees to the pose's heading, turning a little.
         let heading = 30f64.to_radians();
         let step = Pose2::new(0.5 * heading.cos(), 0.5 * heading.sin(), 0.05);
-        let information = step_information(&step, &config, across);
+        let information = step_information(&step, &config, StepHold::to_other_passes(&config));
         let u = Vector3::new(heading.cos(), heading.sin(), 0.0);
         let v = Vector3::new(-heading.sin(), heading.cos(), 0.0);
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b;
@@ -1097,13 +1133,25 @@ mod tests {
         assert_eq!(information, information.transpose());
         assert!(information.cholesky().is_some());
 
-        // As firmly across as along: the same in every direction.
-        let even = step_information(&step, &config, along);
+        // To every wall: as firmly across as along, the same in every direction, and looser
+        // by the turn.
+        let even = step_information(&step, &config, StepHold::to_every_wall(&config));
+        let turning = config.every_wall_step_xy_variance_per_rad * 0.05;
+        assert!(close(even[(0, 0)], 1.0 / (along * 0.5 + turning)));
         assert!(close(even[(0, 0)], even[(1, 1)]));
         assert!(even[(0, 1)].abs() <= 1e-9 * even[(0, 0)]);
+        assert!(close(even[(2, 2)], information[(2, 2)]));
+        // Turning in place, a step there is held by the turn alone.
+        let in_place = step_information(
+            &Pose2::new(0.0, 0.0, 0.3),
+            &config,
+            StepHold::to_every_wall(&config),
+        );
+        let by_turn = 1.0 / (config.every_wall_step_xy_variance_per_rad * 0.3);
+        assert!(close(in_place[(0, 0)], by_turn) && close(in_place[(1, 1)], by_turn));
 
         // A stopped robot's step is firm in every direction, and finite.
-        let stopped = step_information(&Pose2::IDENTITY, &config, across);
+        let stopped = step_information(&Pose2::IDENTITY, &config, StepHold::to_every_wall(&config));
         assert_eq!(stopped[(0, 0)], 1.0 / MIN_STEP_VARIANCE);
         assert_eq!(stopped[(1, 1)], 1.0 / MIN_STEP_VARIANCE);
         assert_eq!(stopped[(0, 1)], 0.0);
