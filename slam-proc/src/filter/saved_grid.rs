@@ -6,8 +6,8 @@
 //! little else, fit after fit carries the run down it.
 
 use crate::config::SlamConfig;
+use crate::localize::cell_frame::SeenCells;
 use crate::localize::hill_climb::HillClimb;
-use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
 use crate::localize::localizer::{ScanRanges, sample_beam_ends};
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use map_sink::GridMap;
@@ -28,7 +28,7 @@ const TRACKING: HillClimb = HillClimb {
 #[derive(Debug, Clone)]
 pub(crate) struct SavedGrid {
     /// Which cells the saved map has seen.
-    field: LikelihoodField,
+    seen: SeenCells,
     /// What the beams are scored on: the converged localizer's field.
     tracking: TrackingField,
     /// This scan's sampled beam ends, sensor frame.
@@ -42,12 +42,8 @@ pub(crate) struct SavedGrid {
 impl SavedGrid {
     /// The field of `grid` under the localizer's beam model (`config.localize`).
     pub fn new(grid: &GridMap, config: &SlamConfig) -> Self {
-        let model = BeamModel {
-            sigma_hit: config.localize.sigma_hit,
-            floor: config.localize.beam_floor,
-        };
         Self {
-            field: LikelihoodField::new(grid, config.localize.max_distance, model),
+            seen: SeenCells::of(grid),
             tracking: TrackingField::new(grid, &config.localize),
             beams: Vec::new(),
             known: Vec::new(),
@@ -75,8 +71,8 @@ impl SavedGrid {
         self.known.clear();
         self.known
             .extend(self.beams.iter().copied().filter(|[px, py]| {
-                self.field
-                    .is_known(pose.x + c * px - s * py, pose.y + s * px + c * py)
+                self.seen
+                    .contains(pose.x + c * px - s * py, pose.y + s * px + c * py)
             }));
         beam_bearings(&self.known, &mut self.bearings);
         !self.known.is_empty() && self.known.len() as f64 >= min_known * self.beams.len() as f64

@@ -1,6 +1,6 @@
 //! Where a saved grid's cells lie in the map frame, for the fields computed over them.
 
-use map_sink::GridMap;
+use map_sink::{CellState, GridMap};
 
 /// A grid's cells in the map frame: row 0 the lowest y, cells indexed row by row.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,5 +44,33 @@ impl CellFrame {
             self.origin[0] + (col as f64 + 0.5) * self.resolution,
             self.origin[1] + (row as f64 + 0.5) * self.resolution,
         ]
+    }
+}
+
+/// Which cells of a grid were seen, free or occupied: a beam ending in one can be judged by
+/// a field of the grid, one ending in unknown space cannot.
+#[derive(Debug, Clone)]
+pub(crate) struct SeenCells {
+    frame: CellFrame,
+    seen: Vec<bool>,
+}
+
+impl SeenCells {
+    /// The seen cells of `grid`.
+    pub fn of(grid: &GridMap) -> Self {
+        Self {
+            frame: CellFrame::of(grid),
+            seen: grid
+                .cells
+                .iter()
+                .map(|c| *c != CellState::Unknown)
+                .collect(),
+        }
+    }
+
+    /// Whether `(x, y)` (map frame) lies in a seen cell.
+    #[inline]
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        self.frame.index(x, y).is_some_and(|i| self.seen[i])
     }
 }

@@ -4,7 +4,7 @@
 
 use map_sink::{CellState, GridMap};
 
-use crate::localize::cell_frame::CellFrame;
+use crate::localize::cell_frame::{CellFrame, SeenCells};
 
 /// A beam end's likelihood by its distance `d` to the nearest wall: a Gaussian hit plus a
 /// floor for what the map does not hold, `exp(-d^2 / (2 sigma^2)) + floor`, scaled so that
@@ -37,8 +37,8 @@ pub struct LikelihoodField {
     far_score: f64,
     /// Indices of the free cells, where a robot may stand.
     free: Vec<u32>,
-    /// Whether each cell was seen (free or occupied), row 0 the lowest y.
-    known: Vec<bool>,
+    /// Which cells were seen (free or occupied).
+    seen: SeenCells,
 }
 
 impl LikelihoodField {
@@ -70,11 +70,6 @@ impl LikelihoodField {
             .filter(|(_, c)| **c == CellState::Free)
             .filter_map(|(i, _)| u32::try_from(i).ok())
             .collect();
-        let known = grid
-            .cells
-            .iter()
-            .map(|c| *c != CellState::Unknown)
-            .collect();
         Self {
             frame: CellFrame::of(grid),
             distance,
@@ -82,7 +77,7 @@ impl LikelihoodField {
             score,
             far_score: model.log_likelihood(max_distance),
             free,
-            known,
+            seen: SeenCells::of(grid),
         }
     }
 
@@ -90,7 +85,7 @@ impl LikelihoodField {
     /// ending there can be judged by the field, one ending in unknown space cannot.
     #[inline]
     pub fn is_known(&self, x: f64, y: f64) -> bool {
-        self.frame.index(x, y).is_some_and(|i| self.known[i])
+        self.seen.contains(x, y)
     }
 
     /// Metres from `(x, y)` (map frame) to the nearest occupied cell; `max_distance` off
