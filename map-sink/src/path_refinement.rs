@@ -249,11 +249,12 @@ pub fn refine_path_within(
                 });
             }
             for (anchor, information) in tie.links {
+                let anchor_pose = pass_scans.guesses[anchor];
                 links.push(PoseLink {
                     from: on_path[anchor].0,
                     to: index,
-                    seen: pass_scans.guesses[anchor].between(&tie.aligned),
-                    information,
+                    seen: anchor_pose.between(&tie.aligned),
+                    information: in_frame_of(&anchor_pose, &information),
                 });
             }
         }
@@ -666,6 +667,18 @@ impl OtherPasses<'_> {
             (self.scans.guesses[k].position() - self.scans.guesses[middle].position()).norm();
         along - straight >= self.revisit_detour_m
     }
+}
+
+/// `information` over a pose's world `x, y, yaw` as the information over the same pose
+/// seen from `anchor`, in `anchor`'s frame, as a [`PoseLink`] holds it: its translation
+/// turned by the anchor's heading.
+fn in_frame_of(anchor: &Pose2, information: &Matrix3<f64>) -> Matrix3<f64> {
+    let (s, c) = anchor.yaw.sin_cos();
+    // The link's error is `R^T (b - b*)` in translation and `b.yaw - b*.yaw` in turn: the
+    // world error is this turned back, `[R 0; 0 1]` times the link's.
+    let to_world = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    let turned = to_world.transpose() * information * to_world;
+    0.5 * (turned + turned.transpose())
 }
 
 /// The 1 m tile `p` lies in.
@@ -1155,5 +1168,36 @@ mod tests {
         assert_eq!(stopped[(0, 0)], 1.0 / MIN_STEP_VARIANCE);
         assert_eq!(stopped[(1, 1)], 1.0 / MIN_STEP_VARIANCE);
         assert_eq!(stopped[(0, 1)], 0.0);
+    }
+
+    #[test]
+    fn an_alignment_turned_into_its_anchor_frame_weighs_a_world_shift_as_the_fit_did() {
+        // A fit that fixes world x firmly, y hardly, and the turn, with an x-turn coupling;
+        // the anchor faces nearly along world y, where an unturned matrix would swap x and y.
+        let world = Matrix3::new(400.0, 0.0, 30.0, 0.0, 2.0, 0.0, 30.0, 0.0, 900.0);
+        let anchor = Pose2::new(3.0, -1.0, 1.4);
+        let scan = Pose2::new(4.5, 2.0, -0.3);
+        let information = in_frame_of(&anchor, &world);
+        for shift in [
+            Vector3::new(0.01, 0.0, 0.0),
+            Vector3::new(0.0, 0.01, 0.0),
+            Vector3::new(-0.004, 0.007, 0.003),
+        ] {
+            let shifted = Pose2::new(scan.x + shift.x, scan.y + shift.y, scan.yaw + shift.z);
+            // The link's error as the chain solve computes it: the pose seen from the anchor.
+            let (seen, seen_shifted) = (anchor.between(&scan), anchor.between(&shifted));
+            let error = Vector3::new(
+                seen_shifted.x - seen.x,
+                seen_shifted.y - seen.y,
+                seen_shifted.yaw - seen.yaw,
+            );
+            let by_link = error.dot(&(information * error));
+            let by_fit = shift.dot(&(world * shift));
+            assert!(
+                (by_link - by_fit).abs() <= 1e-9 * by_fit,
+                "{by_link} {by_fit}"
+            );
+        }
+        assert_eq!(information, information.transpose());
     }
 }
