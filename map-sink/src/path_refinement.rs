@@ -88,8 +88,8 @@ pub struct PathRefinementConfig {
 impl Default for PathRefinementConfig {
     fn default() -> Self {
         Self {
-            passes: 7,
-            every_wall_passes: 2,
+            passes: 8,
+            every_wall_passes: 1,
             step_along_variance_per_m: 0.01,
             step_across_variance_per_m: 0.001,
             every_wall_step_xy_variance_per_rad: 0.2,
