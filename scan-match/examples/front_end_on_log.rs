@@ -4,11 +4,13 @@
 //!     cargo run --release -p scan-match --example front_end_on_log -- \
 //!         ../shared/data/carmen/mit-csail.clf [--relations FILE] [--out FILE.tum] \
 //!         [--no-odometry] [--format carmen|seed-csv] [--start N] [--limit N] \
-//!         [--config FILE.toml] [--debug FILE]
+//!         [--config FILE.toml] [--debug FILE] [--every N] [--max-range M]
 //!
 //! `--debug` writes one line per scan: stamp, the front end's increment (x y yaw), the
 //! odometry's, points, inliers, iterations, keyframe, microseconds, status, odometry status.
-//! Odometry is the latest odometry record at or before each scan. Without `--relations`
+//! `--every N` keeps one scan in N and `--max-range M` cuts the ranges at M metres, as
+//! lidar-replay's `--every` and `--max-range` do. Odometry is interpolated to each scan's
+//! stamp, as feature-proc does. Without `--relations`
 //! the log's own `.relations` beside it is used if there is one.
 
 #[path = "../tests/support/logs.rs"]
@@ -19,7 +21,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use lidar_replay::LogFormat;
+use lidar_replay::{Degradation, LogFormat};
 use scan_match::{FrontEnd, FrontEndConfig, MatchStatus};
 use slam_eval::{Score, Trajectory, read_relations, score};
 
@@ -36,6 +38,8 @@ struct Args {
     limit: usize,
     config: Option<PathBuf>,
     debug: Option<PathBuf>,
+    every: u64,
+    max_range_m: Option<f64>,
 }
 
 fn parse_args() -> Result<Args> {
@@ -50,6 +54,8 @@ fn parse_args() -> Result<Args> {
         limit: usize::MAX,
         config: None,
         debug: None,
+        every: 1,
+        max_range_m: None,
     };
     let mut log = None;
     while let Some(arg) = args.next() {
@@ -63,11 +69,13 @@ fn parse_args() -> Result<Args> {
             "--limit" => parsed.limit = value()?.parse()?,
             "--config" => parsed.config = Some(value()?.into()),
             "--debug" => parsed.debug = Some(value()?.into()),
+            "--every" => parsed.every = value()?.parse()?,
+            "--max-range" => parsed.max_range_m = Some(value()?.parse()?),
             other if other.starts_with("--") => bail!("unknown option {other}"),
             other => log = Some(PathBuf::from(other)),
         }
     }
-    parsed.log = log.context("usage: front_end_on_log LOG [--relations FILE] [--out FILE] [--no-odometry] [--format F] [--start N] [--limit N] [--config FILE] [--debug FILE]")?;
+    parsed.log = log.context("usage: front_end_on_log LOG [--relations FILE] [--out FILE] [--no-odometry] [--format F] [--start N] [--limit N] [--config FILE] [--debug FILE] [--every N] [--max-range M]")?;
     if parsed.relations.is_none() {
         let beside = parsed.log.with_extension("relations");
         if beside.exists() {
@@ -83,10 +91,12 @@ fn main() -> Result<()> {
         Some(path) => toml::from_str(&std::fs::read_to_string(path)?)?,
         None => FrontEndConfig::default(),
     };
-    let scans = logs::load(
+    let degradation = Degradation::new(args.every, args.max_range_m)?;
+    let scans = logs::load_degraded(
         &args.log,
         args.format,
         args.start.saturating_add(args.limit),
+        degradation,
     )?;
     // The front end starts cold at `--start`, as a run replayed from there does.
     let scans = scans.get(args.start..).unwrap_or_default();

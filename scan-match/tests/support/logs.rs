@@ -13,9 +13,11 @@ use lidar_replay::{
 use nalgebra::Matrix3;
 use scan_match::{OdometryInput, ScanInput};
 use slam_geom::ScanGeometry;
+use stage_kit::odometry_buffer::{OdometryBuffer, OdometryReading};
 
-/// One scan of a log with the odometry paired to it: the latest odometry record at or
-/// before it (a FLASER line yields its odometry just before its scan, same stamp).
+/// One scan of a log with the odometry paired to it as feature-proc pairs it: interpolated
+/// to the scan's stamp between the readings around it (a FLASER line's own odometry has
+/// the scan's stamp; a log with ODOM lines has its readings between the scans).
 #[derive(Debug, Clone)]
 pub struct LoggedScan {
     pub stamp_ns: u64,
@@ -53,7 +55,7 @@ pub fn load_degraded(
     let reader = open_log(format, path, ReorderConfig::default())
         .with_context(|| format!("opening {}", path.display()))?;
     let mut covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
-    let mut odometry: Option<OdometryInput> = None;
+    let mut track = OdometryBuffer::new();
     let mut scans = Vec::new();
     let mut index = 0;
     for record in reader {
@@ -61,11 +63,23 @@ pub fn load_degraded(
         match record {
             LogRecord::Odometry(o) => {
                 let c = covariance.update(o.pose());
-                odometry = Some(OdometryInput {
-                    odom_from_robot: o.pose(),
+                // A reading the pipeline would refuse (out of order, a repeated stamp) is
+                // left out here too.
+                let _ = track.push(OdometryReading {
+                    stamp_ns: o.stamp_ns,
+                    pose: o.pose(),
                     covariance: Matrix3::from_row_slice(&c),
                 });
+                // The last scan's odometry is final once a reading at or after it is in.
+                if scans.len() >= limit
+                    && scans
+                        .last()
+                        .is_none_or(|s: &LoggedScan| o.stamp_ns >= s.stamp_ns)
+                {
+                    break;
+                }
             }
+            LogRecord::Scan(_) if scans.len() >= limit => {}
             LogRecord::Scan(mut s) => {
                 index += 1;
                 if !degradation.keeps(index - 1) {
@@ -76,13 +90,20 @@ pub fn load_degraded(
                     stamp_ns: s.stamp_ns,
                     geometry: s.geometry,
                     ranges: s.ranges,
-                    odometry,
+                    odometry: None,
                 });
-                if scans.len() >= limit {
-                    break;
-                }
             }
         }
+    }
+    track.end();
+    for scan in &mut scans {
+        scan.odometry = track
+            .at(scan.stamp_ns)
+            .reading()
+            .map(|reading| OdometryInput {
+                odom_from_robot: reading.pose,
+                covariance: reading.covariance,
+            });
     }
     Ok(scans)
 }
