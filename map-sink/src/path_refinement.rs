@@ -673,10 +673,9 @@ impl OtherPasses<'_> {
 /// seen from `anchor`, in `anchor`'s frame, as a [`PoseLink`] holds it: its translation
 /// turned by the anchor's heading.
 fn in_frame_of(anchor: &Pose2, information: &Matrix3<f64>) -> Matrix3<f64> {
-    let (s, c) = anchor.yaw.sin_cos();
     // The link's error is `R^T (b - b*)` in translation and `b.yaw - b*.yaw` in turn: the
-    // world error is this turned back, `[R 0; 0 1]` times the link's.
-    let to_world = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    // world error is this turned back by the anchor's frame Jacobian.
+    let to_world = anchor.frame_jacobian();
     let turned = to_world.transpose() * information * to_world;
     0.5 * (turned + turned.transpose())
 }

@@ -8,7 +8,7 @@ use slam_geom::{Pose2, wrap_angle};
 
 use crate::config::FrontEndConfig;
 use crate::error::InputError;
-use crate::fusion::{Prediction, disagreement, fuse, predict, robot_to_map};
+use crate::fusion::{Prediction, disagreement, fuse, predict};
 use crate::input::{OdometryInput, ScanInput};
 use crate::local_map::LocalMap;
 use crate::odometry_anchor::{MAX_CATCH_UP_NS, OdometryAnchor, is_frozen};
@@ -341,7 +341,7 @@ impl FrontEnd {
             self.wheels_froze = is_frozen(&moved);
         }
 
-        let to_map = robot_to_map(&self.pose);
+        let to_map = self.pose.frame_jacobian();
         let increment = self.pose.between(&pose);
         output.increment = increment;
         output.increment_covariance = positive_definite(
@@ -590,7 +590,7 @@ fn is_finite(odometry: &OdometryInput) -> bool {
 /// A direction over `(x, y, yaw)` in the map frame, turned into the robot frame at `pose`
 /// and normalised.
 fn robot_direction(pose: &Pose2, direction: &Vector3<f64>) -> Vector3<f64> {
-    let turned = robot_to_map(pose).transpose() * direction;
+    let turned = pose.frame_jacobian().transpose() * direction;
     let norm = turned.norm();
     if norm > 0.0 { turned / norm } else { turned }
 }

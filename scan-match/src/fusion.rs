@@ -18,18 +18,11 @@ pub struct Prediction {
 
 /// `previous * step`, with the step's covariance rotated into the map frame.
 pub fn predict(previous: &Pose2, step: &Step) -> Prediction {
-    let rotation = robot_to_map(previous);
+    let rotation = previous.frame_jacobian();
     Prediction {
         pose: previous.compose(&step.increment),
         covariance: rotation * step.covariance * rotation.transpose(),
     }
-}
-
-/// The Jacobian taking `(x, y, yaw)` in `pose`'s frame to the map frame.
-pub fn robot_to_map(pose: &Pose2) -> Matrix3<f64> {
-    let mut m = Matrix3::identity();
-    m.fixed_view_mut::<2, 2>(0, 0).copy_from(&pose.rotation());
-    m
 }
 
 /// `match - prediction` over `(x, y, yaw)`, yaw wrapped.

@@ -9,7 +9,6 @@ use slam_geom::Pose2;
 
 use crate::config::FrontEndConfig;
 use crate::front_end::MIN_DT;
-use crate::fusion::robot_to_map;
 use crate::input::OdometryInput;
 use crate::odometry_scale::OdometryScale;
 use crate::prior::{OdometryRejection, Step, odometry_step};
@@ -53,7 +52,7 @@ impl OdometryAnchor {
         let increment = previous_pose.between(&self.pose.compose(&span.increment));
         // The span's covariance is in the anchor's frame; the step's in the previous one.
         let turn = Pose2::new(0.0, 0.0, self.pose.yaw - previous_pose.yaw);
-        let rotation = robot_to_map(&turn);
+        let rotation = turn.frame_jacobian();
         let covariance = rotation * span.covariance * rotation.transpose();
         Ok(Step {
             increment,

@@ -1,6 +1,6 @@
 //! Planar rigid transforms `world_from_robot` (docs/CONVENTIONS.md).
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Matrix3, Vector2};
 
 use crate::Point2;
 
@@ -72,6 +72,15 @@ impl Pose2 {
     pub fn rotation(&self) -> Matrix2<f64> {
         let (s, c) = self.yaw.sin_cos();
         Matrix2::new(c, -s, s, c)
+    }
+
+    /// The Jacobian taking `(x, y, yaw)` in this pose's frame to the outer frame: `R(yaw)`
+    /// on the translation, the identity on the turn. `J M J^T` turns a covariance into the
+    /// outer frame, `J^T M J` an information out of it.
+    pub fn frame_jacobian(&self) -> Matrix3<f64> {
+        let mut m = Matrix3::identity();
+        m.fixed_view_mut::<2, 2>(0, 0).copy_from(&self.rotation());
+        m
     }
 
     /// The pose a fraction `t` of the way from `self` to `other`: position along the straight
