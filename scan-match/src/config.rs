@@ -77,6 +77,11 @@ pub struct FrontEndConfig {
     pub max_linear_speed: f64,
     /// Nor one turning faster than this, rad/s.
     pub max_angular_speed: f64,
+    /// A wheel step that would change the wheels' pace faster than this, m/s^2, is a stale
+    /// reading (odometry that lags the scan by a varying delay, as mit-csail's does): the
+    /// scan is registered as without odometry, and the next steps are measured from the
+    /// last reading believed. Well above what a wheeled indoor robot does.
+    pub max_linear_acceleration: f64,
     /// Without odometry the prior is constant velocity; its velocity may change by this
     /// much (one sigma) between scans, m/s.
     pub velocity_sigma_linear: f64,
@@ -116,6 +121,7 @@ impl Default for FrontEndConfig {
             odometry_min_sigma_yaw: 0.005,
             max_linear_speed: 10.0,
             max_angular_speed: 10.0,
+            max_linear_acceleration: 3.0,
             velocity_sigma_linear: 0.5,
             velocity_sigma_angular: 1.0,
             odometry_scale_memory: 50.0,
@@ -141,8 +147,9 @@ impl FrontEndConfig {
             range_sigma, voxel_size, max_correspondence, convergence, max_search_translation,
             max_search_yaw, recovery_translation, recovery_yaw, keyframe_distance, keyframe_angle,
             degenerate_keyframe_interval, degeneracy_ratio, odometry_gate, odometry_min_sigma_xy,
-            odometry_min_sigma_yaw, max_linear_speed, max_angular_speed, velocity_sigma_linear,
-            velocity_sigma_angular, odometry_scale_memory, odometry_scale_min_evidence,
+            odometry_min_sigma_yaw, max_linear_speed, max_angular_speed, max_linear_acceleration,
+            velocity_sigma_linear, velocity_sigma_angular, odometry_scale_memory,
+            odometry_scale_min_evidence,
         ))?;
         check(
             "odometry_scale_max_correction",
@@ -201,6 +208,10 @@ mod tests {
         };
         assert_eq!(refused(|c| c.range_sigma = -1.0), Some("range_sigma"));
         assert_eq!(refused(|c| c.max_keyframes = 0), Some("max_keyframes"));
+        assert_eq!(
+            refused(|c| c.max_linear_acceleration = 0.0),
+            Some("max_linear_acceleration")
+        );
         assert_eq!(
             refused(|c| c.odometry_scale_max_correction = 0.5),
             Some("odometry_scale_max_correction")

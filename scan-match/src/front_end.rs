@@ -11,7 +11,7 @@ use crate::error::InputError;
 use crate::fusion::{Prediction, disagreement, fuse, predict};
 use crate::input::{OdometryInput, ScanInput};
 use crate::local_map::LocalMap;
-use crate::odometry_anchor::{MAX_CATCH_UP_NS, OdometryAnchor, is_frozen};
+use crate::odometry_anchor::{Lag, MAX_CATCH_UP_NS, OdometryAnchor, is_frozen};
 use crate::odometry_scale::OdometryScale;
 use crate::output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
 use crate::points::{Extractor, SurfacePoint};
@@ -22,6 +22,7 @@ use crate::prior::{
 use crate::recovery::{RecoveryWindow, rank, recover};
 use crate::registration::{Registration, RegistrationParams, register};
 use crate::search::{Window, score_sample, search_sample, subsample};
+use crate::wheel_pace::{STALE_WINDOW_NS, WheelPace};
 use stage_kit::SettingError;
 
 /// Steps closer in time than this (repeated or reordered stamps) are timed as this long,
@@ -86,9 +87,11 @@ pub struct FrontEnd {
     last_odometry: Option<OdometryInput>,
     /// The last odometry reading a step was believed from.
     odometry_anchor: Option<OdometryAnchor>,
-    /// Whether the wheels stood still since then while the scans moved: frozen odometry
-    /// that will catch up in one step.
-    wheels_froze: bool,
+    /// Whether the wheels' readings since then were not believed, frozen while the scans
+    /// moved or stale: odometry that will catch up, its steps measured from the anchor.
+    lag: Lag,
+    /// The wheels' pace, that a stale step breaks.
+    wheel_pace: WheelPace,
     /// The wheels' distance scale, learnt from the fits.
     odometry_scale: OdometryScale,
     stats: FrontEndStats,
@@ -116,7 +119,8 @@ impl FrontEnd {
             velocity: Vector3::zeros(),
             last_odometry: None,
             odometry_anchor: None,
-            wheels_froze: false,
+            lag: Lag::OnTime,
+            wheel_pace: WheelPace::default(),
             odometry_scale,
             stats: FrontEndStats::default(),
         })
@@ -191,25 +195,20 @@ impl FrontEnd {
         let dt = elapsed_s.max(MIN_DT);
 
         let cv = constant_velocity_step(&self.velocity, dt, &self.config);
+        // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
+        let gap = elapsed_s > MAX_EXTRAPOLATION_S;
         let mut wheels_moved = None;
+        let mut caught_up = false;
         let mut odometry = match (scan.odometry, self.last_odometry) {
             (None, _) => Err(OdometryStatus::Absent),
             (Some(_), None) => Err(OdometryStatus::Started),
             (Some(current), Some(previous)) => odometry_step(&previous, &current, dt, &self.config)
                 .and_then(|step| {
                     wheels_moved = Some(step.increment);
-                    match self.catch_up(scan.stamp_ns, &step) {
-                        // Wheels that froze while the scans moved, moving again: their
-                        // step is the motion since the last reading believed.
-                        Some(anchor) => anchor.step_to(
-                            &current,
-                            scan.stamp_ns,
-                            &self.pose,
-                            &self.odometry_scale,
-                            &self.config,
-                        ),
-                        None => Ok(self.odometry_scale.apply(step)),
-                    }
+                    let (step, from_anchor) =
+                        self.wheel_step(&current, scan.stamp_ns, step, dt, gap)?;
+                    caught_up = from_anchor;
+                    Ok(step)
                 })
                 .map_err(OdometryStatus::Rejected),
         };
@@ -221,8 +220,6 @@ impl FrontEnd {
             Some(_) => {}
         }
 
-        // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
-        let gap = elapsed_s > MAX_EXTRAPOLATION_S;
         let mut prior = odometry.unwrap_or(cv);
         let seeded_by = if odometry.is_ok() {
             Seed::Odometry
@@ -289,7 +286,7 @@ impl FrontEnd {
                         // The scan measured the whole step: what the wheels' distance
                         // is worth.
                         if let (Ok(_), Some(moved), false) =
-                            (odometry, wheels_moved, self.wheels_froze)
+                            (odometry, wheels_moved, self.lag != Lag::OnTime)
                         {
                             self.odometry_scale
                                 .observe(&moved, &self.pose.between(&found.pose));
@@ -331,14 +328,30 @@ impl FrontEnd {
             None => self.odometry_anchor = None,
             Some(_) => {}
         }
-        if believed {
-            self.wheels_froze = false;
-        } else if let (
-            OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. }),
-            Some(moved),
-        ) = (output.odometry, wheels_moved)
-        {
-            self.wheels_froze = is_frozen(&moved);
+        match (output.odometry, wheels_moved) {
+            (OdometryStatus::Used, _) => {
+                match odometry {
+                    Ok(step) if !caught_up => self.wheel_pace.believe(&step.increment, dt),
+                    // A catch-up is no pace: the next step is not judged.
+                    _ => self.wheel_pace.forget(),
+                }
+                self.lag = Lag::OnTime;
+            }
+            (OdometryStatus::Absent | OdometryStatus::Started, _) => {
+                self.lag = Lag::OnTime;
+                self.wheel_pace.forget();
+            }
+            (OdometryStatus::Rejected(OdometryRejection::Stale { .. }), _) => {
+                self.lag = Lag::Stale;
+            }
+            (OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. }), Some(moved)) => {
+                self.lag = if is_frozen(&moved) {
+                    Lag::Frozen
+                } else {
+                    Lag::OnTime
+                }
+            }
+            (OdometryStatus::Rejected(_), _) => {}
         }
 
         let to_map = self.pose.frame_jacobian();
@@ -524,13 +537,76 @@ impl FrontEnd {
         at_fit >= WEAK_FIT_MIN_SCORE && at_odometry < WEAK_FIT_MARGIN * at_fit
     }
 
+    /// The wheels' step to the `current` reading at `stamp_ns` (`step` from the last
+    /// reading, `dt` seconds before), scaled, unless it breaks the wheels' pace; and
+    /// whether it is a catch-up, measured from the anchor.
+    fn wheel_step(
+        &self,
+        current: &OdometryInput,
+        stamp_ns: u64,
+        step: Step,
+        dt: f64,
+        gap: bool,
+    ) -> Result<(Step, bool), OdometryRejection> {
+        let paced = |step: Step| match self.pace_change(stamp_ns, &step, dt, gap) {
+            Some(acceleration) => Err(OdometryRejection::Stale { acceleration }),
+            None => Ok(step),
+        };
+        let plain = self.odometry_scale.apply(step);
+        let Some(anchor) = self.catch_up(stamp_ns, &step) else {
+            return paced(plain).map(|step| (step, false));
+        };
+        // Wheels that lagged the scans (froze, or stale), moving again: their step is the
+        // motion since the last reading believed ...
+        anchor
+            .step_to(
+                current,
+                stamp_ns,
+                &self.pose,
+                &self.odometry_scale,
+                &self.config,
+            )
+            .and_then(paced)
+            .map(|step| (step, true))
+            .or_else(|rejection| match rejection {
+                // ... unless that breaks the pace where this reading's own step does not:
+                // the wheels go on at the robot's pace, and what they missed stays missed.
+                OdometryRejection::Stale { .. } => paced(plain)
+                    .map(|step| (step, false))
+                    .map_err(|_| rejection),
+                other => Err(other),
+            })
+    }
+
+    /// The acceleration, m/s^2, the wheels' `step` over `dt` seconds would take from their
+    /// pace, when more than `max_linear_acceleration` allows: a stale reading. Not across a
+    /// `gap`, and only within [`STALE_WINDOW_NS`] of the last believed reading.
+    fn pace_change(&self, stamp_ns: u64, step: &Step, dt: f64, gap: bool) -> Option<f64> {
+        let recent = self
+            .odometry_anchor
+            .is_some_and(|anchor| stamp_ns.saturating_sub(anchor.stamp_ns) <= STALE_WINDOW_NS);
+        if gap || !recent {
+            return None;
+        }
+        self.wheel_pace.broken_by(
+            &step.increment,
+            dt,
+            self.config.max_linear_acceleration,
+            self.config.odometry_min_sigma_xy,
+        )
+    }
+
     /// The reading to measure the wheels' `step` to the scan at `stamp_ns` from instead of
-    /// the last one, when the wheels froze since it (recently) and `step` moves again.
+    /// the last one, when the wheels lag since it (recently): stale, or frozen and moving
+    /// again.
     fn catch_up(&self, stamp_ns: u64, step: &Step) -> Option<OdometryAnchor> {
         let anchor = self.odometry_anchor?;
-        let moving = !is_frozen(&step.increment);
-        (self.wheels_froze && moving && stamp_ns.saturating_sub(anchor.stamp_ns) <= MAX_CATCH_UP_NS)
-            .then_some(anchor)
+        let due = match self.lag {
+            Lag::OnTime => false,
+            Lag::Frozen => !is_frozen(&step.increment),
+            Lag::Stale => true,
+        };
+        (due && stamp_ns.saturating_sub(anchor.stamp_ns) <= MAX_CATCH_UP_NS).then_some(anchor)
     }
 
     /// Whether the scan just registered at `stamp_ns` joins the map: after enough motion,

@@ -50,6 +50,7 @@ pub mod prior;
 pub mod recovery;
 pub mod registration;
 pub mod search;
+mod wheel_pace;
 
 pub use config::FrontEndConfig;
 pub use error::InputError;

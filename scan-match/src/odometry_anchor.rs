@@ -17,6 +17,17 @@ use crate::prior::{OdometryRejection, Step, odometry_step};
 /// nanoseconds: longer, and the odometry's frame was reset rather than frozen.
 pub(crate) const MAX_CATCH_UP_NS: u64 = 2_000_000_000;
 
+/// How the wheels' readings since the anchor stand.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Lag {
+    /// Believed: the anchor is the last reading.
+    OnTime,
+    /// Standing still while the scans moved: measured from the anchor once they move again.
+    Frozen,
+    /// Stale (see [`crate::wheel_pace`]): measured from the anchor until believed again.
+    Stale,
+}
+
 /// A contradicted wheel step shorter than this (metres, radians) is wheels that froze.
 const FROZEN_M: f64 = 1e-3;
 const FROZEN_RAD: f64 = 1e-3;

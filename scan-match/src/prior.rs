@@ -26,6 +26,9 @@ pub enum OdometryRejection {
     Implausible,
     /// Far outside the scan match: the squared Mahalanobis distance.
     Inconsistent { mahalanobis_squared: f64 },
+    /// A change of pace no robot makes (see `max_linear_acceleration`): the acceleration
+    /// it would take, m/s^2. A reading that lags the scan, stale.
+    Stale { acceleration: f64 },
 }
 
 /// The odometry step between two readings, or why it cannot be one.

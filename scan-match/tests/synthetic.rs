@@ -213,7 +213,8 @@ fn odometry_outliers_are_rejected_and_counted_consistent_steps_used() {
     odo = odo.compose(&step);
     let out = feed(&mut front_end, truth, odo, &mut k);
     assert_eq!(out.odometry, OdometryStatus::Used);
-    // A plausible but wrong step, 15 cm sideways (15 sigma): the match overrules it.
+    // A step 15 cm sideways of the wheels' pace (the mean over their last 0.2 s, 0.15 s
+    // before this step's middle: 10 m/s^2): stale.
     truth = truth.compose(&step);
     odo = odo.compose(&step);
     let out = feed(
@@ -225,13 +226,37 @@ fn odometry_outliers_are_rejected_and_counted_consistent_steps_used() {
     assert!(
         matches!(
             out.odometry,
+            OdometryStatus::Rejected(OdometryRejection::Stale { acceleration })
+                if (acceleration - 10.0).abs() < 0.5
+        ),
+        "{out:?}"
+    );
+    assert_close(&out.increment, &step, 0.01, 0.005);
+    // The next reading is on course again: measured from the last one believed, used.
+    truth = truth.compose(&step);
+    odo = odo.compose(&step);
+    let out = feed(&mut front_end, truth, odo, &mut k);
+    assert_eq!(out.odometry, OdometryStatus::Used);
+    assert_close(&out.increment, &step, 0.01, 0.005);
+    // A step at the pace but turned 0.15 rad too far (15 sigma): the match overrules it.
+    truth = truth.compose(&step);
+    odo = odo.compose(&step);
+    let out = feed(
+        &mut front_end,
+        truth,
+        odo.compose(&Pose2::new(0.0, 0.0, 0.15)),
+        &mut k,
+    );
+    assert!(
+        matches!(
+            out.odometry,
             OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. })
         ),
         "{out:?}"
     );
     assert_close(&out.increment, &step, 0.01, 0.005);
     let stats = front_end.stats();
-    assert_eq!(stats.odometry_rejected, 6);
+    assert_eq!(stats.odometry_rejected, 7);
     assert_eq!(stats.failed_matches, 0);
     assert!(stats.odometry_used >= 5);
 }
@@ -386,11 +411,12 @@ fn wheels_that_freeze_and_catch_up_are_measured_from_before_they_froze() {
         }
         statuses.push(out.odometry);
     }
+    // Standing still at 0.8 m/s breaks the wheels' pace: stale.
     for (k, status) in statuses.iter().enumerate().take(9).skip(5) {
         assert!(
             matches!(
                 status,
-                OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. })
+                OdometryStatus::Rejected(OdometryRejection::Stale { .. })
             ),
             "{k}: {status:?}"
         );
@@ -398,6 +424,68 @@ fn wheels_that_freeze_and_catch_up_are_measured_from_before_they_froze() {
     // The catch-up agrees with the scans since scan 4: believed, not rejected as a jump.
     assert_eq!(statuses[9], OdometryStatus::Used);
     assert!(statuses[10..].iter().all(|s| *s == OdometryStatus::Used));
+}
+
+#[test]
+fn stale_wheel_readings_in_a_corridor_do_not_stop_the_robot() {
+    // mit-csail's odometry reaches some scans late: a reading stands still for a scan or
+    // two, then the wheels make up for it.
+    let walls = corridor();
+    let step = Pose2::new(0.12, 0.0, 0.0);
+    let truth: Vec<Pose2> =
+        std::iter::successors(Some(Pose2::new(0.0, 0.2, 0.0)), |p| Some(p.compose(&step)))
+            .take(14)
+            .collect();
+    // What the wheels had counted when each scan took its reading: 1.2 m/s, scan 4's count
+    // still at scans 5 and 6, on time again from scan 7.
+    let counted = |k: usize| 0.12 * if (5..=6).contains(&k) { 4 } else { k } as f64;
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let mut statuses = Vec::new();
+    for (k, pose) in truth.iter().enumerate() {
+        let wheels = odometry(Pose2::new(counted(k), 0.0, 0.0), 1e-4 * k as f64);
+        let ranges = raycast(&walls, pose, &SICK, 361, 0.0);
+        let out = front_end
+            .process(&scan(k as u64, &ranges, SICK, Some(wheels)))
+            .unwrap();
+        if k > 0 {
+            assert!(
+                matches!(out.status, MatchStatus::Degenerate { .. }),
+                "{k}: {out:?}"
+            );
+            // Along the corridor only the pace tells: the step is the robot's.
+            assert_close(&out.increment, &step, 0.01, 0.005);
+        }
+        statuses.push(out.odometry);
+    }
+    // The standing readings are stale; the one that makes up for them is measured from
+    // the last reading believed, and used.
+    for (k, status) in statuses.iter().enumerate().take(7).skip(5) {
+        assert!(
+            matches!(
+                status,
+                OdometryStatus::Rejected(OdometryRejection::Stale { .. })
+            ),
+            "{k}: {status:?}"
+        );
+    }
+    assert!(statuses[7..].iter().all(|s| *s == OdometryStatus::Used));
+    // Wheels that did stop are believed once they have stood still for longer than a
+    // stale reading lags.
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let mut stopped = Vec::new();
+    for k in 0..60usize {
+        let x = 0.12 * k.min(10) as f64;
+        let pose = Pose2::new(x, 0.2, 0.0);
+        let wheels = odometry(Pose2::new(x, 0.0, 0.0), 1e-4 * k as f64);
+        let ranges = raycast(&walls, &pose, &SICK, 361, 0.0);
+        let out = front_end
+            .process(&scan(k as u64, &ranges, SICK, Some(wheels)))
+            .unwrap();
+        stopped.push((out.odometry, front_end.pose()));
+    }
+    let (status, end) = stopped[59];
+    assert_eq!(status, OdometryStatus::Used);
+    assert!((end.x - 1.2).abs() < 0.05, "{end:?}");
 }
 
 #[test]
