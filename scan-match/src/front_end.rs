@@ -556,7 +556,7 @@ impl FrontEnd {
         let Some(anchor) = self.catch_up(stamp_ns, &step) else {
             return paced(plain).map(|step| (step, false));
         };
-        // Wheels that lagged the scans (froze, or stale), moving again: their step is the
+        // Wheels that lag the scans (stale, or frozen and moving again): their step is the
         // motion since the last reading believed ...
         anchor
             .step_to(
