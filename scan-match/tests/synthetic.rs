@@ -34,6 +34,20 @@ fn odometry(pose: Pose2, variance: f64) -> OdometryInput {
     }
 }
 
+/// Every odometry status of scans `range` is a stale reading's rejection.
+fn assert_stale(statuses: &[OdometryStatus], range: std::ops::Range<usize>) {
+    for k in range {
+        assert!(
+            matches!(
+                statuses[k],
+                OdometryStatus::Rejected(OdometryRejection::Stale { .. })
+            ),
+            "{k}: {:?}",
+            statuses[k]
+        );
+    }
+}
+
 fn assert_close(a: &Pose2, b: &Pose2, metres: f64, radians: f64) {
     assert!(
         (a.x - b.x).abs() < metres
@@ -412,15 +426,7 @@ fn wheels_that_freeze_and_catch_up_are_measured_from_before_they_froze() {
         statuses.push(out.odometry);
     }
     // Standing still at 0.8 m/s breaks the wheels' pace: stale.
-    for (k, status) in statuses.iter().enumerate().take(9).skip(5) {
-        assert!(
-            matches!(
-                status,
-                OdometryStatus::Rejected(OdometryRejection::Stale { .. })
-            ),
-            "{k}: {status:?}"
-        );
-    }
+    assert_stale(&statuses, 5..9);
     // The catch-up agrees with the scans since scan 4: believed, not rejected as a jump.
     assert_eq!(statuses[9], OdometryStatus::Used);
     assert!(statuses[10..].iter().all(|s| *s == OdometryStatus::Used));
@@ -459,15 +465,7 @@ fn stale_wheel_readings_in_a_corridor_do_not_stop_the_robot() {
     }
     // The standing readings are stale; the one that makes up for them is measured from
     // the last reading believed, and used.
-    for (k, status) in statuses.iter().enumerate().take(7).skip(5) {
-        assert!(
-            matches!(
-                status,
-                OdometryStatus::Rejected(OdometryRejection::Stale { .. })
-            ),
-            "{k}: {status:?}"
-        );
-    }
+    assert_stale(&statuses, 5..7);
     assert!(statuses[7..].iter().all(|s| *s == OdometryStatus::Used));
     // Wheels that did stop are believed once they have stood still for longer than a
     // stale reading lags.
