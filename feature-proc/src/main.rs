@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use feature_proc::{Extractor, FeatureConfig, ScanInput, scan_motion};
 use ipc_types::prelude::*;
-use scan_match::{FrontEnd, FrontEndConfig, FrontEndStats};
+use scan_match::{FrontEnd, FrontEndConfig, FrontEndStats, OdometryRejections};
 use slam_geom::ScanGeometry;
 use stage_kit::odometry_buffer::{OdometryBuffer, OdometryReading, RefusedReading};
 use stage_kit::{say, say_err};
@@ -301,7 +301,7 @@ fn front_end_summary(stats: &FrontEndStats, odometry_scale: f64) -> String {
         "feature-proc: summary of the scan-matching front end\n  \
          scans:           {} ({} matched, {} with a direction left to the prior, {} not \
          registered)\n  \
-         odometry steps:  {} used, {} rejected; wheel distances x {odometry_scale:.3} \
+         odometry steps:  {} used, {}; wheel distances x {odometry_scale:.3} \
          (learnt from the fits)\n  \
          keyframes:       {}\n  \
          time:            {per_scan_ms:.3} ms per scan",
@@ -310,9 +310,28 @@ fn front_end_summary(stats: &FrontEndStats, odometry_scale: f64) -> String {
         stats.degenerate,
         stats.failed_matches,
         stats.odometry_used,
-        stats.odometry_rejected,
+        rejected_summary(&stats.odometry_rejected),
         stats.keyframes,
     )
+}
+
+/// "12 rejected (9 stale, 3 inconsistent with the scan)": the reasons that occurred.
+fn rejected_summary(rejected: &OdometryRejections) -> String {
+    let reasons: Vec<String> = [
+        (rejected.stale, "stale"),
+        (rejected.inconsistent, "inconsistent with the scan"),
+        (rejected.implausible, "faster than a robot"),
+        (rejected.not_finite, "not finite"),
+    ]
+    .iter()
+    .filter(|(count, _)| *count > 0)
+    .map(|(count, why)| format!("{count} {why}"))
+    .collect();
+    if reasons.is_empty() {
+        "0 rejected".to_string()
+    } else {
+        format!("{} rejected ({})", rejected.total(), reasons.join(", "))
+    }
 }
 
 /// The extractor and the buffers and counts it works with.
@@ -382,4 +401,24 @@ fn publish_features(
     }
     counts.processed += 1;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_summary_names_the_reasons_steps_were_rejected() {
+        let none = OdometryRejections::default();
+        assert_eq!(rejected_summary(&none), "0 rejected");
+        let some = OdometryRejections {
+            stale: 9,
+            inconsistent: 3,
+            ..OdometryRejections::default()
+        };
+        assert_eq!(
+            rejected_summary(&some),
+            "12 rejected (9 stale, 3 inconsistent with the scan)"
+        );
+    }
 }

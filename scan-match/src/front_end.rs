@@ -645,7 +645,7 @@ impl FrontEnd {
         }
         match output.odometry {
             OdometryStatus::Used => stats.odometry_used += 1,
-            OdometryStatus::Rejected(_) => stats.odometry_rejected += 1,
+            OdometryStatus::Rejected(why) => stats.odometry_rejected.add(&why),
             OdometryStatus::Absent | OdometryStatus::Started => {}
         }
         if output.keyframe {

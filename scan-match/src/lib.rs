@@ -56,6 +56,8 @@ pub use config::FrontEndConfig;
 pub use error::InputError;
 pub use front_end::FrontEnd;
 pub use input::{OdometryInput, ScanInput};
-pub use output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
+pub use output::{
+    FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryRejections, OdometryStatus,
+};
 pub use prior::OdometryRejection;
 pub use stage_kit::SettingError;

@@ -85,8 +85,36 @@ pub struct FrontEndStats {
     pub degenerate: u64,
     pub failed_matches: u64,
     pub odometry_used: u64,
-    pub odometry_rejected: u64,
+    pub odometry_rejected: OdometryRejections,
     pub keyframes: u64,
     /// Total time in `process`, nanoseconds.
     pub busy_ns: u64,
+}
+
+/// Odometry steps not believed over a run, by why ([`OdometryRejection`]): a source whose
+/// readings come late shows as stale, one that disagrees with the scans as inconsistent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct OdometryRejections {
+    pub not_finite: u64,
+    pub implausible: u64,
+    pub inconsistent: u64,
+    pub stale: u64,
+}
+
+impl OdometryRejections {
+    /// Counts one rejection.
+    pub fn add(&mut self, rejection: &OdometryRejection) {
+        let count = match rejection {
+            OdometryRejection::NotFinite => &mut self.not_finite,
+            OdometryRejection::Implausible => &mut self.implausible,
+            OdometryRejection::Inconsistent { .. } => &mut self.inconsistent,
+            OdometryRejection::Stale { .. } => &mut self.stale,
+        };
+        *count += 1;
+    }
+
+    /// Every rejection, whatever the reason.
+    pub fn total(&self) -> u64 {
+        self.not_finite + self.implausible + self.inconsistent + self.stale
+    }
 }
