@@ -7,7 +7,7 @@ use scan_match::{FrontEndOutput, MatchStatus, OdometryStatus};
 /// odometry, as a [`ScanMotion`]; the reasons behind a failure or a rejection stay in the
 /// front end's counts.
 pub fn scan_motion(output: &FrontEndOutput) -> ScanMotion {
-    ScanMotion {
+    let mut motion = ScanMotion {
         pose: output.odom_from_robot.into(),
         increment: output.increment.into(),
         increment_covariance: covariance_to_row_major(&output.increment_covariance),
@@ -25,7 +25,10 @@ pub fn scan_motion(output: &FrontEndOutput) -> ScanMotion {
         },
         points: u32::try_from(output.points).unwrap_or(u32::MAX),
         inliers: u32::try_from(output.inliers).unwrap_or(u32::MAX),
-    }
+        ..ScanMotion::default()
+    };
+    motion.set_wheel_increment(output.wheel_increment.map(Into::into));
+    motion
 }
 
 #[cfg(test)]
@@ -46,6 +49,7 @@ mod tests {
             increment_covariance: Matrix3::new(1e-4, 2e-6, 0.0, 2e-6, 3e-4, 0.0, 0.0, 0.0, 5e-5),
             status,
             odometry,
+            wheel_increment: None,
             valid_beams: 180,
             points: 120,
             inliers: 95,
@@ -65,6 +69,14 @@ mod tests {
             [1e-4, 2e-6, 0.0, 2e-6, 3e-4, 0.0, 0.0, 0.0, 5e-5]
         );
         assert_eq!((motion.points, motion.inliers), (120, 95));
+        assert_eq!(motion.wheel_increment(), None);
+        let mut with_wheels = output(MatchStatus::Matched, OdometryStatus::Used);
+        with_wheels.wheel_increment = Some(Pose2::new(0.18, 0.001, 0.012));
+        let motion = scan_motion(&with_wheels);
+        assert_eq!(
+            motion.wheel_increment().map(Pose2::from),
+            Some(Pose2::new(0.18, 0.001, 0.012))
+        );
     }
 
     #[test]

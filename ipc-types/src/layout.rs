@@ -27,12 +27,14 @@ const _: () = {
     assert!(offset_of!(PoseEstimate, timing) == 232);
     assert!(offset_of!(PoseEstimate, localization) == 272);
 
-    assert!(size_of::<ScanMotion>() == 136);
+    assert!(size_of::<ScanMotion>() == 168);
+    assert!(offset_of!(ScanMotion, wheel_increment) == 120);
+    assert!(offset_of!(ScanMotion, has_wheel_increment) == 160);
     assert!(offset_of!(Features, odometry) == 88);
     assert!(offset_of!(Features, motion) == 192);
-    assert!(offset_of!(Features, lines) == 328);
+    assert!(offset_of!(Features, lines) == 360);
     assert!(
-        size_of::<Features>() == 328 + 88 * crate::MAX_LINES + 160 * crate::MAX_FEATURE_CORNERS
+        size_of::<Features>() == 360 + 88 * crate::MAX_LINES + 160 * crate::MAX_FEATURE_CORNERS
     );
     assert!(size_of::<WorldCorners>() == 72 + 32 * crate::MAX_WORLD_CORNERS);
     assert!(size_of::<MapSnapshot>() == 72 + 168 * crate::MAX_MAP_CORNERS);

@@ -145,10 +145,13 @@ fn features_round_trip() {
         pose: Pose2::new(3.0, 4.0, -1.0),
         increment: Pose2::new(0.05, -0.001, 0.01),
         increment_covariance: [1e-6, 0.0, 0.0, 0.0, 4e-6, 0.0, 0.0, 0.0, 1e-7],
+        wheel_increment: Pose2::new(0.07, 0.002, 0.012),
         match_status: ScanMotion::MATCH_DEGENERATE,
         odometry_status: ScanMotion::ODOMETRY_REJECTED,
         points: 300,
         inliers: 280,
+        has_wheel_increment: 1,
+        reserved: 0,
     }));
     let lines: Vec<Line> = (0..5)
         .map(|i| Line {

@@ -468,7 +468,7 @@ fn odometry_features_maps_and_world_corners_are_their_messages_in_serde_form() {
     assert_eq!(
         text(&features.to_record()),
         format!(
-            r#"{{"header":{},"scan_sent_ns":3,"processing_ns":4,"odometry":{{"pose":{{"x":1.0,"y":0.0,"yaw":0.0}},"covariance":[{}]}},"motion":{{"pose":{origin},"increment":{origin},"increment_covariance":[{}],"match_status":2,"odometry_status":0,"points":500,"inliers":480}},"lines":[{{"rho":2.0,"theta":0.5,"covariance":[1.0,0.0,0.0,0.5],"start":[1.0,1.0],"end":[2.0,0.5],"point_count":40}}],"corners":[{{{corner_json}}}]}}"#,
+            r#"{{"header":{},"scan_sent_ns":3,"processing_ns":4,"odometry":{{"pose":{{"x":1.0,"y":0.0,"yaw":0.0}},"covariance":[{}]}},"motion":{{"pose":{origin},"increment":{origin},"increment_covariance":[{}],"wheel_increment":{origin},"match_status":2,"odometry_status":0,"points":500,"inliers":480,"has_wheel_increment":0}},"lines":[{{"rho":2.0,"theta":0.5,"covariance":[1.0,0.0,0.0,0.5],"start":[1.0,1.0],"end":[2.0,0.5],"point_count":40}}],"corners":[{{{corner_json}}}]}}"#,
             head_json(9, "laser"),
             zeros(9),
             zeros(9)

@@ -171,6 +171,7 @@ impl FrontEnd {
             increment_covariance: floor,
             status: MatchStatus::First,
             odometry: OdometryStatus::Absent,
+            wheel_increment: None,
             valid_beams: extracted.valid_beams,
             points: points.len(),
             inliers: 0,
@@ -227,6 +228,8 @@ impl FrontEnd {
             Seed::ConstantVelocity
         };
         let mut registration = self.register(points, &prior, gap, seeded_by);
+        // The wheels' step as judged against the scan, even if the scan overrules it.
+        let judged = odometry.ok();
         if let Ok(step) = odometry {
             let second_opinion = Seed::SecondOpinion {
                 wheels_turn: step.increment.yaw,
@@ -312,6 +315,14 @@ impl FrontEnd {
         output.odometry = match odometry {
             Ok(_) => OdometryStatus::Used,
             Err(status) => status,
+        };
+        output.wheel_increment = match (output.odometry, judged) {
+            (
+                OdometryStatus::Used
+                | OdometryStatus::Rejected(OdometryRejection::Inconsistent { .. }),
+                Some(step),
+            ) => Some(step.increment),
+            _ => None,
         };
         let believed = matches!(
             output.odometry,

@@ -63,6 +63,12 @@ pub struct FrontEndOutput {
     pub increment_covariance: Matrix3<f64>,
     pub status: MatchStatus,
     pub odometry: OdometryStatus,
+    /// The wheels' step since the previous scan as the front end weighed it against the
+    /// scan (scaled by the learnt distance ratio; after stale or frozen readings, from the
+    /// last one believed), in the previous robot frame: present when the odometry was used,
+    /// or overruled by a clear fit. A second odometer whose errors are not the fit's: where
+    /// the two disagree, the motion is uncertain by as much.
+    pub wheel_increment: Option<Pose2>,
     /// Valid beams of the scan.
     pub valid_beams: usize,
     /// Points used for matching (valid, on a surface, one per voxel).

@@ -243,12 +243,15 @@ fn odometry_outliers_are_rejected_and_counted_consistent_steps_used() {
         "{out:?}"
     );
     assert_close(&out.increment, &step, 0.01, 0.005);
+    assert_eq!(out.wheel_increment, None, "a stale step is no odometer");
     // The next reading is on course again: measured from the last one believed, used.
     truth = truth.compose(&step);
     odo = odo.compose(&step);
     let out = feed(&mut front_end, truth, odo, &mut k);
     assert_eq!(out.odometry, OdometryStatus::Used);
     assert_close(&out.increment, &step, 0.01, 0.005);
+    let wheels = out.wheel_increment.expect("the wheels' step, used");
+    assert_close(&wheels, &step, 0.01, 0.005);
     // A step at the pace but turned 0.15 rad too far (15 sigma): the match overrules it.
     truth = truth.compose(&step);
     odo = odo.compose(&step);
@@ -266,6 +269,14 @@ fn odometry_outliers_are_rejected_and_counted_consistent_steps_used() {
         "{out:?}"
     );
     assert_close(&out.increment, &step, 0.01, 0.005);
+    // The overruled step is still the wheels' word, for whoever weighs both.
+    let wheels = out.wheel_increment.expect("the wheels' step, overruled");
+    assert_close(
+        &wheels,
+        &step.compose(&Pose2::new(0.0, 0.0, 0.15)),
+        1e-9,
+        1e-9,
+    );
     let stats = front_end.stats();
     assert_eq!(
         stats.odometry_rejected,

@@ -16,7 +16,7 @@ use crate::header::Header;
 /// The features of one scan, in the sensor frame.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
-#[type_name("slam::Features::v3")]
+#[type_name("slam::Features::v4")]
 pub struct Features {
     /// The source scan's header (sequence, stamp, frame); `sent_ns` is this message's.
     pub header: Header,

@@ -624,6 +624,7 @@ mod tests {
         let step = MeasuredMotion {
             increment: Pose2::new(0.1, 0.0, 0.02),
             covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-6, 1e-6, 1e-7)),
+            wheel_increment: None,
         };
         // A front end's first scan has no motion.
         let first = MeasuredMotion {
@@ -677,6 +678,7 @@ mod tests {
         let step = MeasuredMotion {
             increment: Pose2::new(0.05, 0.0, 0.0),
             covariance: Matrix3::identity() * 1e-6,
+            wheel_increment: None,
         };
         let observed = |update_min_distance: f64| {
             let config = SlamConfig {

@@ -22,6 +22,9 @@ pub struct OdometryInput {
 pub struct MeasuredMotion {
     pub increment: Pose2,
     pub covariance: Matrix3<f64>,
+    /// The wheels' step the front end weighed against the scan, when it had one it
+    /// believed or was overruled on (not a stale or implausible one).
+    pub wheel_increment: Option<Pose2>,
 }
 
 impl MeasuredMotion {
@@ -31,6 +34,7 @@ impl MeasuredMotion {
         Self {
             increment: Pose2::IDENTITY,
             covariance: Matrix3::zeros(),
+            wheel_increment: None,
         }
     }
 
@@ -47,12 +51,13 @@ impl MeasuredMotion {
 }
 
 impl From<&ipc_types::ScanMotion> for MeasuredMotion {
-    /// The step a features message carries; its pose in the front end's frame, statuses
+    /// The steps a features message carries; its pose in the front end's frame, statuses
     /// and counts are not the filter's business.
     fn from(motion: &ipc_types::ScanMotion) -> Self {
         Self {
             increment: motion.increment.into(),
             covariance: ipc_types::covariance_from_row_major(&motion.increment_covariance),
+            wheel_increment: motion.wheel_increment().map(Into::into),
         }
     }
 }
@@ -131,6 +136,10 @@ mod tests {
         assert_eq!(measured.increment, Pose2::new(0.3, -0.01, 0.02));
         assert_eq!(measured.covariance[(1, 0)], 1e-5);
         assert_eq!(measured.covariance[(1, 1)], 2e-4);
+        assert_eq!(measured.wheel_increment, None);
+        motion.set_wheel_increment(Some(Pose2::new(0.28, 0.0, 0.015).into()));
+        let measured = MeasuredMotion::from(&*motion);
+        assert_eq!(measured.wheel_increment, Some(Pose2::new(0.28, 0.0, 0.015)));
         let odometry = OdometryInput::from(ipc_types::OdometryAtScan {
             pose: Pose2::new(5.0, 6.0, -1.0).into(),
             covariance: [1.0, 0.0, 0.5, 0.0, 2.0, 0.0, 0.5, 0.0, 3.0],

@@ -226,6 +226,7 @@ mod tests {
         let drifting = MeasuredMotion {
             increment: Pose2::new(0.105, 0.0, 0.004),
             covariance: Matrix3::identity() * 1e-6,
+            wheel_increment: None,
         };
         let standing = MeasuredMotion {
             increment: Pose2::IDENTITY,
