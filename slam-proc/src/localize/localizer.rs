@@ -1,5 +1,6 @@
 //! Localization on a saved map: Monte Carlo localization (AMCL's scheme) over the map's
-//! occupancy grid. The particles move by the front end's measured steps, the scan's beams
+//! occupancy grid. The particles move by the front end's measured steps (spread between
+//! them and the wheels' where the front end weighed the wheels against the scan), the beams
 //! weight them through the grid's likelihood field (once converged, against the wall faces
 //! a beam going their way can end on: [`FacedField`]), and KLD-sampling sizes the particle
 //! set at each resampling: many while the pose is uncertain, few once it is not. The map is
