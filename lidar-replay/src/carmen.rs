@@ -13,16 +13,16 @@
 //!
 //! Stamps are the `ipc_timestamp`, kept to the nanosecond. Records come out in time order
 //! within a window ([`crate::reorder`]): a line written after later ones is put in its
-//! place, and one too late for that, or repeating a stamp, is dropped and counted. A `FLASER`
-//! line yields its odometry first and then its scan, both with the line's stamp, so a
-//! consumer has the odometry when the scan arrives; but once the log has given an `ODOM` line,
-//! odometry comes from `ODOM` lines only. Logs with both (ACES) copy into each `FLASER` the
-//! last `ODOM` reading before it, up to a tenth of a second stale, under the laser's stamp:
-//! the two sources together would zig-zag, and the `ODOM` lines are the readings at their
-//! true times. `ROBOTLASER1`'s robot pose is not published as odometry: a localizer may
-//! have corrected it, and logs that have such lines carry the raw odometry in `ODOM` lines.
-//! The laser's mounting offset (`laser_*` against `robot_*`) is not used either: the
-//! pipeline's sensor frame is the robot frame.
+//! place, and one too late for that, or repeating a stamp, is dropped and counted.
+//!
+//! A log may carry two odometry sources: `ODOM` lines, and the reading a scan line holds
+//! (`odom_*` of `FLASER`, `robot_*` of `ROBOTLASER1`, taken with the scan). One of them is
+//! published, as [`OdometryChoice`] says: the replay judges them by the scans before it
+//! starts ([`crate::odometry_judge`]), and corrects the chosen source's clock by the offset
+//! found. A scan line's reading goes out right before its scan, with the scan's stamp.
+//! Unjudged ([`OdometrySource::Auto`]), the scan lines' readings are used until the log gives
+//! an `ODOM` line, and the `ODOM` lines from then on. The laser's mounting offset (`laser_*`
+//! against `robot_*`) is not used: the pipeline's sensor frame is the robot frame.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::f64::consts::{PI, TAU};
@@ -30,6 +30,7 @@ use std::io::BufRead;
 
 use crate::error::{LineError, Malformation, ReadError};
 use crate::lines::{NumberedLines, snippet};
+use crate::odometry_judge::Verdict;
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
 use slam_geom::parse_stamp_ns;
@@ -64,8 +65,11 @@ pub struct CarmenReader<R> {
     /// The log's lines; [`crate::LogReader`] sets the stop and reads the counts here.
     pub(crate) lines: NumberedLines<R>,
     window: ReorderWindow,
-    /// Whether an `ODOM` line has been read: from then on the odometry comes from those
-    /// lines alone.
+    /// Which odometry is published, and its clock's offset.
+    odometry: OdometryChoice,
+    /// The judgement the choice came from, for the console.
+    verdict: Option<Verdict>,
+    /// Whether an `ODOM` line has been read (what [`OdometrySource::Auto`] goes by).
     odom_lines: bool,
     /// Records let out of the window and not yet handed out (a `FLASER`'s scan waits behind
     /// its odometry).
@@ -90,12 +94,31 @@ impl<R: BufRead> CarmenReader<R> {
             lines: NumberedLines::new(reader),
             window: ReorderWindow::new(reorder),
             ready: VecDeque::new(),
+            odometry: OdometryChoice::default(),
+            verdict: None,
             odom_lines: false,
             last_scan: None,
             skipped: BTreeMap::new(),
             ended: false,
             stopped: false,
         }
+    }
+
+    /// Publishes the odometry `choice` names (by default [`OdometrySource::Auto`]).
+    pub fn with_odometry(mut self, choice: OdometryChoice) -> Self {
+        self.odometry = choice;
+        self
+    }
+
+    /// Keeps the judgement the odometry choice came from.
+    pub(crate) fn judged(mut self, verdict: Verdict) -> Self {
+        self.verdict = Some(verdict);
+        self
+    }
+
+    /// What the judgement of the odometry found, if it was judged.
+    pub fn verdict(&self) -> Option<&Verdict> {
+        self.verdict.as_ref()
     }
 
     /// Record types skipped so far (`PARAM`, `SYNC`, ...) and how many lines of each.
@@ -137,36 +160,65 @@ impl<R: BufRead> CarmenReader<R> {
     }
 }
 
+/// Where a log's published odometry comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OdometrySource {
+    /// The scan lines' own readings until an `ODOM` line appears, the `ODOM` lines after.
+    #[default]
+    Auto,
+    /// `ODOM` lines only.
+    OdomLines,
+    /// The reading in each scan line only (`FLASER` `odom_*`, `ROBOTLASER1` `robot_*`).
+    ScanLines,
+}
+
+/// The odometry a replay publishes, and by how much its stamps lead the laser's: a reading
+/// stamped `t` was taken at `t - lead_ns` in the laser's clock.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct OdometryChoice {
+    pub source: OdometrySource,
+    pub lead_ns: i64,
+}
+
+impl OdometryChoice {
+    /// `odometry` on the laser's clock.
+    fn on_laser_clock(&self, mut odometry: OdometryRecord) -> OdometryRecord {
+        odometry.stamp_ns = odometry.stamp_ns.saturating_add_signed(-self.lead_ns);
+        odometry
+    }
+}
+
+/// One CARMEN record this reader uses.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Parsed {
+    /// A scan and the odometry reading its line carries, if any.
+    Scan(ScanRecord, Option<OdometryRecord>),
+    /// An `ODOM` line.
+    Odom(OdometryRecord),
+}
+
 /// Parses one non-comment line: `Ok(None)` for a record type that is skipped (and counted in
 /// `skipped`).
-/// `odom_lines` says whether an `ODOM` line has been read; from then on a `FLASER` line's
-/// odometry is not used (see the module's documentation).
-fn parse_line(
+pub(crate) fn parse_record(
     line: u64,
     text: &str,
     skipped: &mut BTreeMap<String, u64>,
-    odom_lines: &mut bool,
-) -> Result<Option<Entry>, LineError> {
+) -> Result<Option<Parsed>, LineError> {
     let tokens: Vec<&str> = text.split_whitespace().collect();
     let Some(&kind) = tokens.first() else {
         return Ok(None);
     };
     let mut fields = Fields::new(line, kind, &tokens[1..]);
-    let entry = match kind {
+    let parsed = match kind {
         "FLASER" => {
             let (odometry, scan) = parse_flaser(&mut fields)?;
-            if *odom_lines {
-                Entry::Scan(scan)
-            } else {
-                Entry::OdometryAndScan(odometry, scan)
-            }
+            Parsed::Scan(scan, Some(odometry))
         }
-        "ROBOTLASER1" => Entry::Scan(parse_robotlaser1(&mut fields)?),
-        "ODOM" => {
-            let odometry = parse_odom(&mut fields)?;
-            *odom_lines = true;
-            Entry::Odometry(odometry)
+        "ROBOTLASER1" => {
+            let (odometry, scan) = parse_robotlaser1(&mut fields)?;
+            Parsed::Scan(scan, Some(odometry))
         }
+        "ODOM" => Parsed::Odom(parse_odom(&mut fields)?),
         other if is_record_name(other) => {
             *skipped.entry(other.to_owned()).or_default() += 1;
             return Ok(None);
@@ -179,7 +231,28 @@ fn parse_line(
             ));
         }
     };
-    Ok(Some(entry))
+    Ok(Some(parsed))
+}
+
+/// What a parsed record puts in the window under the odometry `choice`; `odom_lines` says
+/// whether an `ODOM` line has been read (set here).
+fn entry(parsed: Parsed, choice: &OdometryChoice, odom_lines: &mut bool) -> Option<Entry> {
+    use OdometrySource::{Auto, OdomLines, ScanLines};
+    match (parsed, choice.source) {
+        (Parsed::Scan(scan, Some(odometry)), ScanLines) => Some(Entry::OdometryAndScan(
+            choice.on_laser_clock(odometry),
+            scan,
+        )),
+        (Parsed::Scan(scan, Some(odometry)), Auto) if !*odom_lines => {
+            Some(Entry::OdometryAndScan(odometry, scan))
+        }
+        (Parsed::Scan(scan, _), _) => Some(Entry::Scan(scan)),
+        (Parsed::Odom(odometry), Auto | OdomLines) => {
+            *odom_lines = true;
+            Some(Entry::Odometry(choice.on_laser_clock(odometry)))
+        }
+        (Parsed::Odom(_), ScanLines) => None,
+    }
 }
 
 impl<R: BufRead> Iterator for CarmenReader<R> {
@@ -209,6 +282,7 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
                 lines,
                 skipped,
                 odom_lines,
+                odometry,
                 ..
             } = self;
             let parsed = match lines.next_line() {
@@ -217,7 +291,8 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
                     if text.is_empty() || text.starts_with('#') {
                         continue;
                     }
-                    parse_line(line, text, skipped, odom_lines)
+                    parse_record(line, text, skipped)
+                        .map(|parsed| parsed.and_then(|p| entry(p, odometry, odom_lines)))
                 }
                 Ok(Some((_, Err(e)))) => Err(e),
                 Ok(None) => {
@@ -431,7 +506,7 @@ fn parse_flaser(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRecord),
     Ok((odometry, scan))
 }
 
-fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<ScanRecord, LineError> {
+fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRecord), LineError> {
     fields.skip("the laser type", 1)?;
     let start_angle = fields.number("start_angle")?;
     let _fov = fields.number("fov")?;
@@ -466,13 +541,25 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<ScanRecord, LineError> {
     if remissions.len() != n {
         remissions.clear();
     }
-    fields.skip(
-        "laser pose, robot pose, tv, rv, forward_safety, side_safety, turn_axis",
-        11,
-    )?;
+    fields.skip("laser_x laser_y laser_theta", 3)?;
+    let x = fields.number("robot_x")?;
+    let y = fields.number("robot_y")?;
+    let theta = fields.number("robot_theta")?;
+    let linear_velocity = fields.number("tv")?;
+    let angular_velocity = fields.number("rv")?;
+    fields.skip("forward_safety, side_safety, turn_axis", 3)?;
     let stamp_ns = fields.stamp()?;
     fields.finish()?;
-    Ok(ScanRecord {
+    let odometry = OdometryRecord {
+        line: fields.line,
+        stamp_ns,
+        x,
+        y,
+        yaw: wrap_angle(theta),
+        linear_velocity,
+        angular_velocity,
+    };
+    let scan = ScanRecord {
         line: fields.line,
         stamp_ns,
         // CARMEN places beam i at start_angle + i * angular_res, as here; each line has its
@@ -487,7 +574,8 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<ScanRecord, LineError> {
         },
         ranges,
         intensities: remissions,
-    })
+    };
+    Ok((odometry, scan))
 }
 
 fn parse_odom(fields: &mut Fields<'_>) -> Result<OdometryRecord, LineError> {
@@ -669,10 +757,16 @@ mod tests {
         let line = "ROBOTLASER1 0 -1.25 2.5 0.0125 50.0 0.01 0 3 1.5 50.0 2.5 \
                     3 10 20 30 0.1 0 0 1 2 0.5 0.3 0.1 0 0 0 0.000001 host 5.5";
         let records = read(line);
-        let Ok(LogRecord::Scan(scan)) = &records[0] else {
+        let [Ok(LogRecord::Odometry(odometry)), Ok(LogRecord::Scan(scan))] = &records[..] else {
             panic!("{records:?}");
         };
-        assert_eq!(records.len(), 1, "no odometry from ROBOTLASER1");
+        // Without ODOM lines the robot pose of the line is the odometry, at the scan's stamp.
+        assert_eq!(odometry.pose(), slam_geom::Pose2::new(1.0, 2.0, 0.5));
+        assert_eq!(
+            (odometry.linear_velocity, odometry.angular_velocity),
+            (0.3, 0.1)
+        );
+        assert_eq!(odometry.stamp_ns, 1_000);
         assert_eq!(scan.stamp_ns, 1_000);
         assert_eq!(scan.geometry.angle_min, -1.25);
         assert_eq!(scan.geometry.angle_increment, 0.0125);
@@ -683,11 +777,66 @@ mod tests {
         let without = "ROBOTLASER1 0 -1.5 3.0 1.5 50.0 0.01 0 3 1 2 3 0 \
                        0 0 0 1 2 0.5 0.3 0.1 0 0 0 7.25 host 5.5";
         let records = read(without);
-        let Ok(LogRecord::Scan(scan)) = &records[0] else {
+        let Ok(LogRecord::Scan(scan)) = &records[1] else {
             panic!("{records:?}");
         };
         assert!(scan.intensities.is_empty());
         assert_eq!(scan.stamp_ns, 7_250_000_000);
+    }
+
+    #[test]
+    fn odom_lines_take_over_from_the_scan_lines_readings_unless_judged_otherwise() {
+        let text = [
+            robotlaser1(-1.5, 0.5, 8.0, &["1", "2", "3"], "1.0"),
+            "ODOM 5 6 0.2 0 0 0 1.05 host 0".to_owned(),
+            robotlaser1(-1.5, 0.5, 8.0, &["1", "2", "3"], "1.1"),
+        ]
+        .join("\n");
+        let kinds = |choice: OdometryChoice| -> Vec<(char, u64)> {
+            CarmenReader::new(text.as_bytes())
+                .with_odometry(choice)
+                .map(|r| match r.expect("well-formed") {
+                    LogRecord::Odometry(o) => ('o', o.stamp_ns),
+                    LogRecord::Scan(s) => ('s', s.stamp_ns),
+                })
+                .collect()
+        };
+        let auto = kinds(OdometryChoice::default());
+        assert_eq!(
+            auto,
+            [
+                ('o', 1_000_000_000),
+                ('s', 1_000_000_000),
+                ('o', 1_050_000_000),
+                ('s', 1_100_000_000)
+            ]
+        );
+        let scan_lines = kinds(OdometryChoice {
+            source: OdometrySource::ScanLines,
+            lead_ns: 0,
+        });
+        assert_eq!(
+            scan_lines,
+            [
+                ('o', 1_000_000_000),
+                ('s', 1_000_000_000),
+                ('o', 1_100_000_000),
+                ('s', 1_100_000_000)
+            ]
+        );
+        // ODOM lines 20 ms ahead of the laser: their reading is put 20 ms earlier.
+        let odom = kinds(OdometryChoice {
+            source: OdometrySource::OdomLines,
+            lead_ns: 20_000_000,
+        });
+        assert_eq!(
+            odom,
+            [
+                ('s', 1_000_000_000),
+                ('o', 1_030_000_000),
+                ('s', 1_100_000_000)
+            ]
+        );
     }
 
     /// A `ROBOTLASER1` line with `ranges`, no remissions, stamped `stamp`.

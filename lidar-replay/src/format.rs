@@ -8,6 +8,7 @@ use std::path::Path;
 use crate::carmen::CarmenReader;
 use crate::error::{CheckError, OpenError, ReadError};
 use crate::lines::{NumberedLines, StopFlag, never};
+use crate::odometry_judge::{self, Verdict};
 use crate::record::LogRecord;
 use crate::reorder::{ReorderConfig, ReorderCounts};
 use crate::seed_csv::SeedCsvReader;
@@ -101,6 +102,24 @@ impl<R: BufRead> LogReader<R> {
                 Self::Carmen(Box::new(CarmenReader::with_reorder(reader, reorder)))
             }
             LogFormat::Mcap => Self::NotText { told: false },
+        }
+    }
+
+    /// Publishes the odometry `verdict` chose (CARMEN logs; others have one source).
+    pub fn with_odometry_verdict(mut self, verdict: Verdict) -> Self {
+        if let Self::Carmen(reader) = self {
+            self = Self::Carmen(Box::new(
+                reader.with_odometry(verdict.choice).judged(verdict),
+            ));
+        }
+        self
+    }
+
+    /// What the judgement of the log's odometry found, if it was judged.
+    pub fn odometry_verdict(&self) -> Option<&Verdict> {
+        match self {
+            Self::Carmen(reader) => reader.verdict(),
+            _ => None,
         }
     }
 
@@ -262,8 +281,16 @@ pub fn open_log_until(
             path: path.to_path_buf(),
         },
     })?;
+    let verdict = match format {
+        LogFormat::Carmen => odometry_judge::judge(open()?, stop),
+        LogFormat::SeedCsv | LogFormat::Mcap => None,
+    };
     // Read again from the top, so the lines looked at are replayed and reported as usual.
-    Ok(LogReader::with_reorder(format, open()?, reorder).stop_when(stop))
+    let reader = LogReader::with_reorder(format, open()?, reorder).stop_when(stop);
+    Ok(match verdict {
+        Some(verdict) => reader.with_odometry_verdict(verdict),
+        None => reader,
+    })
 }
 
 #[cfg(test)]

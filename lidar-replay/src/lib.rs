@@ -34,6 +34,7 @@ mod error;
 mod fill;
 mod format;
 mod lines;
+pub mod odometry_judge;
 mod odometry_noise;
 mod pacing;
 mod record;
@@ -41,7 +42,7 @@ pub mod reorder;
 pub mod seed_csv;
 mod summary;
 
-pub use carmen::CarmenReader;
+pub use carmen::{CarmenReader, OdometryChoice, OdometrySource};
 pub use degradation::{Degradation, DegradationError};
 pub use error::{CheckError, LineError, Malformation, OpenError, ReadError};
 pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};
@@ -50,6 +51,7 @@ pub use format::{
     open_log_until,
 };
 pub use lines::{MAX_LINE_BYTES, StopFlag};
+pub use odometry_judge::Verdict;
 pub use odometry_noise::LOG_ODOMETRY_NOISE;
 pub use pacing::{RATE_RANGE, SPEED_FACTOR, check_rate, parse_rate};
 pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};

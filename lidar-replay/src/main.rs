@@ -236,6 +236,11 @@ fn replay_log(args: &Args) -> Result<()> {
         }
         Err(e) => return Err(e.into()),
     };
+    if let Some(verdict) = log.odometry_verdict()
+        && !args.no_odometry
+    {
+        say(&format!("lidar-replay: {}", verdict.describe()));
+    }
     let mut streams = Streams::open(args, args.format.can_have_odometry() && !args.no_odometry)?;
     let mut odometry_covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut summary = ReplaySummary {

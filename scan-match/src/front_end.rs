@@ -21,13 +21,10 @@ use crate::prior::{
 };
 use crate::recovery::{RecoveryWindow, rank, recover};
 use crate::registration::{Registration, RegistrationParams, register};
+use crate::scan_clock::ScanClock;
 use crate::search::{Window, score_sample, search_sample, subsample};
 use crate::wheel_pace::{STALE_WINDOW_NS, WheelPace};
 use stage_kit::SettingError;
-
-/// Steps closer in time than this (repeated or reordered stamps) are timed as this long,
-/// and teach nothing about the velocity.
-pub(crate) const MIN_DT: f64 = 1e-3;
 
 /// The correlative search runs only when fewer of the scan's points than this (weighted
 /// by closeness) lie near the map at the prior's prediction.
@@ -80,6 +77,8 @@ pub struct FrontEnd {
     extractor: Extractor,
     pose: Pose2,
     last_stamp_ns: Option<u64>,
+    /// The time between scans the motion model uses.
+    clock: ScanClock,
     /// Stamp of the newest keyframe.
     keyframe_stamp_ns: u64,
     /// `(vx, vy, yaw rate)` in the robot frame, from the last step.
@@ -115,6 +114,7 @@ impl FrontEnd {
             extractor: Extractor::default(),
             pose: Pose2::IDENTITY,
             last_stamp_ns: None,
+            clock: ScanClock::default(),
             keyframe_stamp_ns: 0,
             velocity: Vector3::zeros(),
             last_odometry: None,
@@ -193,7 +193,7 @@ impl FrontEnd {
             return Ok(self.finish(output, start));
         };
         let elapsed_s = scan.stamp_ns.saturating_sub(last_stamp_ns) as f64 * 1e-9;
-        let dt = elapsed_s.max(MIN_DT);
+        let dt = self.clock.interval(elapsed_s);
 
         let cv = constant_velocity_step(&self.velocity, dt, &self.config);
         // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
@@ -372,9 +372,7 @@ impl FrontEnd {
             &(to_map.transpose() * covariance * to_map),
             &floor.diagonal(),
         );
-        if elapsed_s >= MIN_DT {
-            self.velocity = Vector3::new(increment.x, increment.y, increment.yaw) / elapsed_s;
-        }
+        self.velocity = Vector3::new(increment.x, increment.y, increment.yaw) / dt;
         self.pose = pose;
         self.last_stamp_ns = Some(scan.stamp_ns);
         output.odom_from_robot = pose;

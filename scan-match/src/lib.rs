@@ -49,6 +49,7 @@ pub mod points;
 pub mod prior;
 pub mod recovery;
 pub mod registration;
+mod scan_clock;
 pub mod search;
 mod wheel_pace;
 

@@ -8,10 +8,10 @@
 use slam_geom::Pose2;
 
 use crate::config::FrontEndConfig;
-use crate::front_end::MIN_DT;
 use crate::input::OdometryInput;
 use crate::odometry_scale::OdometryScale;
 use crate::prior::{OdometryRejection, Step, odometry_step};
+use crate::scan_clock::MIN_DT;
 
 /// A step is measured from the last odometry reading believed for at most this long,
 /// nanoseconds: longer, and the odometry's frame was reset rather than frozen.

@@ -54,6 +54,9 @@ pub fn load_degraded(
 ) -> Result<Vec<LoggedScan>> {
     let reader = open_log(format, path, ReorderConfig::default())
         .with_context(|| format!("opening {}", path.display()))?;
+    if let Some(verdict) = reader.odometry_verdict() {
+        eprintln!("{}", verdict.describe());
+    }
     let mut covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut track = OdometryBuffer::new();
     let mut scans = Vec::new();
