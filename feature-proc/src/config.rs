@@ -54,12 +54,11 @@ pub struct FeatureConfig {
 impl Default for FeatureConfig {
     fn default() -> Self {
         Self {
-            // Measured on the whole pipeline: 30 m maps far, flickering corners of the real
-            // recording twice; the course's 15 m costs the simulated office its long
-            // sightlines (ATE 0.08 m instead of 0.02 m); 25 m has neither problem.
+            // Far corners flicker (their two walls are few, far-apart beams), while a short
+            // reach loses a building's long sightlines.
             max_range: 25.0,
-            // The Hokuyo's residuals about long walls in seed-hall are 6-14 mm; 20 mm leaves
-            // room for walls that are not quite flat.
+            // A Hokuyo's residuals about long flat walls are about a centimetre; the rest
+            // is room for walls that are not quite flat.
             range_sigma: 0.02,
             bearing_sigma: 0.0002,
             // Below Borges & Aldon's 10 degrees: walls seen at a grazing angle (pillar

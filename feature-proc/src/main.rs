@@ -220,6 +220,8 @@ impl Counts {
 struct PendingScan {
     header: Header,
     geometry: ScanGeometry,
+    /// Where the sensor sits on the robot.
+    robot_from_sensor: slam_geom::Pose2,
     ranges: Vec<f32>,
     arrived: Instant,
 }
@@ -232,6 +234,7 @@ impl PendingScan {
         Self {
             header: scan.header,
             geometry: scan.geometry(),
+            robot_from_sensor: scan.robot_from_sensor.into(),
             ranges: buffer,
             arrived: Instant::now(),
         }
@@ -271,9 +274,8 @@ fn register(
         stamp_ns: scan.header.stamp_ns,
         geometry: scan.geometry,
         ranges: &scan.ranges,
-        odometry: odometry.map(|o| scan_match::OdometryInput {
-            odom_from_robot: o.pose,
-            covariance: o.covariance,
+        odometry: odometry.map(|o| {
+            scan_match::OdometryInput::of_sensor(o.pose, o.covariance, &scan.robot_from_sensor)
         }),
     };
     match front_end.process(&input) {

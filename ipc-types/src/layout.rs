@@ -16,10 +16,11 @@ const _: () = {
     assert!(size_of::<Line>() == 88);
     assert!(size_of::<StageTiming>() == 40);
 
-    assert!(size_of::<LaserScan>() == 64 + 32 + 2 * 4 * crate::MAX_BEAMS);
+    assert!(size_of::<LaserScan>() == 64 + 56 + 2 * 4 * crate::MAX_BEAMS);
     assert!(align_of::<LaserScan>() == 8);
-    assert!(offset_of!(LaserScan, beam_count) == 88);
-    assert!(offset_of!(LaserScan, ranges) == 96);
+    assert!(offset_of!(LaserScan, robot_from_sensor) == 88);
+    assert!(offset_of!(LaserScan, beam_count) == 112);
+    assert!(offset_of!(LaserScan, ranges) == 120);
 
     assert!(size_of::<Odometry>() == 176);
     assert!(size_of::<GroundTruthPose>() == 88);

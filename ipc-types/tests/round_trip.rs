@@ -115,6 +115,7 @@ fn too_many_beams_is_an_error_not_a_panic() {
         scan_time: 0.0,
         range_min: 0.0,
         range_max: 1.0,
+        robot_from_sensor: Default::default(),
         ranges: Cow::Owned(vec![1.0; 3]),
         intensities: Cow::Owned(vec![1.0; 2]),
     };

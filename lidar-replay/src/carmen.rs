@@ -33,15 +33,14 @@ use crate::lines::{NumberedLines, snippet};
 use crate::odometry_judge::Verdict;
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
-use slam_geom::parse_stamp_ns;
 use slam_geom::wrap_angle;
+use slam_geom::{Pose2, parse_stamp_ns};
 
 /// Longest range of a `FLASER` scan; readings at or beyond it become +inf (no return). The
 /// SICK LMS 2xx of these logs reports "no return" as 81.91 m (8191 cm, its largest code),
-/// but CARMEN loggers that clip at their `laser_max_range` write that value instead: ACES
-/// has 11 139 readings of exactly 50.00 m, which are no returns, not walls. Real returns
-/// beyond 50 m are rare indoors (the longest of MIT CSAIL is 42.4 m) and lose only a point,
-/// where a phantom return would add one.
+/// but CARMEN loggers that clip at their `laser_max_range` write that value instead, and
+/// those readings are no returns, not walls. Real returns beyond 50 m are rare indoors and
+/// lose only a point, where a phantom return would add one.
 pub const FLASER_RANGE_MAX: f64 = 50.0;
 
 /// Bearing step of a `FLASER` scan, from its beam count: the SICK LMS modes over a 180-degree
@@ -69,6 +68,8 @@ pub struct CarmenReader<R> {
     odometry: OdometryChoice,
     /// The judgement the choice came from, for the console.
     verdict: Option<Verdict>,
+    /// The `FLASER` laser's mount, from the log's `PARAM` lines so far.
+    front_laser: FrontLaser,
     /// Whether an `ODOM` line has been read (what [`OdometrySource::Auto`] goes by).
     odom_lines: bool,
     /// Records let out of the window and not yet handed out (a `FLASER`'s scan waits behind
@@ -96,6 +97,7 @@ impl<R: BufRead> CarmenReader<R> {
             ready: VecDeque::new(),
             odometry: OdometryChoice::default(),
             verdict: None,
+            front_laser: FrontLaser::default(),
             odom_lines: false,
             last_scan: None,
             skipped: BTreeMap::new(),
@@ -188,6 +190,30 @@ impl OdometryChoice {
     }
 }
 
+/// Where a log's `FLASER` laser sits: `PARAM robot_frontlaser_offset` metres ahead of the
+/// robot's origin, facing forward (CARMEN's convention); at the origin until a log says.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct FrontLaser {
+    offset: f64,
+}
+
+impl FrontLaser {
+    fn robot_from_sensor(&self) -> Pose2 {
+        Pose2::new(self.offset, 0.0, 0.0)
+    }
+
+    /// Takes the offset from a `PARAM name value ...` line's fields, if it names it with a
+    /// finite value (a malformed PARAM is one the replay does not use anyway).
+    fn read_param(&mut self, fields: &[&str]) {
+        if let ["robot_frontlaser_offset", value, ..] = fields
+            && let Ok(offset) = value.parse::<f64>()
+            && offset.is_finite()
+        {
+            self.offset = offset;
+        }
+    }
+}
+
 /// One CARMEN record this reader uses.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Parsed {
@@ -203,6 +229,7 @@ pub(crate) fn parse_record(
     line: u64,
     text: &str,
     skipped: &mut BTreeMap<String, u64>,
+    mount: &mut FrontLaser,
 ) -> Result<Option<Parsed>, LineError> {
     let tokens: Vec<&str> = text.split_whitespace().collect();
     let Some(&kind) = tokens.first() else {
@@ -211,7 +238,8 @@ pub(crate) fn parse_record(
     let mut fields = Fields::new(line, kind, &tokens[1..]);
     let parsed = match kind {
         "FLASER" => {
-            let (odometry, scan) = parse_flaser(&mut fields)?;
+            let (odometry, mut scan) = parse_flaser(&mut fields)?;
+            scan.robot_from_sensor = mount.robot_from_sensor();
             Parsed::Scan(scan, Some(odometry))
         }
         "ROBOTLASER1" => {
@@ -220,6 +248,9 @@ pub(crate) fn parse_record(
         }
         "ODOM" => Parsed::Odom(parse_odom(&mut fields)?),
         other if is_record_name(other) => {
+            if other == "PARAM" {
+                mount.read_param(&tokens[1..]);
+            }
             *skipped.entry(other.to_owned()).or_default() += 1;
             return Ok(None);
         }
@@ -283,6 +314,7 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
                 skipped,
                 odom_lines,
                 odometry,
+                front_laser,
                 ..
             } = self;
             let parsed = match lines.next_line() {
@@ -291,7 +323,7 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
                     if text.is_empty() || text.starts_with('#') {
                         continue;
                     }
-                    parse_record(line, text, skipped)
+                    parse_record(line, text, skipped, front_laser)
                         .map(|parsed| parsed.and_then(|p| entry(p, odometry, odom_lines)))
                 }
                 Ok(Some((_, Err(e)))) => Err(e),
@@ -502,6 +534,8 @@ fn parse_flaser(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRecord),
         },
         ranges,
         intensities: Vec::new(),
+        // Set by the reader from the log's `robot_frontlaser_offset`.
+        robot_from_sensor: Pose2::IDENTITY,
     };
     Ok((odometry, scan))
 }
@@ -541,7 +575,11 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRec
     if remissions.len() != n {
         remissions.clear();
     }
-    fields.skip("laser_x laser_y laser_theta", 3)?;
+    let laser = Pose2::new(
+        fields.number("laser_x")?,
+        fields.number("laser_y")?,
+        wrap_angle(fields.number("laser_theta")?),
+    );
     let x = fields.number("robot_x")?;
     let y = fields.number("robot_y")?;
     let theta = fields.number("robot_theta")?;
@@ -574,6 +612,8 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRec
         },
         ranges,
         intensities: remissions,
+        // The laser's pose against the robot's, both by the same odometry.
+        robot_from_sensor: odometry.pose().between(&laser),
     };
     Ok((odometry, scan))
 }
@@ -782,6 +822,40 @@ mod tests {
         };
         assert!(scan.intensities.is_empty());
         assert_eq!(scan.stamp_ns, 7_250_000_000);
+    }
+
+    #[test]
+    fn the_front_laser_offset_places_flaser_scans_on_the_robot() {
+        let text = [
+            flaser(&[], "0 0 0", "1.0"),
+            "PARAM robot_frontlaser_offset 0.25 host 0".to_owned(),
+            "PARAM robot_frontlaser_offset nonsense host 0".to_owned(),
+            flaser(&[], "0 0 0", "1.1"),
+        ]
+        .join("\n");
+        let mounts: Vec<Pose2> = read(&text)
+            .into_iter()
+            .filter_map(|r| match r {
+                Ok(LogRecord::Scan(scan)) => Some(scan.robot_from_sensor),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(mounts, [Pose2::IDENTITY, Pose2::new(0.25, 0.0, 0.0)]);
+    }
+
+    #[test]
+    fn robotlaser1_places_its_laser_by_the_laser_and_robot_poses() {
+        // The laser at (1.2, 2.1, 0.6) where the robot is at (1, 2, 0.5).
+        let line = "ROBOTLASER1 0 -1.5 3.0 1.5 50.0 0.01 0 3 1 2 3 0 \
+                    1.2 2.1 0.6 1 2 0.5 0.3 0.1 0 0 0 7.25 host 5.5";
+        let records = read(line);
+        let Ok(LogRecord::Scan(scan)) = &records[1] else {
+            panic!("{records:?}");
+        };
+        let robot = Pose2::new(1.0, 2.0, 0.5);
+        let laser = robot.compose(&scan.robot_from_sensor);
+        assert!((laser.x - 1.2).abs() < 1e-12 && (laser.y - 2.1).abs() < 1e-12);
+        assert!((laser.yaw - 0.6).abs() < 1e-12);
     }
 
     #[test]

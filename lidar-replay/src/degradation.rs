@@ -144,6 +144,7 @@ mod tests {
             geometry: GEOMETRY,
             ranges: vec![0.5, 5.0, 5.01, 40.0, f32::NAN, f32::INFINITY],
             intensities: Vec::new(),
+            robot_from_sensor: slam_geom::Pose2::IDENTITY,
         };
         let five = Degradation::new(1, Some(5.0)).unwrap();
         assert_eq!(five.shorten(&mut scan), 2);

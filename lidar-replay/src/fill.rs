@@ -13,6 +13,7 @@ pub const ODOMETRY_FRAME: &str = "odom";
 pub fn fill_scan(scan: &mut LaserScan, seq: u64, record: &ScanRecord) -> Result<(), CapacityError> {
     scan.header = Header::new(seq, record.stamp_ns, SCAN_FRAME);
     scan.set_geometry(&record.geometry);
+    scan.robot_from_sensor = record.robot_from_sensor.into();
     scan.set_beams(&record.ranges, &record.intensities)
 }
 
@@ -47,6 +48,7 @@ mod tests {
             geometry: GEOMETRY,
             ranges: vec![1.0, f32::INFINITY, f32::NAN],
             intensities: Vec::new(),
+            robot_from_sensor: slam_geom::Pose2::IDENTITY,
         };
         let mut scan = LaserScan::boxed_zeroed();
         fill_scan(&mut scan, 7, &record).unwrap();
@@ -68,6 +70,7 @@ mod tests {
             geometry: GEOMETRY,
             ranges: vec![1.0; ipc_types::MAX_BEAMS + 1],
             intensities: Vec::new(),
+            robot_from_sensor: slam_geom::Pose2::IDENTITY,
         };
         assert!(fill_scan(&mut LaserScan::boxed_zeroed(), 0, &record).is_err());
     }

@@ -15,11 +15,11 @@
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
-use std::io::{BufRead, Read};
+use std::io::BufRead;
 
 use slam_geom::wrap_angle;
 
-use crate::carmen::{OdometryChoice, OdometrySource, Parsed, parse_record};
+use crate::carmen::{FrontLaser, OdometryChoice, OdometrySource, Parsed, parse_record};
 use crate::lines::{NumberedLines, StopFlag};
 use crate::record::{OdometryRecord, ScanRecord};
 
@@ -146,6 +146,7 @@ fn read_start<R: BufRead>(reader: R, stop: StopFlag) -> (Vec<ScanEntry>, Vec<Odo
     let mut lines = NumberedLines::new(reader.take(MAX_BYTES));
     lines.set_stop(stop);
     let mut skipped = BTreeMap::new();
+    let mut mount = FrontLaser::default();
     let mut scans = Vec::new();
     let mut odom = Vec::new();
     while scans.len() < MAX_SCANS {
@@ -155,7 +156,7 @@ fn read_start<R: BufRead>(reader: R, stop: StopFlag) -> (Vec<ScanEntry>, Vec<Odo
                 if text.is_empty() || text.starts_with('#') {
                     continue;
                 }
-                parse_record(line, text, &mut skipped)
+                parse_record(line, text, &mut skipped, &mut mount)
             }
             Ok(Some((_, Err(_)))) => continue,
             // The end, a read error or a stop: judge what was read.

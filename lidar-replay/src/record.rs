@@ -15,6 +15,8 @@ pub struct ScanRecord {
     pub ranges: Vec<f32>,
     /// Intensities, one per beam, or empty when the log has none.
     pub intensities: Vec<f32>,
+    /// Where the sensor sits on the robot (the identity when the log does not say).
+    pub robot_from_sensor: Pose2,
 }
 
 /// One odometry pose of a log (`odom_from_robot`), yaw wrapped to `[-pi, pi)`.

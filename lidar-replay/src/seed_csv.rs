@@ -136,6 +136,7 @@ fn parse_line(line: u64, text: &str) -> Result<ScanRecord, LineError> {
         geometry: GEOMETRY,
         ranges,
         intensities: Vec::new(),
+        robot_from_sensor: slam_geom::Pose2::IDENTITY,
     })
 }
 

@@ -145,6 +145,9 @@ pub struct Recorder {
     true_corners: Vec<[f64; 2]>,
     counts: Option<FrameCounts>,
     scans_seen: u64,
+    /// Where the sensor sits on the robot, from the first scan: the pipeline estimates the
+    /// sensor's poses, the trajectories written are the robot's.
+    robot_from_sensor: Option<Pose2>,
     first_message: Option<Instant>,
     last_message: Option<Instant>,
     wall_s: Option<f64>,
@@ -200,6 +203,7 @@ impl Recorder {
             true_corners: Vec::new(),
             counts: None,
             scans_seen: 0,
+            robot_from_sensor: None,
             first_message: None,
             last_message: None,
             wall_s: None,
@@ -232,8 +236,10 @@ impl Recorder {
             Some((first, last)) => (first.min(stamp_ns), last.max(stamp_ns)),
             None => (stamp_ns, stamp_ns),
         });
-        self.incomplete.extend(self.online.append(stamp_ns, est));
+        let online = self.robot_pose(&est);
+        self.incomplete.extend(self.online.append(stamp_ns, online));
         if let Some(dr) = dead_reckoning {
+            let dr = self.robot_pose(&dr);
             self.incomplete
                 .extend(self.dead_reckoning.append(stamp_ns, dr));
         }
@@ -248,6 +254,36 @@ impl Recorder {
         self.latencies_ns.extend(latency_ns);
         self.scans.add_pose(seq, stamp_ns, est);
         Ok(())
+    }
+
+    /// The sensor's mount on the robot, as the scans give it; the first one holds for the run.
+    pub fn set_mount(&mut self, robot_from_sensor: Pose2) {
+        self.robot_from_sensor.get_or_insert(robot_from_sensor);
+    }
+
+    /// Whether a scan has said where the sensor sits.
+    pub fn knows_mount(&self) -> bool {
+        self.robot_from_sensor.is_some()
+    }
+
+    /// The robot's pose where the sensor's is `world_from_sensor`.
+    fn robot_pose(&self, world_from_sensor: &Pose2) -> Pose2 {
+        match &self.robot_from_sensor {
+            Some(mount) => world_from_sensor.compose(&mount.inverse()),
+            None => *world_from_sensor,
+        }
+    }
+
+    /// `path` as the robot's poses, for `trajectory.tum`.
+    fn robot_path(&self, path: &[StampedPose]) -> String {
+        let robot: Vec<StampedPose> = path
+            .iter()
+            .map(|p| StampedPose {
+                pose: self.robot_pose(&p.pose),
+                ..*p
+            })
+            .collect();
+        tum_text(&robot)
     }
 
     /// Records the simulator's true pose for scan `seq`.
@@ -432,7 +468,7 @@ impl Recorder {
         refinement: Option<PathRefinement>,
     ) -> Result<Written, SinkError> {
         let unwritten = self.incomplete.len();
-        self.write_result(TRAJECTORY_FILE, tum_text(path).as_bytes());
+        self.write_result(TRAJECTORY_FILE, self.robot_path(path).as_bytes());
         let path_written = self.incomplete.len() == unwritten;
         let relative_pose_error = self
             .options
@@ -584,8 +620,10 @@ impl Recorder {
         refinement: PathRefinement,
     ) -> Result<Staged, SinkError> {
         let mut files = Vec::new();
-        let trajectory =
-            StagedFile::write(&self.dir.join(TRAJECTORY_FILE), tum_text(path).as_bytes())?;
+        let trajectory = StagedFile::write(
+            &self.dir.join(TRAJECTORY_FILE),
+            self.robot_path(path).as_bytes(),
+        )?;
         let relative_pose_error =
             match (&self.options.relations, &first.metrics.relative_pose_error) {
                 (Some(truth), Some(before)) => Some(RelativePoseErrors {

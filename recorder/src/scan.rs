@@ -44,6 +44,10 @@ pub struct ScanMessage<'a> {
     pub nan: Vec<u32>,
     pub inf: Vec<u32>,
     pub neg_inf: Vec<u32>,
+    /// Where the sensor sits on the robot, `[x, y, yaw]` (absent in older recordings: the
+    /// robot's origin).
+    #[serde(default)]
+    pub robot_from_sensor: [f64; 3],
 }
 
 impl ChannelMessage for ScanMessage<'_> {
@@ -129,6 +133,10 @@ impl<'a> ScanMessage<'a> {
             nan,
             inf,
             neg_inf,
+            robot_from_sensor: {
+                let m = scan.robot_from_sensor;
+                [m.x, m.y, m.yaw]
+            },
         }
     }
 
@@ -158,6 +166,8 @@ impl<'a> ScanMessage<'a> {
         scan.header = ipc_types::Header::new(self.seq, stamp_ns, &self.frame_id);
         scan.header.sent_ns = self.sent_ns;
         scan.set_geometry(&self.geometry);
+        let [x, y, yaw] = self.robot_from_sensor;
+        scan.robot_from_sensor = ipc_types::Pose2::new(x, y, yaw);
         scan.set_beams(&ranges, &self.intensities)?;
         Ok(scan)
     }

@@ -78,7 +78,7 @@ pub struct FrontEndConfig {
     /// Nor one turning faster than this, rad/s.
     pub max_angular_speed: f64,
     /// A wheel step that would change the wheels' pace faster than this, m/s^2, is a stale
-    /// reading (odometry that lags the scan by a varying delay, as mit-csail's does): the
+    /// reading (odometry that lags the scan by a varying delay): the
     /// scan is registered as without odometry, and the next steps are measured from the
     /// last reading believed. Well above what a wheeled indoor robot does.
     pub max_linear_acceleration: f64,

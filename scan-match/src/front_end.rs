@@ -58,12 +58,10 @@ enum Seed {
     ConstantVelocity,
     /// Constant velocity as a second opinion beside wheels (that turned by `wheels_turn`,
     /// radians) whose seed found a poor or contradicting fit. Its wide search takes only a
-    /// turn the wheels can have misjudged: by as much as they turned (they slip in a fast
-    /// turn: mit-csail's wheels gave two thirds of a 1.7 rad turn), or by what the window
-    /// searches anyway. A wheel does not invent or miss a larger turn, and a fit there is
-    /// the wrong basin of a scan that sees little: with 4 m of range, after two seconds of
-    /// scans too sparse to register, a fit turning 67 degrees where the wheels turned 6,
-    /// with 36 of its 55 points on the map, overruled them and bent the rest of the path.
+    /// turn the wheels can have misjudged: by as much as they turned (wheels slip in a fast
+    /// turn and undercount it), or by what the window searches anyway. A wheel does not
+    /// invent or miss a larger turn, and a fit there is the wrong basin of a scan that sees
+    /// little (a short-range sensor after seconds of scans too sparse to register).
     SecondOpinion { wheels_turn: f64 },
 }
 

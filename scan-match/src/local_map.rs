@@ -13,7 +13,7 @@ use crate::points::SurfacePoint;
 
 /// Cells of the neighbour grid are this many voxels wide: a query within the usual gates
 /// (a few voxels) looks at one to 2 x 2 cells. A hash lookup costs more than the few extra
-/// points a wider cell holds (measured: 2, 4, 6 and 8 voxels; 6 was fastest on both logs).
+/// points a wider cell holds.
 const GRID_CELL_VOXELS: f64 = 6.0;
 
 /// Cells of the lookup raster are this many voxels wide: a point's map neighbour is

@@ -1,5 +1,5 @@
-//! Stale wheel readings: some odometry reaches the scans late by a varying delay (mit-csail's
-//! is attached to each scan as last received), so now and then a step falls short of the
+//! Stale wheel readings: some odometry reaches the scans late by a varying delay (a log that
+//! attaches to each scan the reading last received), so now and then a step falls short of the
 //! motion, down to none at all, and a later one makes up for it. Along a corridor the scan
 //! cannot tell, and a front end that believed them would stand still for a scan and then
 //! jump. A wheel step is judged against the wheels' own recent believed steps, not against

@@ -83,6 +83,17 @@ impl Pose2 {
         m
     }
 
+    /// The Jacobian of `self.compose(mount)` with respect to `self`: how an error of this
+    /// pose moves a frame fixed to it at `mount` (its turn swings the mount's offset).
+    /// `J M J^T` is the covariance of the mounted frame's pose.
+    pub fn mount_jacobian(&self, mount: &Self) -> Matrix3<f64> {
+        let offset = self.rotation() * nalgebra::Vector2::new(mount.x, mount.y);
+        let mut m = Matrix3::identity();
+        m[(0, 2)] = -offset.y;
+        m[(1, 2)] = offset.x;
+        m
+    }
+
     /// The pose a fraction `t` of the way from `self` to `other`: position along the straight
     /// line, yaw along the shorter arc. `t` outside `[0, 1]` extrapolates at the same rate.
     pub fn interpolate(&self, other: &Self, t: f64) -> Self {
@@ -102,6 +113,33 @@ impl Pose2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_mount_jacobian_is_the_derivative_of_composing_the_mount() {
+        let pose = Pose2::new(1.0, -2.0, 0.7);
+        let mount = Pose2::new(0.25, 0.1, 0.3);
+        let j = pose.mount_jacobian(&mount);
+        let h = 1e-6;
+        for k in 0..3 {
+            let mut moved = [pose.x, pose.y, pose.yaw];
+            moved[k] += h;
+            let a = Pose2::new(moved[0], moved[1], moved[2]).compose(&mount);
+            let b = pose.compose(&mount);
+            let d = [
+                (a.x - b.x) / h,
+                (a.y - b.y) / h,
+                wrap_angle(a.yaw - b.yaw) / h,
+            ];
+            for r in 0..3 {
+                assert!(
+                    (d[r] - j[(r, k)]).abs() < 1e-5,
+                    "d{r}/d{k}: {} vs {}",
+                    d[r],
+                    j[(r, k)]
+                );
+            }
+        }
+    }
 
     fn close(a: &Pose2, b: &Pose2) -> bool {
         (a.x - b.x).abs() < 1e-12

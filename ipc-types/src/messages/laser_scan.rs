@@ -9,6 +9,7 @@ use zerocopy::FromZeros;
 
 use crate::capacity::{CapacityError, MAX_BEAMS, fill, used};
 use crate::header::Header;
+use crate::messages::pose::Pose2;
 
 /// One sweep of a planar lidar.
 ///
@@ -18,7 +19,7 @@ use crate::header::Header;
 /// `[range_min, range_max]`, as invalid.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
-#[type_name("slam::LaserScan::v1")]
+#[type_name("slam::LaserScan::v2")]
 pub struct LaserScan {
     pub header: Header,
     /// Bearing of the first beam, radians.
@@ -33,6 +34,9 @@ pub struct LaserScan {
     pub range_min: f32,
     /// Longest valid range, metres.
     pub range_max: f32,
+    /// Where the sensor sits on the robot: the sensor frame in the robot frame (`base_link`).
+    /// All zero for a sensor at the robot's origin, as the simulator's.
+    pub robot_from_sensor: Pose2,
     /// Beams used in `ranges` and `intensities`.
     pub beam_count: u32,
     /// Keeps the layout free of implicit padding; always 0.
@@ -102,6 +106,7 @@ impl LaserScan {
             scan_time: self.scan_time,
             range_min: self.range_min,
             range_max: self.range_max,
+            robot_from_sensor: self.robot_from_sensor,
             ranges: Cow::Borrowed(self.ranges()),
             intensities: Cow::Borrowed(self.intensities()),
         }
@@ -117,6 +122,7 @@ impl LaserScan {
         scan.scan_time = record.scan_time;
         scan.range_min = record.range_min;
         scan.range_max = record.range_max;
+        scan.robot_from_sensor = record.robot_from_sensor;
         scan.set_beams(&record.ranges, &record.intensities)?;
         Ok(scan)
     }
@@ -132,6 +138,9 @@ pub struct LaserScanRecord<'a> {
     pub scan_time: f32,
     pub range_min: f32,
     pub range_max: f32,
+    /// Absent in records written before the mount was sent: the robot's origin.
+    #[serde(default)]
+    pub robot_from_sensor: Pose2,
     pub ranges: Cow<'a, [f32]>,
     pub intensities: Cow<'a, [f32]>,
 }
