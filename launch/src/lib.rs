@@ -34,6 +34,7 @@ pub mod closing;
 pub mod config;
 pub mod losses;
 pub mod record;
+pub mod reference;
 pub mod relations;
 pub mod shm_room;
 pub mod stage;

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use ipc_types::Domain;
-use launch::cli::Args;
+use launch::cli::{Args, PrintFormat};
 use launch::config::{RunConfig, SourceKind};
 use launch::relations::relations_beside;
 use launch::stall::StallLimits;
@@ -26,6 +26,20 @@ fn main() -> ExitCode {
     }
 }
 
+/// `--print-config`: the configuration as a commented TOML file, or the reference.
+fn print_config(config: &RunConfig, format: PrintFormat) -> Result<()> {
+    use std::io::Write;
+    let text = match format {
+        PrintFormat::Toml => launch::reference::toml_file(config),
+        PrintFormat::Markdown => launch::reference::markdown(),
+    }
+    .context("cannot write the configuration as TOML")?;
+    std::io::stdout()
+        .lock()
+        .write_all(text.as_bytes())
+        .context("cannot print the configuration")
+}
+
 fn run() -> Result<ExitCode> {
     let args = Args::parse();
     // Started by slam-bench: a killed slam-bench takes this run with it.
@@ -34,6 +48,10 @@ fn run() -> Result<ExitCode> {
 
     let mut config = args.run_config()?;
     config.validate()?;
+    if let Some(format) = args.print_config {
+        print_config(&config, format)?;
+        return Ok(ExitCode::SUCCESS);
+    }
     // slam-proc refuses it too, but as a stage that dies once map-sink is up.
     slam_proc::memory::check(config.slam.filter.particles).context("refusing to start")?;
     // A map that cannot be used would only fail once the stages are up.
