@@ -33,6 +33,7 @@ pub mod cli;
 pub mod closing;
 pub mod config;
 pub mod losses;
+pub mod memory;
 pub mod record;
 pub mod reference;
 pub mod relations;
