@@ -64,8 +64,8 @@ pub struct Args {
     #[arg(long, value_name = "METRES")]
     resolution: Option<f64>,
     /// Passes refining the final path against its own grid before the map is written, the
-    /// last two (the last one of two) aligning every scan to every wall; 0 keeps the
-    /// filter's path as it is. Default 7.
+    /// last one aligning every scan to every wall; 0 keeps the filter's path as it is
+    /// (default: `[grid] refine_passes`, see --print-config).
     #[arg(long, value_name = "N")]
     refine_passes: Option<usize>,
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
@@ -121,6 +121,21 @@ pub struct Args {
     /// run stays lossless and deterministic.
     #[arg(long)]
     record: bool,
+    /// Print the configuration and exit: every setting with its value (the defaults, with
+    /// --config and the options given over them) and a comment line saying what it means,
+    /// its unit and its range, as a TOML file to start a --config file from; `markdown`
+    /// prints the reference of the defaults (docs/CONFIG.md).
+    #[arg(long, value_enum, value_name = "FORMAT", num_args = 0..=1, default_missing_value = "toml")]
+    pub print_config: Option<PrintFormat>,
+}
+
+/// What `--print-config` prints.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrintFormat {
+    /// A config file with a comment line per setting.
+    Toml,
+    /// The reference as Markdown tables, as docs/CONFIG.md has it.
+    Markdown,
 }
 
 impl Args {

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use ipc_types::Domain;
-use launch::cli::Args;
+use launch::cli::{Args, PrintFormat};
 use launch::config::{RunConfig, SourceKind};
 use launch::relations::relations_beside;
 use launch::stall::StallLimits;
@@ -26,6 +26,20 @@ fn main() -> ExitCode {
     }
 }
 
+/// `--print-config`: the configuration as a commented TOML file, or the reference.
+fn print_config(config: &RunConfig, format: PrintFormat) -> Result<()> {
+    use std::io::Write;
+    let text = match format {
+        PrintFormat::Toml => launch::reference::toml_file(config),
+        PrintFormat::Markdown => launch::reference::markdown(),
+    }
+    .context("cannot write the configuration as TOML")?;
+    std::io::stdout()
+        .lock()
+        .write_all(text.as_bytes())
+        .context("cannot print the configuration")
+}
+
 fn run() -> Result<ExitCode> {
     let args = Args::parse();
     // Started by slam-bench: a killed slam-bench takes this run with it.
@@ -34,6 +48,10 @@ fn run() -> Result<ExitCode> {
 
     let mut config = args.run_config()?;
     config.validate()?;
+    if let Some(format) = args.print_config {
+        print_config(&config, format)?;
+        return Ok(ExitCode::SUCCESS);
+    }
     // slam-proc refuses it too, but as a stage that dies once map-sink is up.
     slam_proc::memory::check(config.slam.filter.particles).context("refusing to start")?;
     // A map that cannot be used would only fail once the stages are up.
@@ -171,7 +189,9 @@ fn run() -> Result<ExitCode> {
     let supervisor::Ended {
         outcome,
         mut losses,
+        peak_memory_kib,
     } = supervisor::run(&plan, &domain, &log_dir, &display, &stall)?;
+    write_memory(&out, peak_memory_kib);
     // map-sink's count is in its metrics; it prints none of its own.
     if let Some(metrics) = read_metrics(&out) {
         losses.add("map-sink", "frames_dropped", metrics.frames_dropped);
@@ -218,6 +238,33 @@ fn run() -> Result<ExitCode> {
             say_err(&format!("logs in {}", log_dir.display()));
             Ok(ExitCode::FAILURE)
         }
+    }
+}
+
+/// `OUT/memory.json`: the stages' peak memory and slam-launch's own. A run whose file
+/// cannot be written says so and goes on: it is a measurement, not a result.
+fn write_memory(out: &Path, stages: Vec<(String, u64)>) {
+    use launch::memory::{MEMORY_FILE, RunMemory, peak_resident_kib};
+    let mut memory = RunMemory {
+        sampled_every_ms: supervisor::POLL.as_millis() as u64,
+        peak_resident_kib: stages.into_iter().collect(),
+    };
+    if let Some(own) = peak_resident_kib(None) {
+        memory
+            .peak_resident_kib
+            .insert("slam-launch".to_owned(), own);
+    }
+    // Whole lines, as every text file of a run.
+    let written = serde_json::to_string_pretty(&memory)
+        .map_err(anyhow::Error::from)
+        .and_then(|json| {
+            Ok(write_atomic(
+                &out.join(MEMORY_FILE),
+                format!("{json}\n").as_bytes(),
+            )?)
+        });
+    if let Err(e) = written {
+        say_err(&format!("slam-launch: cannot write {MEMORY_FILE}: {e:#}"));
     }
 }
 

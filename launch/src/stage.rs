@@ -59,6 +59,8 @@ pub struct Stage {
     stdout_reader: Option<std::thread::JoinHandle<()>>,
     stderr_reader: Option<std::thread::JoinHandle<()>>,
     exit: Option<ExitStatus>,
+    /// The child's peak resident memory at the last reading, KiB.
+    peak_kib: Option<u64>,
 }
 
 impl Stage {
@@ -172,6 +174,7 @@ impl Stage {
             stdout_reader,
             stderr_reader,
             exit: None,
+            peak_kib: None,
         })
     }
 
@@ -181,6 +184,21 @@ impl Stage {
             self.exit = self.child.try_wait().ok().flatten();
         }
         self.exit
+    }
+
+    /// Reads the child's peak resident memory so far, while it runs (once it has ended,
+    /// /proc no longer tells).
+    pub fn sample_memory(&mut self) {
+        if self.poll_exit().is_none()
+            && let Some(kib) = crate::memory::peak_resident_kib(Some(self.child.id()))
+        {
+            self.peak_kib = Some(kib);
+        }
+    }
+
+    /// The child's peak resident memory at the last reading, KiB.
+    pub fn peak_memory_kib(&self) -> Option<u64> {
+        self.peak_kib
     }
 
     /// The last lines the child wrote to stderr; once it has ended, all of them up to its end.

@@ -21,7 +21,8 @@ pub const STOP_GRACE: Duration = Duration::from_secs(30);
 /// What is kept of [`STOP_GRACE`] beyond map-sink's own budget (`[grid] stop_budget`): the
 /// stop reaching it and it noticing, and its exit after the last file.
 pub const STOP_MARGIN: Duration = Duration::from_secs(5);
-const POLL: Duration = Duration::from_millis(50);
+/// How often the stages are looked at (and their memory read).
+pub const POLL: Duration = Duration::from_millis(50);
 
 /// A process to start.
 #[derive(Debug, Clone)]
@@ -46,11 +47,13 @@ pub enum Outcome {
     Failed(String),
 }
 
-/// How a run ended, and what its stages reported losing.
+/// How a run ended, what its stages reported losing, and their peak memory.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ended {
     pub outcome: Outcome,
     pub losses: Losses,
+    /// Each stage's peak resident memory as last read while it ran (every [`POLL`]), KiB.
+    pub peak_memory_kib: Vec<(String, u64)>,
 }
 
 /// Options of the progress display.
@@ -105,6 +108,9 @@ pub fn run(
     let mut lost = vec![false; stages.len()];
 
     let outcome = loop {
+        for stage in &mut stages {
+            stage.sample_memory();
+        }
         while let Ok(event) = events.try_recv() {
             match event {
                 StageEvent::Ready(i) => ready[i] = true,
@@ -270,7 +276,15 @@ pub fn run(
             say_err(&format!("slam-launch: incomplete: {}", stopped.line()));
         }
     }
-    Ok(Ended { outcome, losses })
+    let peak_memory_kib = stages
+        .iter()
+        .filter_map(|s| Some((s.name.clone(), s.peak_memory_kib()?)))
+        .collect();
+    Ok(Ended {
+        outcome,
+        losses,
+        peak_memory_kib,
+    })
 }
 
 /// SIGTERM to every stage, the source first so the stream ends; then waits for them to

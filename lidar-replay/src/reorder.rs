@@ -2,7 +2,7 @@
 //! window of log time.
 //!
 //! Some published CARMEN logs write a line up to about a second after lines stamped later
-//! (an `ODOM` line before the `FLASER` taken a little earlier, say). The pipeline
+//! (an `ODOM` line before the `FLASER` taken just before it). The pipeline
 //! wants stamps that only move forward, so records are held in a window sorted by stamp and
 //! let out once the newest stamp read is more than the window past them. What is still out of
 //! order after that (a line later than the window allows) or repeats a stamp already let out

@@ -10,10 +10,8 @@ use crate::scene::{
 
 /// A features scene is recorded at most once per this much data time (every twentieth scan
 /// of a 40 Hz sensor): the features are recorded whole on `/perception/features` at every
-/// scan, and the scene is for the eye. A scene takes about 0.6 KB of the file (its numbers
-/// mixed with the scans' in a chunk compress less than alone): at every scan of the
-/// simulated office that added 7 % to a recording already near the 200 MB that ten minutes
-/// may take, two a second add under 0.5 %.
+/// scan, and the scene is for the eye: at every scan the scenes would add several per cent
+/// to a recording that is already large, at two a second next to nothing.
 pub const FEATURES_SCENE_PERIOD_NS: u64 = 500_000_000;
 
 /// The fitted lines: green.

@@ -79,7 +79,7 @@ fn run_world(world: &str, frames: u64, particles: u32, ate_limit: f64) -> slam_e
 #[test]
 fn office_loop_is_mapped_within_target() {
     // The whole loop (109 m, about 4 s in lockstep): closing it is what the filter is
-    // for. Target 0.10 m (README); the margin keeps a busy CI machine from flaking.
+    // for. Target 0.10 m; the margin keeps a busy CI machine from flaking.
     let metrics = run_world("office", 0, 100, 0.15);
     // The filter must beat the scan-matching motion integrated alone. (On an open stretch
     // it need not: the motion estimate drifts by millimetres there, and the particles'

@@ -4,15 +4,15 @@
 use tests::*;
 
 /// Bound on the mean translational relative-pose error over the first 400 scans of
-/// mit-csail (seed 1, 100 particles): about twice what the defaults give (README, "The
-/// benchmark"), so a regression of the filter or the front end fails it and a change of a
+/// mit-csail (seed 1, 100 particles): about twice what the defaults give (docs/RESULTS.md),
+/// so a regression of the filter or the front end fails it and a change of a
 /// few millimetres does not. Tighten it as the pipeline improves.
 const MIT_CSAIL_400_MAX_TRANSLATION_M: f64 = 0.05;
 /// Scans replayed: the first fifth of the log, with its first loop.
 const FRAMES: &str = "400";
 /// Bound on the mean translational relative-pose error over the whole of aces (seed 1,
-/// 100 particles): GMapping's published figure, well above what the defaults give (README,
-/// "The benchmark"), and below what each loop's jump spread back on its own gave.
+/// 100 particles): GMapping's published figure, well above what the defaults give
+/// (docs/RESULTS.md), and below what each loop's jump spread back on its own gave.
 const ACES_MAX_TRANSLATION_M: f64 = 0.060;
 /// Bound on the mean translational relative-pose error of mit-csail replayed at a third of
 /// its scan rate, over the relations whose two scans it keeps: the last loop drifts metres

@@ -1,14 +1,15 @@
 //! What a benchmark found, per log: ours over the seeds, and the published figures beside.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use slam_eval::{Metrics, PoseErrors, RelativePoseErrors, ScoreSummary};
 
 use super::published::{Published, SOURCES};
 
 /// One run of slam-launch: a log with one seed.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SeedRun {
     pub seed: u64,
     /// The run's output directory.
@@ -17,10 +18,14 @@ pub struct SeedRun {
     pub wall_s: f64,
     /// The run's metrics.json.
     pub metrics: Metrics,
+    /// Peak resident memory per process, KiB (slam-launch's memory.json; empty when the
+    /// run did not write one).
+    #[serde(default)]
+    pub peak_memory_kib: BTreeMap<String, u64>,
 }
 
 /// The smallest, median and largest of some values.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Spread {
     pub min: f64,
     pub median: f64,
@@ -47,7 +52,7 @@ impl Spread {
 }
 
 /// One log over all its seeds.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct LogResult {
     /// The log's name (file stem), as the published figures know it.
     pub log: String,
@@ -121,7 +126,7 @@ impl LogResult {
 }
 
 /// The whole benchmark, as bench.json.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BenchReport {
     pub particles: usize,
     pub seeds: Vec<u64>,
@@ -134,8 +139,56 @@ pub struct BenchReport {
     /// Ranges beyond this were replayed as no-returns, metres (`--max-range`).
     pub max_range_m: Option<f64>,
     /// Where the published figures come from.
-    pub published_sources: &'static str,
+    pub published_sources: String,
     pub logs: Vec<LogResult>,
+    /// The simulated worlds run beside the logs (`--worlds`), each over the seeds.
+    #[serde(default)]
+    pub worlds: Vec<WorldResult>,
+    /// The workspace's commit when the benchmark ran (`git describe --always --dirty`).
+    #[serde(default)]
+    pub commit: Option<String>,
+    /// When the benchmark started, UTC, `YYYY-MM-DD HH:MM`.
+    #[serde(default)]
+    pub started_utc: Option<String>,
+    /// The machine's logical processors, as the runs had them.
+    #[serde(default)]
+    pub processors: Option<usize>,
+    /// The runs that failed; they are in none of the figures.
+    #[serde(default)]
+    pub failures: Vec<FailedRun>,
+}
+
+/// A run of slam-launch that failed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FailedRun {
+    /// The log's name, or `world-NAME`.
+    pub run: String,
+    pub seed: u64,
+    /// Why, on one line: the last line slam-launch gave (what it names as the failure).
+    pub error: String,
+}
+
+impl FailedRun {
+    /// The failure of `run` with `seed`, `error` cut to its last line that says anything.
+    pub fn new(run: &str, seed: u64, error: &str) -> Self {
+        let last = error
+            .lines()
+            .map(str::trim)
+            .rfind(|line| !line.is_empty() && !line.starts_with("logs in "))
+            .unwrap_or_default();
+        Self {
+            run: run.to_owned(),
+            seed,
+            error: last.to_owned(),
+        }
+    }
+}
+
+/// One simulated world over the seeds.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct WorldResult {
+    pub world: String,
+    pub runs: Vec<SeedRun>,
 }
 
 impl BenchReport {
@@ -153,8 +206,13 @@ impl BenchReport {
             frames,
             every: None,
             max_range_m: None,
-            published_sources: SOURCES,
+            published_sources: SOURCES.to_owned(),
             logs,
+            worlds: Vec::new(),
+            commit: None,
+            started_utc: None,
+            processors: None,
+            failures: Vec::new(),
         }
     }
 }
@@ -162,6 +220,20 @@ impl BenchReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_failure_keeps_the_line_that_names_it() {
+        let error = "slam-launch failed (exit status: 1): slam-proc: summary of the filter\n  \
+                     scans: 13631\nslam-launch: no progress for 120 s after the source \
+                     finished (still running: map-sink)\nlogs in runs/intel/seed-3/logs\n";
+        let failure = FailedRun::new("intel", 3, error);
+        assert_eq!(
+            failure.error,
+            "slam-launch: no progress for 120 s after the source finished (still running: \
+             map-sink)"
+        );
+        assert_eq!(FailedRun::new("aces", 1, "").error, "");
+    }
 
     #[test]
     fn spread_of_odd_and_even_counts() {

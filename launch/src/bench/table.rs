@@ -1,8 +1,8 @@
-//! The benchmark's table, as Markdown so it can go into a README unchanged.
+//! The benchmark's table on the console, as Markdown; docs/RESULTS.md is [`super::markdown`]'s.
 
 use slam_eval::ErrorStats;
 
-use super::published::Figure;
+use super::published::{Figure, Published};
 use super::report::{BenchReport, LogResult};
 
 const HEADER: [&str; 13] = [
@@ -33,36 +33,52 @@ pub fn render(report: &BenchReport) -> String {
         .collect()
 }
 
-fn row(log: &LogResult, seeds: usize) -> Vec<String> {
-    let ours = |stats: Option<ErrorStats>, decimals: usize| {
-        stats.map_or_else(
-            || "n/a".to_owned(),
-            |s| format!("{:.decimals$} +- {:.decimals$}", s.mean, s.std),
-        )
-    };
-    let spread = match log.seed_means_m {
-        Some(s) if seeds > 1 => format!("{:.3} / {:.3} / {:.3}", s.min, s.median, s.max),
-        _ => "-".to_owned(),
-    };
-    // As many decimals as the papers give: three in Kuemmerle et al., four (metres) and
-    // three (degrees) in Hess et al.
-    let figure =
-        |f: Figure, decimals: usize| format!("{:.decimals$} +- {:.decimals$}", f.mean, f.std);
-    let published = log.published.map_or_else(
-        || vec!["-".to_owned(); 4],
+/// Mean +- standard deviation with `decimals` decimals; `n/a` without a score.
+pub(super) fn mean_std(stats: Option<ErrorStats>, decimals: usize) -> String {
+    stats.map_or_else(
+        || "n/a".to_owned(),
+        |s| format!("{:.decimals$} +- {:.decimals$}", s.mean, s.std),
+    )
+}
+
+/// A published figure. As many decimals as the papers give: three in Kuemmerle et al., four
+/// (metres) and three (degrees) in Hess et al.
+pub(super) fn figure(f: Figure, decimals: usize) -> String {
+    format!("{:.decimals$} +- {:.decimals$}", f.mean, f.std)
+}
+
+/// The published columns of a log (scan matching, GMapping, graph mapping, Cartographer in
+/// metres and in degrees); `-` for a log nobody published figures for.
+pub(super) fn published_cells(figures: Option<Published>) -> Vec<String> {
+    figures.map_or_else(
+        || vec!["-".to_owned(); 5],
         |p| {
             vec![
                 figure(p.scan_matching_m, 3),
                 figure(p.rbpf_m, 3),
                 figure(p.graph_mapping_m, 3),
-                format!(
-                    "{} / {}",
-                    figure(p.cartographer_m, 4),
-                    figure(p.cartographer_deg, 3)
-                ),
+                figure(p.cartographer_m, 4),
+                figure(p.cartographer_deg, 3),
             ]
         },
-    );
+    )
+}
+
+fn row(log: &LogResult, seeds: usize) -> Vec<String> {
+    let ours = mean_std;
+    let spread = match log.seed_means_m {
+        Some(s) if seeds > 1 => format!("{:.3} / {:.3} / {:.3}", s.min, s.median, s.max),
+        _ => "-".to_owned(),
+    };
+    // The table on the console has Cartographer's two figures in one column.
+    let mut published = published_cells(log.published);
+    if log.published.is_some() {
+        let degrees = published.pop().unwrap_or_default();
+        let metres = published.pop().unwrap_or_default();
+        published.push(format!("{metres} / {degrees}"));
+    } else {
+        published.pop();
+    }
     let mut cells = vec![
         log.log.clone(),
         log.scans.to_string(),
@@ -117,7 +133,7 @@ mod tests {
             vec![1, 2, 3],
             None,
             None,
-            vec![log("mit-csail"), log("intel")],
+            vec![log("mit-csail"), log("seed-hall")],
         );
         let table = render(&report);
         let lines: Vec<&str> = table.lines().collect();
@@ -130,7 +146,7 @@ mod tests {
              | 0.004 +- 0.009 | 0.0319 +- 0.0363 / 0.369 +- 0.365 |"
         );
         // A log nobody published figures for still gets our columns.
-        assert!(lines[3].starts_with("| intel | 1988 | 0.580 +- 1.782 |"));
+        assert!(lines[3].starts_with("| seed-hall | 1988 | 0.580 +- 1.782 |"));
         assert!(lines[3].ends_with("| - | - | - | - |"));
         // One seed has no spread over seeds.
         let one = BenchReport::new(100, vec![1], None, None, vec![log("aces")]);

@@ -3,18 +3,16 @@
 //! Each particle holds its own corner map and path, shared copy-on-write with its relatives
 //! (a resampled particle copies only what it changes), so what a particle costs depends on
 //! how far the maps diverge, which grows with the run. The figures below are measured, not
-//! derived from the types: the peak resident size (VmHWM) of slam-proc over whole runs with
-//! 1, 100, 1000 and 5000 particles on the office world (3958 scans: 84-85 KiB more per
-//! particle from one run to the next) and the aces log (7374 scans, the longest recording
-//! here, whose maps and paths diverge the most: 136-140 KiB, 152 KiB from the office run's one
-//! particle to aces with 100), and the per-particle figure is the steepest of those slopes, rounded up. A much
+//! derived from the types: the steepest slope of slam-proc's peak resident size (VmHWM) per
+//! particle over whole runs with one to thousands of particles, on the simulated office and
+//! on the longest benchmark log (whose maps and paths diverge the most), rounded up. A much
 //! longer live run may need more; the check refuses what cannot fit at all rather than
 //! promise that what passes will.
 
 use std::path::{Path, PathBuf};
 
 /// Peak resident size of slam-proc with one particle (the process, its buffers, the
-/// transport), rounded up: 9.6 MiB measured on the office world.
+/// transport), measured on the office world and rounded up.
 pub const BASE_BYTES: u64 = 16 << 20;
 /// Peak resident size each particle adds, rounded up from the steepest measured slope (see
 /// the module documentation).

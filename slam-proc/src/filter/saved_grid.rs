@@ -94,8 +94,7 @@ impl SavedGrid {
     /// (`drift`: the x-y and yaw variances since the grid last judged a scan); else the
     /// tracking climb's `pull` of the way. The search's steps reach the basin of a
     /// neighbouring wall a metre and tens of degrees away, which a few metres of drift
-    /// cannot explain (aces on a saved map: 0.9 m and 12 degrees after 10 m off the grid,
-    /// and the run never came back).
+    /// cannot explain, and a run taken there never comes back.
     pub fn search(&self, pose: Pose2, drift: &Matrix3<f64>, pull: f64) -> Pose2 {
         let fit = HillClimb::SEARCH.climb_on(|pose| self.log_likelihood(pose), pose);
         let within = |offset: f64, variance: f64| offset * offset <= 9.0 * variance;

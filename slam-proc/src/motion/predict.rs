@@ -46,10 +46,9 @@ impl MotionNoise {
                 }
             }
             // Walls fix a line step's heading as well as the fit says (scaled and floored
-            // like a corner fit's, it measured worse on the office loop: 0.013-0.073 m
-            // against 0.008-0.018 m over six seeds). The advance along them is the
-            // prior's: as good as the fit says on odometry, a guess at constant velocity
-            // (the fit's tighter figure measured worse there too: 0.014-0.039 m).
+            // like a corner fit's, the particles spread too narrowly along the walls). The
+            // advance along them is the prior's: as good as the fit says on odometry, a
+            // guess at constant velocity, where the fit's tighter figure would be too sure.
             MotionSource::Lines { on_odometry } => {
                 let (xy, yaw) = fit_sigmas(&motion.covariance);
                 Self {
