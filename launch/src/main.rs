@@ -118,7 +118,10 @@ fn run() -> Result<ExitCode> {
     // Atomically, like every small result of a run: a full disk leaves no half file.
     write_atomic(&out.join("config.toml"), effective.as_bytes())?;
 
-    let cleaned = Domain::sweep_abandoned();
+    let ipc_types::Sweep { cleaned, foreign } = Domain::sweep_abandoned();
+    for file in &foreign {
+        say_err(&format!("slam-launch: {file}"));
+    }
     if !cleaned.is_empty() {
         say_err(&format!(
             "cleaned up shared memory of {} abandoned run(s): {}",
