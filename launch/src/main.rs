@@ -34,6 +34,7 @@ fn run() -> Result<ExitCode> {
 
     let mut config = args.run_config()?;
     config.validate()?;
+    check_source_input(&config).context("refusing to start")?;
     // slam-proc refuses it too, but as a stage that dies once map-sink is up.
     slam_proc::memory::check(config.slam.filter.particles).context("refusing to start")?;
     // A map that cannot be used would only fail once the stages are up.
@@ -49,6 +50,9 @@ fn run() -> Result<ExitCode> {
         // Mapping on it, map-sink starts its grid from the saved one (a localizing run's
         // slam-proc needs the same of it): the check map-sink makes, made now.
         if let Some(grid) = &saved.grid {
+            grid.check_extent(run_start(&config)?).with_context(|| {
+                format!("refusing to start: cannot use the map in {}", dir.display())
+            })?;
             map_sink::prior_grid(grid, config.grid.resolution).with_context(|| {
                 format!("refusing to start: cannot use the map in {}", dir.display())
             })?;
@@ -222,6 +226,40 @@ fn run() -> Result<ExitCode> {
             Ok(ExitCode::FAILURE)
         }
     }
+}
+
+/// Where the run starts in a saved map's frame, when it is known: the initial pose, or the
+/// map's origin for a run that maps on it (a global localization searches).
+fn run_start(config: &RunConfig) -> Result<Option<[f64; 2]>> {
+    Ok(match &config.initial_pose {
+        Some(pose) => {
+            let pose = slam_proc::parse_pose(pose)?;
+            Some([pose.x, pose.y])
+        }
+        None => (!config.localize).then_some([0.0, 0.0]),
+    })
+}
+
+/// The world or log the source will read, checked as the source reads it: a device, a
+/// FIFO or a file too large would otherwise only fail (or hang) a started stage.
+fn check_source_input(config: &RunConfig) -> Result<()> {
+    match config.source {
+        SourceKind::Sim => {
+            lidar_sim::World::resolve(&config.sim.world)
+                .with_context(|| format!("world '{}'", config.sim.world))?;
+        }
+        SourceKind::Replay => {
+            if let (Some(file), Ok(format)) = (&config.replay.file, config.replay.format.parse()) {
+                lidar_replay::input_kind(format).open(file, stage_kit::input::Links::Follow)?;
+                // A text log is also read up to its first scan, as lidar-replay will.
+                if format != lidar_replay::LogFormat::Mcap {
+                    lidar_replay::open_log(format, file, lidar_replay::ReorderConfig::default())?;
+                }
+            }
+        }
+        SourceKind::Hokuyo => {}
+    }
+    Ok(())
 }
 
 /// A short name of the source, for the progress line and the default output directory.
