@@ -77,8 +77,12 @@ fn run() -> Result<ExitCode> {
     }
     // A bad relations file would only show once the whole log has run: check it now.
     if let Some(path) = &config.relations {
-        let relations = slam_eval::read_relations(path)
+        let read = slam_eval::read_relations_noted(path)
             .context("refusing to start: the relations file cannot be used")?;
+        for note in read.notes(path) {
+            say_err(&note);
+        }
+        let relations = read.relations;
         if !args.quiet {
             say_err(&format!(
                 "{} relations in {}",
