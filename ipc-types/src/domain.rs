@@ -8,11 +8,13 @@
 //! neither's sweep of abandoned runs touches the other's.
 
 use std::os::unix::fs::{DirBuilderExt, MetadataExt, OpenOptionsExt, PermissionsExt};
+use std::path::PathBuf;
 
 use iceoryx2::config::Config;
 use iceoryx2::prelude::*;
 
 use crate::shm::SHM_DIR;
+use crate::unblocked::{Links, kind_of, open_unblocked};
 
 /// Characters a domain name may have: they become part of file names in /dev/shm.
 const MAX_DOMAIN_LEN: usize = 40;
@@ -76,11 +78,37 @@ pub enum NodeError {
     },
 }
 
+/// A file in /dev/shm under this user's prefix that is not this user's regular file:
+/// planted by someone else (a FIFO would block an open, a link redirect it), so it is
+/// neither opened nor removed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{} is not this user's file ({kind}, owner uid {owner}); left alone", path.display())]
+pub struct ForeignFile {
+    pub path: PathBuf,
+    pub kind: &'static str,
+    pub owner: u32,
+}
+
+/// What a sweep of abandoned runs did.
+#[derive(Debug, Default)]
+pub struct Sweep {
+    /// The domains cleaned up.
+    pub cleaned: Vec<String>,
+    /// Files under this user's prefix that are not this user's, whose domains were left.
+    pub foreign: Vec<ForeignFile>,
+}
+
 /// Why a domain could not be claimed for a run.
 #[derive(Debug, thiserror::Error)]
 pub enum ClaimError {
     #[error("domain '{0}' belongs to another slam-launch that is still running")]
     InUse(String),
+    #[error("cannot claim domain '{domain}'")]
+    Foreign {
+        domain: String,
+        #[source]
+        file: ForeignFile,
+    },
     #[error("cannot claim domain '{domain}' with {path}: {source}")]
     Io {
         domain: String,
@@ -264,7 +292,14 @@ impl Domain {
                         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
                         Err(e) => return Err(io(e)),
                     }
-                    if owner_at(&path).map_err(io)? == Owner::Alive {
+                    let owner = owner_at(&path).map_err(|e| match e {
+                        OwnerError::Io(source) => io(source),
+                        OwnerError::Foreign(file) => ClaimError::Foreign {
+                            domain: self.name.clone(),
+                            file,
+                        },
+                    })?;
+                    if owner == Owner::Alive {
                         return Err(ClaimError::InUse(self.name.clone()));
                     }
                     match std::fs::remove_file(&path) {
@@ -280,9 +315,28 @@ impl Domain {
         claimed.map(|()| Claim { _file: file })
     }
 
-    fn owner(&self) -> Owner {
-        // Unreadable counts as alive: a run we cannot judge is left alone.
-        owner_at(&self.owner_path()).unwrap_or(Owner::Alive)
+    /// Who holds this domain; a foreign owner file is reported, not opened.
+    fn owner(&self) -> Result<Owner, ForeignFile> {
+        match owner_at(&self.owner_path()) {
+            Ok(owner) => Ok(owner),
+            Err(OwnerError::Foreign(file)) => Err(file),
+            // Unreadable counts as alive: a run we cannot judge is left alone.
+            Err(OwnerError::Io(_)) => Ok(Owner::Alive),
+        }
+    }
+
+    /// This domain's files in /dev/shm that are not this user's regular files.
+    fn foreign_files(&self) -> Vec<ForeignFile> {
+        let Ok(files) = self.leftovers_in(std::path::Path::new(SHM_DIR)) else {
+            return Vec::new();
+        };
+        files
+            .into_iter()
+            .filter_map(|path| {
+                let metadata = std::fs::symlink_metadata(&path).ok()?;
+                foreign(&path, &metadata)
+            })
+            .collect()
     }
 
     /// Deletes what iceoryx2 leaves of this domain in /dev/shm once every process of it has
@@ -323,7 +377,7 @@ impl Domain {
             return false;
         };
         files.iter().all(|path| {
-            std::fs::metadata(path)
+            std::fs::symlink_metadata(path)
                 .and_then(|m| m.modified())
                 .ok()
                 .and_then(|t| t.elapsed().ok())
@@ -345,12 +399,39 @@ impl Domain {
     }
 
     /// Cleans up every domain of this user in /dev/shm that no live process uses any more:
-    /// dead nodes are removed and, where no node is alive, the domain's files too. Returns
-    /// the domains cleaned. Run at start so crashed runs do not pile up shared memory. A
-    /// domain claimed by a live launcher is left to it; one whose launcher died is cleaned
-    /// at once, one never claimed once its files are a minute old. Other users' domains are
-    /// theirs to clean.
-    pub fn sweep_abandoned() -> Vec<String> {
+    /// dead nodes are removed and, where no node is alive, the domain's files too. Run at
+    /// start so crashed runs do not pile up shared memory. A domain claimed by a live
+    /// launcher is left to it; one whose launcher died is cleaned at once, one never
+    /// claimed once its files are a minute old. Other users' domains are theirs to clean,
+    /// and a domain with a file under this user's prefix that is not this user's (anyone
+    /// can create one in /dev/shm) is left as it is and the file reported.
+    pub fn sweep_abandoned() -> Sweep {
+        let mut sweep = Sweep::default();
+        for name in Self::user_domain_names() {
+            let Ok(domain) = Domain::new(&name) else {
+                continue;
+            };
+            let foreign = domain.foreign_files();
+            if !foreign.is_empty() {
+                sweep.foreign.extend(foreign);
+                continue;
+            }
+            let owner = match domain.owner() {
+                Ok(owner) => owner,
+                Err(file) => {
+                    sweep.foreign.push(file);
+                    continue;
+                }
+            };
+            if owner != Owner::Alive && domain.sweep_one(owner) {
+                sweep.cleaned.push(name);
+            }
+        }
+        sweep
+    }
+
+    /// The names of this user's domains that have files in /dev/shm.
+    fn user_domain_names() -> Vec<String> {
         let Ok(entries) = std::fs::read_dir(SHM_DIR) else {
             return Vec::new();
         };
@@ -365,29 +446,20 @@ impl Domain {
             .collect();
         names.sort();
         names.dedup();
-        let mut cleaned = Vec::new();
-        for name in names {
-            let Ok(domain) = Domain::new(&name) else {
-                continue;
-            };
-            let owner = domain.owner();
-            if owner == Owner::Alive {
-                continue;
-            }
-            let dead = domain.cleanup_dead_nodes();
-            // A pipeline starting right now has files but no node yet: leave young domains,
-            // unless their launcher is known to be dead.
-            if domain.alive_nodes() == 0
-                && (owner == Owner::Gone || domain.is_older_than(ABANDONED_AFTER))
-            {
-                if domain.remove_leftovers().unwrap_or(0) > 0 || dead > 0 {
-                    cleaned.push(name);
-                }
-            } else if dead > 0 {
-                cleaned.push(name);
-            }
+        names
+    }
+
+    /// Cleans this unclaimed or orphaned domain; true when something was removed.
+    fn sweep_one(&self, owner: Owner) -> bool {
+        let dead = self.cleanup_dead_nodes();
+        // A pipeline starting right now has files but no node yet: leave young domains,
+        // unless their launcher is known to be dead.
+        if self.alive_nodes() == 0 && (owner == Owner::Gone || self.is_older_than(ABANDONED_AFTER))
+        {
+            self.remove_leftovers().unwrap_or(0) > 0 || dead > 0
+        } else {
+            dead > 0
         }
-        cleaned
     }
 
     /// Removes the resources of this domain's nodes whose processes died, so a killed
@@ -455,18 +527,46 @@ fn prepare_private_dir(dir: &std::path::Path) -> Result<(), NodeError> {
     Ok(())
 }
 
-/// Who holds the owner file at `path`.
-fn owner_at(path: &std::path::Path) -> std::io::Result<Owner> {
-    let file = match std::fs::File::open(path) {
-        Ok(file) => file,
+/// Why an owner file could not be judged.
+#[derive(Debug)]
+enum OwnerError {
+    Io(std::io::Error),
+    Foreign(ForeignFile),
+}
+
+/// `Some` when `metadata` (of `path`, not followed) is not this user's regular file.
+fn foreign(path: &std::path::Path, metadata: &std::fs::Metadata) -> Option<ForeignFile> {
+    (metadata.uid() != effective_uid() || !metadata.is_file()).then(|| ForeignFile {
+        path: path.to_path_buf(),
+        kind: kind_of(metadata),
+        owner: metadata.uid(),
+    })
+}
+
+/// Who holds the owner file at `path`. It is opened without following a link or blocking,
+/// and judged by what was opened: another user's file or a FIFO is reported, not locked.
+fn owner_at(path: &std::path::Path) -> Result<Owner, OwnerError> {
+    let (file, metadata) = match open_unblocked(path, Links::Refuse) {
+        Ok(opened) => opened,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Owner::None),
-        Err(e) => return Err(e),
+        Err(e) if e.raw_os_error() == Some(nix::libc::ELOOP) => {
+            let metadata = std::fs::symlink_metadata(path).map_err(OwnerError::Io)?;
+            return Err(OwnerError::Foreign(ForeignFile {
+                path: path.to_path_buf(),
+                kind: kind_of(&metadata),
+                owner: metadata.uid(),
+            }));
+        }
+        Err(e) => return Err(OwnerError::Io(e)),
     };
+    if let Some(file) = foreign(path, &metadata) {
+        return Err(OwnerError::Foreign(file));
+    }
     // Shared, so two sweeps looking at once do not take each other for the owner.
     match file.try_lock_shared() {
         Ok(()) => Ok(Owner::Gone),
         Err(std::fs::TryLockError::WouldBlock) => Ok(Owner::Alive),
-        Err(std::fs::TryLockError::Error(e)) => Err(e),
+        Err(std::fs::TryLockError::Error(e)) => Err(OwnerError::Io(e)),
     }
 }
 

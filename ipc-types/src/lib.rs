@@ -49,6 +49,7 @@ pub mod shm;
 pub mod shutdown;
 pub mod topic;
 mod transport;
+pub mod unblocked;
 mod zeroed;
 
 pub use capacity::{
@@ -56,7 +57,8 @@ pub use capacity::{
     MAX_LINES, MAX_MAP_CORNERS, MAX_PATH_CHUNK_POSES, MAX_WORLD_CORNERS,
 };
 pub use domain::{
-    Claim, ClaimError, Domain, DomainError, FILE_PREFIX, NodeError, user_prefix, user_root,
+    Claim, ClaimError, Domain, DomainError, FILE_PREFIX, ForeignFile, NodeError, Sweep,
+    user_prefix, user_root,
 };
 pub use header::{FLAG_END_OF_STREAM, FRAME_ID_LEN, Header, now_ns};
 pub use message::Message;

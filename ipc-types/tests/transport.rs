@@ -278,7 +278,7 @@ fn a_claimed_domain_is_refused_to_others_and_swept_at_once_when_its_owner_is_gon
     // The owner dies (the lock goes with its file descriptor): its files go at the next
     // sweep, without waiting for them to age.
     drop(claim);
-    let cleaned = Domain::sweep_abandoned();
+    let cleaned = Domain::sweep_abandoned().cleaned;
     assert!(
         cleaned.iter().any(|name| name == domain.name()),
         "{cleaned:?}"
@@ -287,4 +287,30 @@ fn a_claimed_domain_is_refused_to_others_and_swept_at_once_when_its_owner_is_gon
     // And the domain can be claimed again.
     drop(domain.claim().unwrap());
     domain.remove_leftovers().unwrap();
+}
+
+#[test]
+fn a_planted_fifo_or_link_as_owner_file_is_reported_not_opened() {
+    let shm = std::path::Path::new("/dev/shm");
+    for planted in ["fifo", "link"] {
+        let domain = unique_domain(planted);
+        let owner = shm.join(format!("{}owner.lock", domain.file_prefix()));
+        match planted {
+            "fifo" => nix::unistd::mkfifo(&owner, nix::sys::stat::Mode::from_bits_truncate(0o666))
+                .unwrap(),
+            _ => std::os::unix::fs::symlink("/dev/zero", &owner).unwrap(),
+        }
+        // A blocking open of the FIFO would never return: the sweep must come back.
+        let sweep = Domain::sweep_abandoned();
+        let reported: Vec<_> = sweep.foreign.iter().map(|f| f.path.clone()).collect();
+        assert!(reported.contains(&owner), "{planted}: {reported:?}");
+        assert!(!sweep.cleaned.iter().any(|name| name == domain.name()));
+        assert!(owner.symlink_metadata().is_ok(), "{planted} left in place");
+        let refused = domain.claim().unwrap_err();
+        assert!(
+            matches!(&refused, ClaimError::Foreign { file, .. } if file.path == owner),
+            "{planted}: {refused:?}"
+        );
+        std::fs::remove_file(&owner).unwrap();
+    }
 }

@@ -52,6 +52,7 @@ fn run() -> Result<ExitCode> {
         print_config(&config, format)?;
         return Ok(ExitCode::SUCCESS);
     }
+    check_source_input(&config).context("refusing to start")?;
     // slam-proc refuses it too, but as a stage that dies once map-sink is up.
     slam_proc::memory::check(config.slam.filter.particles).context("refusing to start")?;
     // A map that cannot be used would only fail once the stages are up.
@@ -67,6 +68,9 @@ fn run() -> Result<ExitCode> {
         // Mapping on it, map-sink starts its grid from the saved one (a localizing run's
         // slam-proc needs the same of it): the check map-sink makes, made now.
         if let Some(grid) = &saved.grid {
+            grid.check_extent(run_start(&config)?).with_context(|| {
+                format!("refusing to start: cannot use the map in {}", dir.display())
+            })?;
             map_sink::prior_grid(grid, config.grid.resolution).with_context(|| {
                 format!("refusing to start: cannot use the map in {}", dir.display())
             })?;
@@ -91,8 +95,12 @@ fn run() -> Result<ExitCode> {
     }
     // A bad relations file would only show once the whole log has run: check it now.
     if let Some(path) = &config.relations {
-        let relations = slam_eval::read_relations(path)
+        let read = slam_eval::read_relations_noted(path)
             .context("refusing to start: the relations file cannot be used")?;
+        for note in read.notes(path) {
+            say_err(&note);
+        }
+        let relations = read.relations;
         if !args.quiet {
             say_err(&format!(
                 "{} relations in {}",
@@ -136,7 +144,10 @@ fn run() -> Result<ExitCode> {
     // Atomically, like every small result of a run: a full disk leaves no half file.
     write_atomic(&out.join("config.toml"), effective.as_bytes())?;
 
-    let cleaned = Domain::sweep_abandoned();
+    let ipc_types::Sweep { cleaned, foreign } = Domain::sweep_abandoned();
+    for file in &foreign {
+        say_err(&format!("slam-launch: {file}"));
+    }
     if !cleaned.is_empty() {
         say_err(&format!(
             "cleaned up shared memory of {} abandoned run(s): {}",
@@ -266,6 +277,42 @@ fn write_memory(out: &Path, stages: Vec<(String, u64)>) {
     if let Err(e) = written {
         say_err(&format!("slam-launch: cannot write {MEMORY_FILE}: {e:#}"));
     }
+}
+
+/// Where the run starts in a saved map's frame, when it is known: the initial pose, or the
+/// map's origin for a run that maps on it (a global localization searches).
+fn run_start(config: &RunConfig) -> Result<Option<[f64; 2]>> {
+    Ok(match &config.initial_pose {
+        Some(pose) => {
+            let pose = slam_proc::parse_pose(pose)?;
+            Some([pose.x, pose.y])
+        }
+        None => (!config.localize).then_some([0.0, 0.0]),
+    })
+}
+
+/// The world or log the source will read, checked as the source reads it: a device, a
+/// FIFO or a file too large would otherwise only fail (or hang) a started stage.
+fn check_source_input(config: &RunConfig) -> Result<()> {
+    match config.source {
+        SourceKind::Sim => {
+            lidar_sim::World::resolve(&config.sim.world)
+                .with_context(|| format!("world '{}'", config.sim.world))?;
+        }
+        SourceKind::Replay => {
+            if let (Some(file), Ok(format)) = (&config.replay.file, config.replay.format.parse()) {
+                let opened =
+                    lidar_replay::input_kind(format).open(file, stage_kit::input::Links::Follow)?;
+                // A text log is also read up to its first scan, as lidar-replay will.
+                if format != lidar_replay::LogFormat::Mcap {
+                    lidar_replay::check_format(format, std::io::BufReader::new(opened))
+                        .with_context(|| format!("{}", file.display()))?;
+                }
+            }
+        }
+        SourceKind::Hokuyo => {}
+    }
+    Ok(())
 }
 
 /// A short name of the source, for the progress line and the default output directory.

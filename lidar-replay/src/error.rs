@@ -124,6 +124,9 @@ pub enum OpenError {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// Not a regular file, or too large.
+    #[error(transparent)]
+    Input(#[from] stage_kit::InputError),
     /// The file is not a log of the given format, or has no scan where one must be.
     #[error("{path} is not a {format} log: {reason}")]
     NotThisFormat {

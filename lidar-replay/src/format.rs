@@ -22,6 +22,23 @@ pub const SNIFF_LINES: u64 = 5_000;
 /// line at all. A real log's first scan comes within its first few hundred kilobytes.
 pub const SNIFF_BYTES: u64 = 64 << 20;
 
+/// A text log. It is read as a stream, a line at most [`crate::MAX_LINE_BYTES`], and refused
+/// when no scan comes within [`SNIFF_BYTES`], so what it may hold is bounded by those; the
+/// size limit keeps out only what is no file of records (a sparse file of tebibytes).
+pub const LOG_INPUT: stage_kit::InputKind = stage_kit::InputKind {
+    what: "log",
+    limit_name: "lidar_replay::LOG_INPUT",
+    max_bytes: 4 << 40,
+};
+
+/// The kind of input a file of `format` is, with its size limit.
+pub fn input_kind(format: LogFormat) -> stage_kit::InputKind {
+    match format {
+        LogFormat::SeedCsv | LogFormat::Carmen => LOG_INPUT,
+        LogFormat::Mcap => recorder::RECORDING_INPUT,
+    }
+}
+
 /// The formats `lidar-replay` reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LogFormat {
@@ -259,13 +276,9 @@ pub fn open_log_until(
     reorder: ReorderConfig,
     stop: StopFlag,
 ) -> Result<LogReader<BufReader<File>>, OpenError> {
-    let open = || {
-        File::open(path)
-            .map(BufReader::new)
-            .map_err(|source| OpenError::Io {
-                path: path.to_path_buf(),
-                source,
-            })
+    let open = || -> Result<_, OpenError> {
+        let file = LOG_INPUT.open(path, stage_kit::input::Links::Follow)?;
+        Ok(BufReader::new(file))
     };
     check_format_until(format, open()?, stop).map_err(|e| match e {
         CheckError::Io(source) => OpenError::Io {

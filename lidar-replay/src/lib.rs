@@ -47,8 +47,8 @@ pub use degradation::{Degradation, DegradationError};
 pub use error::{CheckError, LineError, Malformation, OpenError, ReadError};
 pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};
 pub use format::{
-    LogFormat, LogReader, SNIFF_BYTES, SNIFF_LINES, check_format, check_format_until, open_log,
-    open_log_until,
+    LOG_INPUT, LogFormat, LogReader, SNIFF_BYTES, SNIFF_LINES, check_format, check_format_until,
+    input_kind, open_log, open_log_until,
 };
 pub use lines::{MAX_LINE_BYTES, StopFlag};
 pub use odometry_judge::Verdict;

@@ -1,4 +1,5 @@
-//! `lidar-replay` against input no log has: a file without newlines (`/dev/zero`), one huge
+//! `lidar-replay` against input no log has: a file without newlines (a sparse file), a
+//! device (`/dev/zero`), one huge
 //! line in the middle of a log, and a stop while reading an endless line. Each replay runs
 //! with its heap capped (RLIMIT_DATA), so a reader that held a whole line would fail here
 //! instead of filling the machine's memory.
@@ -64,16 +65,30 @@ fn spawn_replay(tag: &str, file: &Path, extra: &[&str]) -> Child {
 
 #[test]
 fn a_file_without_newlines_is_refused_at_once() {
-    let child = spawn_replay("zero", Path::new("/dev/zero"), &[]);
+    // Ten gigabytes of zeros: a sparse file, so it takes no disk space.
+    let (path, file) = fixture("zeros.clf");
+    file.set_len(10 << 30).unwrap();
+    drop(file);
+    let child = spawn_replay("zeros", &path, &[]);
     let output = finish(child, LIMIT);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success(), "{stderr}");
     assert_says(
         &stderr,
         &[
-            "/dev/zero is not a carmen log: no valid scan in its first 64 MiB",
+            "zeros.clf is not a carmen log: no valid scan in its first 64 MiB",
             "line 1: 67108864 bytes long, over the 1048576 bytes a line may have",
         ],
+    );
+    std::fs::remove_file(&path).unwrap();
+    // A device is no log at all.
+    let child = spawn_replay("zero", Path::new("/dev/zero"), &[]);
+    let output = finish(child, LIMIT);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert_says(
+        &stderr,
+        &["the log /dev/zero is a character device, not a regular file"],
     );
 }
 

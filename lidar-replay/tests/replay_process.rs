@@ -412,6 +412,7 @@ fn a_file_of_another_format_is_refused_before_publishing() {
         .unwrap();
     assert!(!missing.status.success());
     assert!(
-        String::from_utf8_lossy(&missing.stderr).contains("cannot open /nonexistent/scans.csv")
+        String::from_utf8_lossy(&missing.stderr)
+            .contains("cannot open the log /nonexistent/scans.csv")
     );
 }

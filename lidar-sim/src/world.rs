@@ -12,6 +12,13 @@ use crate::builtin;
 /// Names accepted by [`World::builtin`].
 pub const BUILTIN_WORLDS: [&str; 3] = ["hall", "office", "corridor"];
 
+/// A world file: a few bytes per wall, so this holds hundreds of thousands of walls.
+pub const WORLD_INPUT: stage_kit::InputKind = stage_kit::InputKind {
+    what: "world file",
+    limit_name: "lidar_sim::WORLD_INPUT",
+    max_bytes: 16 << 20,
+};
+
 /// Walls and the waypoint path, metres in the world frame.
 ///
 /// JSON form: `{"walls": [[[x, y], ...], ...], "waypoints": [[x, y], ...], "speed": 1.0}`.
@@ -47,10 +54,7 @@ impl World {
     /// Reads and checks a JSON world file.
     pub fn load(path: impl AsRef<Path>) -> Result<World, WorldError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| WorldError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = WORLD_INPUT.read_to_string(path)?;
         World::from_json_str(&text)
     }
 

@@ -1,19 +1,13 @@
 //! Why a world was refused; each variant names the problem and where it is.
 
-use std::path::PathBuf;
-
 /// A world that cannot be simulated. `path` fields are JSON paths such as `walls[2][5]`.
 #[derive(Debug, thiserror::Error)]
 pub enum WorldError {
     #[error("unknown world {name:?} (built in: hall, office, corridor)")]
     UnknownBuiltin { name: String },
-    #[error(
-        "cannot read world file {path} (and it is not a built-in world: hall, office, corridor): {source}"
-    )]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    /// Not a built-in world, and not a world file that can be read.
+    #[error("not a built-in world (hall, office, corridor), nor a world file")]
+    Read(#[from] stage_kit::InputError),
     #[error("world JSON does not parse at line {line}, column {column}: {message}")]
     Json {
         line: usize,

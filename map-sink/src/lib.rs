@@ -111,7 +111,10 @@ pub use prior_grid::{PRIOR_FREE_LOG_ODDS, PRIOR_OCCUPIED_LOG_ODDS, PriorGridErro
 pub use recorder::{
     FinishedRun, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions,
 };
-pub use saved_map::{GridMap, SavedMap};
+pub use saved_map::{
+    GridMap, LANDMARKS_INPUT, MAP_IMAGE_INPUT, MAP_YAML_INPUT, MAX_MAP_COORDINATE_M,
+    MapExtentError, SavedMap,
+};
 pub use scan_alignment::{ScanAlignment, ScanAlignmentConfig};
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::MapCorner;

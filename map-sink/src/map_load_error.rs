@@ -1,6 +1,5 @@
 //! Why a saved map directory was refused.
 
-use std::io;
 use std::path::PathBuf;
 
 /// Why [`crate::SavedMap::load`] refused a directory; each names the file at fault.
@@ -9,14 +8,9 @@ pub enum MapLoadError {
     /// A file the map needs is not there.
     #[error("{} is missing: not a saved map (a run's output directory holds landmarks.json, map.yaml and map.pgm)", path.display())]
     Missing { path: PathBuf },
-    /// A file is there but could not be read.
-    // The cause is the source, not part of the message: `{:#}` would print it twice.
-    #[error("cannot read {}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: io::Error,
-    },
+    /// A file is there but could not be read, is no regular file or is too large.
+    #[error(transparent)]
+    Input(#[from] stage_kit::InputError),
     /// A file ends before its content does.
     #[error("{} is truncated: {reason}", path.display())]
     Truncated { path: PathBuf, reason: String },

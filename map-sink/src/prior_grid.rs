@@ -43,7 +43,10 @@ pub enum PriorGridError {
     Rotated { yaw: f64 },
     #[error("its grid's resolution {resolution} m is outside {min} to {max} m")]
     Resolution { resolution: f64, min: f64, max: f64 },
-    #[error("its grid's origin ({x}, {y}) is not a finite position")]
+    #[error(
+        "its grid's origin ({x}, {y}) is not within {} m of the map frame's",
+        crate::MAX_MAP_COORDINATE_M
+    )]
     Origin { x: f64, y: f64 },
     #[error("its grid on cells of {resolution_m} m: {source}")]
     Size {
@@ -71,7 +74,9 @@ pub fn prior_grid(
             max: *RESOLUTION_RANGE_M.end(),
         });
     }
-    if !(ox.is_finite() && oy.is_finite()) {
+    // Beyond it, cell indices would overflow.
+    let far = |v: f64| v.is_nan() || v.abs() > crate::MAX_MAP_COORDINATE_M;
+    if far(ox) || far(oy) {
         return Err(PriorGridError::Origin { x: ox, y: oy });
     }
     if saved.width == 0 || saved.height == 0 {

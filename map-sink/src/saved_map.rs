@@ -4,6 +4,8 @@
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 
+use stage_kit::{InputError, InputKind};
+
 use crate::landmarks::{Landmarks, LandmarksError};
 use crate::map_load_error::MapLoadError;
 use crate::map_writer::LANDMARKS_FILE;
@@ -27,6 +29,58 @@ impl GridMap {
     pub fn state(&self, col: usize, row: usize) -> CellState {
         self.cells[row * self.width + col]
     }
+
+    /// The area the grid covers: lower-left and upper-right corners, map frame.
+    pub fn extent(&self) -> ([f64; 2], [f64; 2]) {
+        let [x, y, _] = self.yaml.origin;
+        let res = self.yaml.resolution;
+        (
+            [x, y],
+            [x + self.width as f64 * res, y + self.height as f64 * res],
+        )
+    }
+
+    /// Checks that the grid lies within [`MAX_MAP_COORDINATE_M`] of the map frame's origin
+    /// and, when the run knows where it starts (`start`, map frame), that it covers that
+    /// place: a map far from where its run is would make the run's grid span both.
+    pub fn check_extent(&self, start: Option<[f64; 2]>) -> Result<(), MapExtentError> {
+        let (low, high) = self.extent();
+        let within = |v: f64| v.abs() <= MAX_MAP_COORDINATE_M;
+        if !low.into_iter().chain(high).all(within) {
+            return Err(MapExtentError::Far { low, high });
+        }
+        if let Some(start) = start {
+            let covers = (0..2).all(|a| (low[a]..=high[a]).contains(&start[a]));
+            if !covers {
+                return Err(MapExtentError::Elsewhere { low, high, start });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Farthest a saved grid may reach from its frame's origin, metres: a map of a city.
+pub const MAX_MAP_COORDINATE_M: f64 = 100_000.0;
+
+/// Why a saved grid's place does not fit the run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MapExtentError {
+    #[error(
+        "its grid spans x {:.2} to {:.2} m, y {:.2} to {:.2} m: beyond {MAX_MAP_COORDINATE_M} m \
+         of its origin",
+        low[0], high[0], low[1], high[1]
+    )]
+    Far { low: [f64; 2], high: [f64; 2] },
+    #[error(
+        "its grid spans x {:.2} to {:.2} m, y {:.2} to {:.2} m, which does not hold the run's \
+         start ({:.2}, {:.2})",
+        low[0], high[0], low[1], high[1], start[0], start[1]
+    )]
+    Elsewhere {
+        low: [f64; 2],
+        high: [f64; 2],
+        start: [f64; 2],
+    },
 }
 
 /// A saved map: the landmarks and, if the run traced one, the occupancy grid.
@@ -41,7 +95,7 @@ impl SavedMap {
     /// that does not match its description or the landmarks' record of it.
     pub fn load(dir: &Path) -> Result<Self, MapLoadError> {
         let landmarks_path = dir.join(LANDMARKS_FILE);
-        let text = read(&landmarks_path)?;
+        let text = read(&landmarks_path, &LANDMARKS_INPUT)?;
         let text = String::from_utf8(text).map_err(|_| MapLoadError::Foreign {
             path: landmarks_path.clone(),
             reason: "not UTF-8 text".into(),
@@ -74,7 +128,7 @@ fn load_grid(
     reference: &crate::landmarks::GridReference,
 ) -> Result<GridMap, MapLoadError> {
     let yaml_path = dir.join(&reference.yaml);
-    let bytes = read(&yaml_path)?;
+    let bytes = read(&yaml_path, &MAP_YAML_INPUT)?;
     let text = String::from_utf8(bytes).map_err(|_| MapLoadError::Foreign {
         path: yaml_path.clone(),
         reason: "not UTF-8 text".into(),
@@ -107,7 +161,7 @@ fn load_grid(
             ),
         });
     }
-    let pgm = Pgm::decode(&read(&image_path)?).map_err(|e| match e {
+    let pgm = Pgm::decode(&read(&image_path, &MAP_IMAGE_INPUT)?).map_err(|e| match e {
         PgmError::Foreign(reason) => MapLoadError::Foreign {
             path: image_path.clone(),
             reason,
@@ -160,14 +214,62 @@ fn resolve(dir: &Path, name: &str) -> PathBuf {
     }
 }
 
-fn read(path: &Path) -> Result<Vec<u8>, MapLoadError> {
-    std::fs::read(path).map_err(|source| match source.kind() {
-        ErrorKind::NotFound => MapLoadError::Missing {
-            path: path.to_path_buf(),
-        },
-        _ => MapLoadError::Io {
-            path: path.to_path_buf(),
-            source,
-        },
+/// A saved map's landmarks: a few hundred bytes a corner.
+pub const LANDMARKS_INPUT: InputKind = InputKind {
+    what: "landmarks file",
+    limit_name: "map_sink::LANDMARKS_INPUT",
+    max_bytes: 64 << 20,
+};
+
+/// A map_server description: a dozen lines.
+pub const MAP_YAML_INPUT: InputKind = InputKind {
+    what: "map description",
+    limit_name: "map_sink::MAP_YAML_INPUT",
+    max_bytes: 1 << 20,
+};
+
+/// A map image: one byte a cell, so 8192 x 8192 cells (410 m square at 5 cm).
+pub const MAP_IMAGE_INPUT: InputKind = InputKind {
+    what: "map image",
+    limit_name: "map_sink::MAP_IMAGE_INPUT",
+    max_bytes: 64 << 20,
+};
+
+fn read(path: &Path, kind: &InputKind) -> Result<Vec<u8>, MapLoadError> {
+    kind.read(path).map_err(|e| match e {
+        InputError::Open { source, .. } if source.kind() == ErrorKind::NotFound => {
+            MapLoadError::Missing {
+                path: path.to_path_buf(),
+            }
+        }
+        other => other.into(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 5 x 5 m grid whose lower-left corner is at `origin`.
+    fn grid(origin: [f64; 2]) -> GridMap {
+        GridMap {
+            yaml: MapYaml::trinary("map.pgm", 0.05, origin),
+            width: 100,
+            height: 100,
+            cells: vec![CellState::Unknown; 100 * 100],
+        }
+    }
+
+    #[test]
+    fn a_grid_far_away_or_not_where_the_run_starts_is_refused() {
+        assert_eq!(grid([-1.0, -2.0]).check_extent(Some([0.0, 0.0])), Ok(()));
+        assert_eq!(grid([1000.0, 1000.0]).check_extent(None), Ok(()));
+        let elsewhere = grid([1000.0, 1000.0]).check_extent(Some([0.0, 0.0]));
+        assert!(
+            matches!(elsewhere, Err(MapExtentError::Elsewhere { .. })),
+            "{elsewhere:?}"
+        );
+        let far = grid([1e300, -1e300]).check_extent(None).unwrap_err();
+        assert!(far.to_string().contains("beyond 100000 m"), "{far}");
+    }
 }

@@ -63,8 +63,8 @@ pub use path::{MapPathMessage, PathChunks, PathMessage};
 pub use pose::{MAP_FRAME, PoseMessage};
 pub use pose_in_frame::PoseInFrame;
 pub use reader::{
-    ODOMETRY_LOOKAHEAD, OpenRecordingError, RECORD_LENGTH_LIMIT, ReadError, RecordingInfo,
-    RecordingReader, SNIFF_MESSAGES, open_recording,
+    ODOMETRY_LOOKAHEAD, OpenRecordingError, RECORD_LENGTH_LIMIT, RECORDING_INPUT, ReadError,
+    RecordingInfo, RecordingReader, SNIFF_MESSAGES, open_recording,
 };
 pub use recording::{MAP_PERIOD_NS, RECORDING_FILE, Recording, RecordingSummary};
 pub use scan::{FiniteRanges, ScanMessage};

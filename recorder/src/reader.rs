@@ -41,6 +41,9 @@ pub enum OpenRecordingError {
         path: PathBuf,
         cause: std::io::Error,
     },
+    /// Not a regular file, or too large.
+    #[error(transparent)]
+    Input(#[from] stage_kit::InputError),
     #[error("{path} is not an MCAP file: {cause}")]
     NotMcap { path: PathBuf, cause: McapError },
     #[error("{path} is damaged before its first scan (after {messages} messages): {cause}")]
@@ -162,18 +165,21 @@ impl<R: Read> Iterator for RecordingReader<R> {
     }
 }
 
+/// A recording: read as a stream; the limit keeps out what no run recorded.
+pub const RECORDING_INPUT: stage_kit::InputKind = stage_kit::InputKind {
+    what: "recording",
+    limit_name: "recorder::RECORDING_INPUT",
+    max_bytes: 64 << 30,
+};
+
 /// Opens `path` for replay after checking that it is a recording of slam-record with at
 /// least one scan that can be rebuilt (among its first [`SNIFF_MESSAGES`] messages).
 pub fn open_recording(
     path: &Path,
 ) -> Result<(RecordingReader<BufReader<File>>, RecordingInfo), OpenRecordingError> {
-    let open = || {
-        File::open(path)
-            .map(|f| RecordingReader::new(BufReader::new(f)))
-            .map_err(|cause| OpenRecordingError::Io {
-                path: path.to_path_buf(),
-                cause,
-            })
+    let open = || -> Result<_, OpenRecordingError> {
+        let file = RECORDING_INPUT.open(path, stage_kit::input::Links::Follow)?;
+        Ok(RecordingReader::new(BufReader::new(file)))
     };
     let info = check_recording(open()?).map_err(|problem| match problem {
         Problem::NotMcap(cause) => OpenRecordingError::NotMcap {

@@ -277,7 +277,9 @@ fn what_is_no_recording_is_refused_naming_the_problem() {
     assert!(reason.contains("empty.mcap"), "{reason}");
 
     let missing = dir.join("missing.mcap");
-    assert!(refusal(&missing).starts_with(&format!("cannot open {}", missing.display())));
+    assert!(
+        refusal(&missing).starts_with(&format!("cannot open the recording {}", missing.display()))
+    );
 
     // An MCAP file with no scans: a run recorded without a source, or someone else's.
     let foreign = dir.join("foreign.mcap");

@@ -152,6 +152,12 @@ impl FrontEndConfig {
             odometry_scale_min_evidence,
         ))?;
         check(
+            "voxel_size",
+            self.voxel_size,
+            self.voxel_size >= 1e-3,
+            "must be at least 0.001 m",
+        )?;
+        check(
             "odometry_scale_max_correction",
             self.odometry_scale_max_correction,
             (0.0..0.5).contains(&self.odometry_scale_max_correction),

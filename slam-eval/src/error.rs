@@ -11,6 +11,9 @@ pub enum EvalError {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// An input file that is no regular file, too large or unreadable.
+    #[error(transparent)]
+    Input(#[from] stage_kit::InputError),
     #[error("{}, line {line}: {reason}", path.display())]
     Malformed {
         path: PathBuf,

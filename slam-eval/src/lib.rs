@@ -65,8 +65,11 @@ pub use error::EvalError;
 pub use gap::{Gaps, position_gaps};
 pub use pose::{Pose, from_tum, from_xyz_rpy, magnitude};
 pub use pose_errors::PoseErrors;
-pub use relations::{Relation, read_relations};
+pub use relations::{
+    MAX_RELATION_SPEED_M_S, RELATION_SLACK_M, RELATIONS_INPUT, Relation, RelationsRead,
+    read_relations, read_relations_noted,
+};
 pub use score::{DEFAULT_TOLERANCE_NS, Score, Unmatched, score};
 pub use stats::ErrorStats;
 pub use summary::ScoreSummary;
-pub use trajectory::Trajectory;
+pub use trajectory::{TRAJECTORY_INPUT, Trajectory};

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use slam_eval::{DEFAULT_TOLERANCE_NS, ErrorStats, Score, Trajectory, read_relations, score};
+use slam_eval::{DEFAULT_TOLERANCE_NS, ErrorStats, Score, Trajectory, read_relations_noted, score};
 use slam_geom::format_stamp;
 
 /// Scores a trajectory with the relative-pose metric of Kuemmerle et al. 2009: for every
@@ -50,7 +50,11 @@ fn run(args: Args) -> Result<()> {
     );
     let tolerance_ns = (args.tolerance_ms * 1e6).round() as u64;
     let trajectory = Trajectory::read_tum(&args.trajectory)?;
-    let mut relations = read_relations(&args.relations)?;
+    let read = read_relations_noted(&args.relations)?;
+    for note in read.notes(&args.relations) {
+        eprintln!("slam-score: {note}");
+    }
+    let mut relations = read.relations;
     if let Some(span_s) = args.min_span_s {
         anyhow::ensure!(
             span_s.is_finite() && span_s >= 0.0,

@@ -10,12 +10,10 @@ use slam_geom::parse_stamp_ns;
 /// returns becomes [`EvalError::Malformed`] naming the line.
 pub(crate) fn parse_lines<T>(
     path: &Path,
+    kind: &stage_kit::InputKind,
     mut parse: impl FnMut(&[&str]) -> Result<T, String>,
 ) -> Result<Vec<(usize, T)>, EvalError> {
-    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = kind.read_to_string(path)?;
     let mut items = Vec::new();
     for (index, line) in text.lines().enumerate() {
         let line = line.trim();

@@ -3,9 +3,16 @@
 use std::path::Path;
 
 use crate::error::EvalError;
-use slam_geom::{TumReadError, read_tum};
+use slam_geom::parse_tum;
 
 use crate::pose::{Pose, from_tum};
+
+/// A TUM trajectory: about 100 bytes a pose.
+pub const TRAJECTORY_INPUT: stage_kit::InputKind = stage_kit::InputKind {
+    what: "trajectory",
+    limit_name: "slam_eval::TRAJECTORY_INPUT",
+    max_bytes: 1 << 30,
+};
 
 /// Poses sorted by stamp, each stamp once.
 #[derive(Debug, Clone, Default)]
@@ -34,10 +41,8 @@ impl Trajectory {
             line,
             reason,
         };
-        let lines = read_tum(path).map_err(|e| match e {
-            TumReadError::Io { path, source } => EvalError::Io { path, source },
-            TumReadError::Malformed { line, problem, .. } => malformed(line, problem.to_string()),
-        })?;
+        let text = TRAJECTORY_INPUT.read_to_string(path)?;
+        let lines = parse_tum(&text).map_err(|e| malformed(e.line, e.problem.to_string()))?;
         if lines.is_empty() {
             return Err(EvalError::Empty {
                 path: path.to_path_buf(),

@@ -179,3 +179,62 @@ fn nothing_to_score_is_an_error() {
         "{stderr}"
     );
 }
+
+#[test]
+fn absurd_relations_are_refused_with_their_line() {
+    let head = "1134864629.895182 1134864629.995182 1 0 0 0 0 0\n";
+    for (tag, line, reason) in [
+        (
+            "huge",
+            "1134864629.995182 1134864630.095182 1e300 0 0 0 0 0\n",
+            "a motion of 1.000e300 m in 0.100 s",
+        ),
+        (
+            "fast",
+            "1134864629.995182 1134864630.095182 50 0 0 0 0 0\n",
+            "a motion of 50.000 m in 0.100 s",
+        ),
+        (
+            "turns",
+            "1134864629.995182 1134864630.095182 1 0 0 0 0 100\n",
+            "yaw 100 rad",
+        ),
+        (
+            "inf",
+            "1134864629.995182 1134864630.095182 inf 0 0 0 0 0\n",
+            "x: \"inf\"",
+        ),
+        (
+            "clash",
+            "1134864629.895182 1134864629.995182 2 0 0 0 0 0\n",
+            "the stamps of line 1",
+        ),
+    ] {
+        let run = score_stretched(tag, &format!("{head}{line}"), &[]);
+        assert!(!run.success, "{tag}: {}", run.stdout);
+        let want = format!("{tag}.relations, line 2: {reason}");
+        assert!(run.stderr.contains(&want), "{tag}: {}", run.stderr);
+    }
+}
+
+#[test]
+fn a_repeated_line_counts_once_and_a_backward_one_is_scored_as_such() {
+    let forward = "1134864629.895182 1134864629.995182 1 0 0 0 0 0\n";
+    let backward = "1134864629.995182 1134864629.895182 -1 0 0 0 0 0\n";
+    let text = format!("{forward}{forward}{backward}");
+    let run = score_stretched("repeat", &text, &["--json"]);
+    assert!(run.success, "{}", run.stderr);
+    assert!(
+        run.stderr
+            .contains("repeat.relations, line 2: repeats line 1; counted once"),
+        "{}",
+        run.stderr
+    );
+    assert!(
+        run.stderr.contains("1 relation(s) with t2 before t1"),
+        "{}",
+        run.stderr
+    );
+    let score: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(score["relations"], 2, "{}", run.stdout);
+}

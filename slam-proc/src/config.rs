@@ -2,7 +2,9 @@
 //! robot or a UAV (steps up to ~0.2 m and ~0.2 rad between scans).
 
 use serde::{Deserialize, Serialize};
-use stage_kit::settings::{SettingError, check, check_counts, check_non_negative, check_positive};
+use stage_kit::settings::{
+    SettingError, check, check_counts, check_non_negative, check_positive, check_within,
+};
 
 use crate::localize_config::LocalizeConfig;
 use crate::pose_graph::GraphNoise;
@@ -267,6 +269,7 @@ impl SlamConfig {
     /// Checks that every parameter is usable; [`crate::FastSlam::new`] refuses a
     /// configuration that fails this.
     pub fn validate(&self) -> Result<(), SettingError> {
+        self.validate_extents()?;
         check_positive(&stage_kit::named_fields!(self;
             motion_max_translation, motion_max_rotation, motion_prior_sigma_xy,
             motion_prior_sigma_yaw, line_prior_sigma_xy, line_prior_sigma_yaw,
@@ -346,7 +349,58 @@ impl SlamConfig {
         )?;
         self.localize.validate()
     }
+
+    /// The ranges that bound the work a scan costs: distances within the sensor's reach
+    /// and a corner lookup's span of grid cells, drift and noise that still say something
+    /// about the motion (beyond them the particles scatter over the plane and the grid
+    /// with them).
+    fn validate_extents(&self) -> Result<(), SettingError> {
+        check_within(
+            &stage_kit::named_fields!(self; grid_cell_size, view_range),
+            MIN_GRID_CELL_M..=SENSOR_REACH_M,
+            "m",
+        )?;
+        let reach = SENSOR_REACH_M.min(MAX_LOOKUP_CELLS * self.grid_cell_size);
+        check_within(
+            &stage_kit::named_fields!(self; search_radius, revisit_search_radius, duplicate_radius),
+            0.0..=reach,
+            "m (the sensor's reach, and 32 cells of grid_cell_size)",
+        )?;
+        check_within(
+            &stage_kit::named_fields!(self;
+                measured_xy_variance_per_metre, measured_xy_variance_per_radian,
+                measured_yaw_variance_per_metre, measured_yaw_variance_per_radian,
+            ),
+            0.0..=MAX_DRIFT,
+            "(m^2 or rad^2 per metre or radian)",
+        )?;
+        check_within(
+            &stage_kit::named_fields!(self;
+                noise_xy_base, noise_xy_per_metre, noise_xy_per_radian, noise_yaw_base,
+                noise_yaw_per_radian, noise_yaw_per_metre, revisit_sigma_xy_per_metre,
+                revisit_sigma_yaw_per_metre,
+            ),
+            0.0..=MAX_DRIFT,
+            "(m or rad, per metre or radian)",
+        )?;
+        check_within(
+            &stage_kit::named_fields!(self; revisit_max_sigma_xy),
+            0.0..=SENSOR_REACH_M,
+            "m",
+        )
+    }
 }
+
+/// Farther than any planar lidar measures (the longest-reaching SICK, 80 m): a radius
+/// beyond it searches for what no scan can have seen.
+pub const SENSOR_REACH_M: f64 = 100.0;
+/// The finest corner grid: corners closer than this are one corner anyway.
+const MIN_GRID_CELL_M: f64 = 0.1;
+/// A corner lookup spans at most this many grid cells each way, whatever its radius.
+const MAX_LOOKUP_CELLS: f64 = 32.0;
+/// A drift or noise of a metre (or radian) per metre (or radian) of motion says nothing
+/// about the motion any more.
+const MAX_DRIFT: f64 = 1.0;
 
 #[cfg(test)]
 mod tests {
@@ -410,5 +464,20 @@ mod tests {
             refused(|c| c.update_min_distance = -0.5),
             Some("update_min_distance")
         );
+        for (spoil, field) in [
+            (
+                (|c| c.search_radius = 1e9) as fn(&mut SlamConfig),
+                "search_radius",
+            ),
+            (|c| c.revisit_search_radius = 1e9, "revisit_search_radius"),
+            (|c| c.duplicate_radius = 1e9, "duplicate_radius"),
+            (|c| c.grid_cell_size = 1e-9, "grid_cell_size"),
+            (
+                |c| c.measured_xy_variance_per_metre = 1e9,
+                "measured_xy_variance_per_metre",
+            ),
+        ] {
+            assert_eq!(refused(spoil), Some(field));
+        }
     }
 }

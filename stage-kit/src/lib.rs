@@ -13,6 +13,8 @@
 //!   ipc-types because the transport's blocking waits end on it too; a stage reads it here.
 //! - [`say`] and [`say_err`]: console lines that are dropped, not a panic, when the reader
 //!   of the pipe has gone (slam-launch killed while a stage writes its results).
+//! - [`input`]: opening a file a run reads: without blocking, a regular file, within a
+//!   size limit its kind names ([`InputKind`]).
 //! - [`settings`]: a TOML settings file read into a library's config struct, with one error
 //!   type naming the file; [`SettingError`] and [`check`] for the range checks of those
 //!   structs.
@@ -52,6 +54,7 @@
 
 mod console;
 mod exit;
+pub mod input;
 pub mod launcher_watch;
 pub mod odometry_buffer;
 pub mod odometry_covariance;
@@ -61,6 +64,7 @@ mod source_args;
 
 pub use console::{say, say_err};
 pub use exit::{run_stage, run_tool};
+pub use input::{InputError, InputKind};
 pub use ipc_types::shutdown;
 pub use settings::{SettingError, SettingsFileError, check};
 pub use source_args::SourceArgs;

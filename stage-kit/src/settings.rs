@@ -14,12 +14,8 @@ use serde::de::DeserializeOwned;
 /// Why a settings file was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum SettingsFileError {
-    #[error("cannot read config file {path}")]
-    Read {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Read(#[from] crate::InputError),
     #[error("config file {path}")]
     Parse {
         path: PathBuf,
@@ -38,10 +34,7 @@ pub fn load<T: Default + DeserializeOwned>(path: Option<&Path>) -> Result<T, Set
 
 /// The settings in the TOML file at `path`.
 pub fn load_file<T: DeserializeOwned>(path: &Path) -> Result<T, SettingsFileError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SettingsFileError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
+    let text = crate::input::SETTINGS_INPUT.read_to_string(path)?;
     parse(&text, path)
 }
 
@@ -104,6 +97,25 @@ pub fn check_non_negative(fields: &[(&'static str, f64)]) -> Result<(), SettingE
             value.is_finite() && value >= 0.0,
             "must be finite and >= 0",
         )
+    })
+}
+
+/// Checks that every `(field, value)` lies in `range` (so finite); the error names the
+/// range in `unit` ("m", "m^2/m"), which is what keeps the work a setting asks for bounded.
+pub fn check_within(
+    fields: &[(&'static str, f64)],
+    range: std::ops::RangeInclusive<f64>,
+    unit: &str,
+) -> Result<(), SettingError> {
+    fields.iter().try_for_each(|&(field, value)| {
+        if range.contains(&value) {
+            return Ok(());
+        }
+        Err(SettingError {
+            field,
+            value,
+            reason: format!("must be from {} to {} {unit}", range.start(), range.end()).into(),
+        })
     })
 }
 
@@ -183,11 +195,16 @@ mod tests {
     #[test]
     fn errors_name_the_file_and_the_key() {
         let error = parse::<Sample>("gian = 2.5", Path::new("run.toml")).unwrap_err();
+        let refused = check_within(&[("reach", 1e9)], 0.0..=100.0, "m").unwrap_err();
+        assert_eq!(
+            refused.to_string(),
+            "reach = 1000000000: must be from 0 to 100 m"
+        );
         let shown = format!("{:#}", anyhow::Error::new(error));
         assert!(shown.starts_with("config file run.toml: "), "{shown}");
         assert!(shown.contains("unknown field `gian`"), "{shown}");
         let missing = load::<Sample>(Some(Path::new("/nonexistent/run.toml"))).unwrap_err();
-        assert!(matches!(missing, SettingsFileError::Read { .. }));
+        assert!(matches!(missing, SettingsFileError::Read(_)));
         assert!(missing.to_string().contains("/nonexistent/run.toml"));
     }
 

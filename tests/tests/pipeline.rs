@@ -288,7 +288,11 @@ fn a_bad_world_file_is_refused_by_name() {
     );
     assert!(!output.status.success());
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("lidar-sim"), "names the process: {stderr}");
+    // Refused by slam-launch before lidar-sim starts, naming the file and the problem.
+    assert!(
+        stderr.contains("refusing to start: world") && stderr.contains("bad.json"),
+        "names the file: {stderr}"
+    );
     assert!(stderr.contains("waypoint"), "names the problem: {stderr}");
     assert!(shm_leftovers(&domain).is_empty());
 }

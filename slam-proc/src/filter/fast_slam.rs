@@ -24,6 +24,7 @@ use crate::localize::localizer::ScanRanges;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
 use crate::motion::predict::{self, MotionNoise};
+use crate::path::particle_path::ScanLog;
 use crate::update::drift::revisit_covariance;
 use crate::update::free_space::WallSegment;
 use slam_geom::Pose2;
@@ -64,6 +65,9 @@ pub struct FastSlam {
     since_update: SinceUpdate,
     /// The path length of the motion at each scan, metres.
     path_length: Vec<f64>,
+    /// The front end's pose at every scan, which places the scans a particle kept no pose
+    /// for.
+    scan_log: ScanLog,
     /// Scans whose corners updated the particles.
     updates: u64,
     /// Resamplings so far.
@@ -190,6 +194,7 @@ impl FastSlam {
             scratch: Vec::new(),
             since_update: SinceUpdate::default(),
             path_length: Vec::new(),
+            scan_log: ScanLog::default(),
             updates: 0,
             resamplings: 0,
             saved_grid: None,
@@ -241,7 +246,7 @@ impl FastSlam {
     pub fn best_path(&self) -> Vec<StampedPose> {
         self.particles
             .get(self.best)
-            .map(|p| p.path.smoothed(&self.config.graph_noise()))
+            .map(|p| p.path.smoothed(&self.config.graph_noise(), &self.scan_log))
             .unwrap_or_default()
     }
 
@@ -369,6 +374,7 @@ impl FastSlam {
             }
         };
         self.dead_reckoning = self.dead_reckoning.compose(&motion.delta);
+        self.scan_log.push(stamp_ns, self.dead_reckoning);
         let motion_done = Instant::now();
 
         // The first scan defines the map frame: nothing moves.
@@ -405,14 +411,18 @@ impl FastSlam {
             && self.since_update.distance < config.update_min_distance
             && self.since_update.rotation < config.update_min_rotation;
         if skip {
+            // No pose kept: the scan follows the last kept one by the front end's motion.
             for particle in &mut self.particles {
-                particle.path.push(
-                    StampedPose {
-                        stamp_ns,
-                        pose: particle.pose,
-                    },
-                    particle.closure.take(),
-                );
+                match particle.closure.take() {
+                    None => particle.path.pass(),
+                    closure => particle.path.push(
+                        StampedPose {
+                            stamp_ns,
+                            pose: particle.pose,
+                        },
+                        closure,
+                    ),
+                }
             }
             return self.finish([start, motion_done, predict_done, predict_done]);
         }
@@ -454,6 +464,7 @@ impl FastSlam {
             cos_half_fov: (0.5 * config.view_fov).cos(),
             scan: self.scans,
             path_length: &self.path_length,
+            scan_log: &self.scan_log,
             revisits,
             walls: &self.walls,
             wall_memory: &self.wall_memory,

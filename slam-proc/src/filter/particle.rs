@@ -15,7 +15,7 @@ use crate::math::linalg::sample_information_form3;
 use slam_geom::StampedPose;
 
 use crate::filter::wall_memory::WallMemory;
-use crate::path::particle_path::{self, Closure, Path};
+use crate::path::particle_path::{self, Closure, Path, ScanLog};
 use crate::update::corner_model::{PoseTransform, WorldObservation};
 use crate::update::drift::{jump_within, revisit_covariance};
 use crate::update::free_space::{PlacedWalls, WallSegment, closure_fits};
@@ -67,6 +67,8 @@ pub(crate) struct ScanContext<'a> {
     pub scan: u64,
     /// The path length of the motion at each scan so far, this one last, metres.
     pub path_length: &'a [f64],
+    /// The front end's pose at each scan so far, this one last.
+    pub scan_log: &'a ScanLog,
     /// This scan's walls.
     pub walls: &'a [WallSegment],
     /// The walls of the scans that updated the particles before this one.
@@ -192,7 +194,7 @@ impl Particle {
             self.pose = corrected;
             self.closure = Closure::new(revisit_ties, predicted);
             if let Some(closure) = self.closure.clone() {
-                self.reanchor_since(&closure, corrected);
+                self.reanchor_since(&closure, corrected, context.scan_log);
             }
             // The step the next constant-velocity prior repeats takes the correction only
             // up to three sigma of the step's noise (see `increment`). The correction in
@@ -279,9 +281,9 @@ impl Particle {
     /// [`crate::path::particle_path`]), so the map stays the one its path implies. Left as
     /// they were, the corners of the drifted stretch would pull the particle back into its
     /// drift when it sees them again.
-    fn reanchor_since(&mut self, closure: &Closure, landed: Pose2) {
+    fn reanchor_since(&mut self, closure: &Closure, landed: Pose2, log: &ScanLog) {
         let from = closure.drift_start();
-        let raw = self.path.since(from);
+        let raw = self.path.since(from, log);
         if raw.is_empty() {
             return;
         }
@@ -449,7 +451,7 @@ impl Particle {
         let scans: Vec<usize> = around.iter().map(|(scan, _)| *scan).collect();
         let tied: Vec<PlacedWalls> = self
             .path
-            .map_frame_poses(&scans)
+            .map_frame_poses(&scans, context.scan_log)
             .iter()
             .zip(&around)
             .filter_map(|(pose, (_, walls))| Some(PlacedWalls::new(pose.as_ref()?, walls)))
@@ -643,6 +645,7 @@ mod tests {
             cos_half_fov: (0.5 * config.view_fov).cos(),
             scan: 1,
             path_length: &[0.0, path_length],
+            scan_log: &ScanLog::default(),
             revisits: true,
             walls: &[],
             wall_memory: &WallMemory::default(),

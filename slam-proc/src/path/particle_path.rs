@@ -2,9 +2,12 @@
 //!
 //! FastSLAM's answer is a particle's path together with its map: the map was built from
 //! those poses, so a loop that closes corrects the whole path, which the per-scan mean of
-//! the particles never sees again. Particles append one pose per scan; a resampled copy
-//! shares its parent's path up to the split, so the storage is the particles' family tree,
-//! whose branches die out with the particles that are not resampled.
+//! the particles never sees again. Particles keep a pose at each scan that updated them
+//! (the robot had moved, see `SlamConfig::update_min_distance`); the scans between are
+//! placed from it by the front end's motion, held once for all particles ([`ScanLog`]). A
+//! resampled copy shares its parent's path up to the split, so the storage is the
+//! particles' family tree, whose branches die out with the particles that are not
+//! resampled: a long run costs memory by the distance it drove, not by its scans.
 //!
 //! A particle that closes a loop by a revisit jumps back onto its old map; the poses since it
 //! last saw that part of the map carry the drift the jump undoes. Each such jump is kept with
@@ -53,8 +56,38 @@ impl Closure {
     }
 }
 
+/// The front end's pose at every scan, one copy for all particles. A particle keeps a pose
+/// of its own only at the scans that updated it (where the robot had moved); a scan between
+/// two of those is placed from the last one kept by the front end's motion since, so a
+/// robot standing still adds nothing to any particle's path.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ScanLog {
+    poses: Vec<StampedPose>,
+}
+
+impl ScanLog {
+    /// The next scan: its stamp and the front end's pose there.
+    pub fn push(&mut self, stamp_ns: u64, front_end: Pose2) {
+        self.poses.push(StampedPose {
+            stamp_ns,
+            pose: front_end,
+        });
+    }
+
+    /// Scan `scan` placed as the front end moved from scan `kept`, which had `pose`.
+    fn place(&self, kept: usize, pose: &Pose2, scan: usize) -> Option<StampedPose> {
+        let (from, to) = (self.poses.get(kept)?, self.poses.get(scan)?);
+        Some(StampedPose {
+            stamp_ns: to.stamp_ns,
+            pose: pose.compose(&from.pose.inverse().compose(&to.pose)),
+        })
+    }
+}
+
 #[derive(Debug)]
 struct Node {
+    /// The scan this pose is of.
+    scan: usize,
     pose: StampedPose,
     closure: Option<Closure>,
     previous: Option<Arc<Node>>,
@@ -78,13 +111,16 @@ impl Drop for Node {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Path {
     last: Option<Arc<Node>>,
+    /// Scans the path reaches, kept poses or not.
     len: usize,
 }
 
 impl Path {
+    /// The particle's pose at the next scan, kept.
     pub fn push(&mut self, pose: StampedPose, closure: Option<Closure>) {
         let previous = self.last.take();
         self.last = Some(Arc::new(Node {
+            scan: self.len,
             pose,
             closure,
             previous,
@@ -92,40 +128,36 @@ impl Path {
         self.len += 1;
     }
 
+    /// The next scan, placed by the [`ScanLog`] from the last pose kept.
+    pub fn pass(&mut self) {
+        self.len += 1;
+    }
+
     /// The poses from the first scan to the last, as the particle moved.
     #[cfg(test)]
-    pub fn poses(&self) -> Vec<StampedPose> {
-        self.nodes().0
+    pub fn poses(&self, log: &ScanLog) -> Vec<StampedPose> {
+        self.nodes(log).0
     }
 
     /// The poses from the first scan to the last, the loop closures' jumps spread back over
     /// the drift they undid, all closures at once (see [`crate::path::pose_graph`]).
-    pub fn smoothed(&self, noise: &GraphNoise) -> Vec<StampedPose> {
-        let (mut poses, closures) = self.nodes();
+    pub fn smoothed(&self, noise: &GraphNoise, log: &ScanLog) -> Vec<StampedPose> {
+        let (mut poses, closures) = self.nodes(log);
         pose_graph::smooth(&mut poses, &closures, noise);
         poses
     }
 
     /// The poses from index `from` to the last, as the particle moved.
-    pub fn since(&self, from: usize) -> Vec<StampedPose> {
-        let mut poses = Vec::with_capacity(self.len.saturating_sub(from));
-        let mut node = self.last.as_deref();
-        while let Some(n) = node
-            && poses.len() + from < self.len
-        {
-            poses.push(n.pose);
-            node = n.previous.as_deref();
-        }
-        poses.reverse();
-        poses
+    pub fn since(&self, from: usize, log: &ScanLog) -> Vec<StampedPose> {
+        self.expand(from, log).0
     }
 
     /// The poses at `scans` (ascending) in the frame of the particle's map: each moved as
     /// every later loop closure moved the corners mapped from it (see
     /// `Particle::reanchor_since`), so the walls a scan saw, placed by its pose, lie where
     /// the map's corners are. `None` for a scan the path does not reach.
-    pub fn map_frame_poses(&self, scans: &[usize]) -> Vec<Option<Pose2>> {
-        let (raw, closures) = self.nodes();
+    pub fn map_frame_poses(&self, scans: &[usize], log: &ScanLog) -> Vec<Option<Pose2>> {
+        let (raw, closures) = self.nodes(log);
         let mut poses: Vec<Option<Pose2>> =
             scans.iter().map(|&s| raw.get(s).map(|p| p.pose)).collect();
         for (at, closure) in &closures {
@@ -163,19 +195,41 @@ impl Path {
     }
 
     /// The poses in order, and the closures with the index of their pose, in order.
-    fn nodes(&self) -> (Vec<StampedPose>, Vec<(usize, Closure)>) {
-        let mut poses = Vec::with_capacity(self.len);
-        let mut closures = Vec::new();
+    fn nodes(&self, log: &ScanLog) -> (Vec<StampedPose>, Vec<(usize, Closure)>) {
+        self.expand(0, log)
+    }
+
+    /// The poses from scan `from` on, each scan without a kept pose placed from the last
+    /// one kept before it, and the closures at those scans with their scan, in order.
+    fn expand(&self, from: usize, log: &ScanLog) -> (Vec<StampedPose>, Vec<(usize, Closure)>) {
+        let mut kept: Vec<&Node> = Vec::new();
         let mut node = self.last.as_deref();
         while let Some(n) = node {
-            if let Some(closure) = &n.closure {
-                closures.push((self.len - 1 - poses.len(), closure.clone()));
+            kept.push(n);
+            if n.scan <= from {
+                break;
             }
-            poses.push(n.pose);
             node = n.previous.as_deref();
         }
-        poses.reverse();
-        closures.reverse();
+        kept.reverse();
+        let mut poses = Vec::with_capacity(self.len.saturating_sub(from));
+        let mut closures = Vec::new();
+        for (k, n) in kept.iter().enumerate() {
+            let end = kept.get(k + 1).map_or(self.len, |next| next.scan);
+            if let Some(closure) = &n.closure
+                && n.scan >= from
+            {
+                closures.push((n.scan, closure.clone()));
+            }
+            for scan in from.max(n.scan)..end {
+                let placed = if scan == n.scan {
+                    Some(n.pose)
+                } else {
+                    log.place(n.scan, &n.pose.pose, scan)
+                };
+                poses.extend(placed);
+            }
+        }
         (poses, closures)
     }
 }
@@ -247,7 +301,7 @@ mod tests {
         child.push(pose(10), None);
         parent.push(pose(3), None);
         let seqs = |p: &Path| {
-            p.poses()
+            p.poses(&ScanLog::default())
                 .iter()
                 .map(|p| p.pose.x as u64)
                 .collect::<Vec<_>>()
@@ -294,7 +348,7 @@ mod tests {
             },
             None,
         );
-        let poses = path.map_frame_poses(&[1, 2, 4, 5, 6, 7, 20]);
+        let poses = path.map_frame_poses(&[1, 2, 4, 5, 6, 7, 20], &ScanLog::default());
         let on_line = |pose: Option<Pose2>, x: f64| {
             let pose = pose.expect("on the path");
             (pose.x - x).abs() < 1e-9 && pose.y.abs() < 1e-9 && pose.yaw.abs() < 1e-9
@@ -315,7 +369,7 @@ mod tests {
         );
         assert_eq!(poses[6], None);
         // The path itself keeps the poses the particle had.
-        assert_eq!(path.poses()[4].pose, drifted(4));
+        assert_eq!(path.poses(&ScanLog::default())[4].pose, drifted(4));
     }
 
     #[test]
@@ -359,7 +413,7 @@ mod tests {
             },
             Closure::new(vec![0], drifted[40]),
         );
-        let raw = path.poses();
+        let raw = path.poses(&ScanLog::default());
         // Drift that grows with the path alone, as this loop's did.
         let noise = GraphNoise {
             xy_per_metre: 1e-4,
@@ -367,7 +421,7 @@ mod tests {
             yaw_per_metre: 1e-5,
             yaw_per_radian: 0.0,
         };
-        let smoothed = path.smoothed(&noise);
+        let smoothed = path.smoothed(&noise, &ScanLog::default());
         assert_eq!(smoothed.len(), 41);
         assert_eq!(smoothed[0].pose, raw[0].pose);
         let landed = smoothed[40].pose.between(&end);
@@ -402,7 +456,47 @@ mod tests {
         }
         let copy = path.clone();
         drop(path);
-        assert_eq!(copy.poses().len(), 1_000_000);
+        assert_eq!(copy.poses(&ScanLog::default()).len(), 1_000_000);
         drop(copy);
+    }
+
+    #[test]
+    fn scans_without_a_pose_of_their_own_follow_the_front_end_from_the_last_kept() {
+        // The front end: 0.1 m a scan along x, then a quarter turn in place.
+        let mut log = ScanLog::default();
+        let front_end = [0.0, 0.1, 0.2, 0.3].map(|x| Pose2::new(x, 0.0, 0.0));
+        for (scan, pose) in front_end.iter().enumerate() {
+            log.push(scan as u64, *pose);
+        }
+        log.push(4, Pose2::new(0.3, 0.0, std::f64::consts::FRAC_PI_2));
+        // The particle keeps scans 0 and 3, a little off the front end.
+        let mut path = Path::default();
+        path.push(
+            StampedPose {
+                stamp_ns: 0,
+                pose: Pose2::new(1.0, 1.0, std::f64::consts::FRAC_PI_2),
+            },
+            None,
+        );
+        path.pass();
+        path.pass();
+        path.push(pose(3), None);
+        path.pass();
+        let poses = path.poses(&log);
+        assert_eq!(poses.len(), 5);
+        let near = |p: StampedPose, stamp: u64, x: f64, y: f64, yaw: f64| {
+            p.stamp_ns == stamp
+                && (p.pose.x - x).abs() < 1e-12
+                && (p.pose.y - y).abs() < 1e-12
+                && (p.pose.yaw - yaw).abs() < 1e-12
+        };
+        let up = std::f64::consts::FRAC_PI_2;
+        assert!(near(poses[1], 1, 1.0, 1.1, up), "{poses:?}");
+        assert!(near(poses[2], 2, 1.0, 1.2, up), "{poses:?}");
+        assert!(near(poses[3], 75_000_000, 3.0, 0.0, 0.0), "{poses:?}");
+        assert!(near(poses[4], 4, 3.0, 0.0, up), "{poses:?}");
+        assert_eq!(path.since(2, &log)[..2], poses[2..4]);
+        // No node is kept for the scans passed.
+        assert_eq!(path.last.as_ref().map(|n| n.scan), Some(3));
     }
 }
