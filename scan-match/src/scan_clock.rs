@@ -1,9 +1,11 @@
 //! The time between scans as the front end's motion model sees it. Some loggers stamp a
 //! scan when they write it, not when it was taken: stamps then come in bursts (two scans a
 //! millisecond apart, then a long pause) while the sensor turned at its steady rate. A
-//! speed or an acceleration over such an interval is meaningless, so the motion model uses
-//! the longer of the interval itself and the mean of the recent ones: the sensor's rate,
-//! which bursts do not change, and the interval itself across a real pause.
+//! speed or an acceleration over such an interval is meaningless. A sensor does not take
+//! two scans a tenth of its period apart, so where the recent intervals hold one that short
+//! the stamps are the logger's, and each step is timed by the longer of its interval and
+//! the mean of the recent ones (the sensor's rate, which bursts do not change). Stamps
+//! without bursts time their steps as they are.
 
 use std::collections::VecDeque;
 
@@ -11,6 +13,9 @@ use crate::prior::MAX_EXTRAPOLATION_S;
 
 /// Intervals the mean is taken over.
 const SPAN: usize = 50;
+
+/// An interval under this share of the mean is not a sensor's: the stamps come in bursts.
+const BURST: f64 = 0.1;
 
 /// Intervals shorter than this (repeated or reordered stamps) count as this long, seconds.
 pub(crate) const MIN_DT: f64 = 1e-3;
@@ -33,7 +38,9 @@ impl ScanClock {
             self.recent.push_back(elapsed);
         }
         let mean = self.recent.iter().sum::<f64>() / self.recent.len().max(1) as f64;
-        elapsed.max(mean).max(MIN_DT)
+        let bursts = self.recent.iter().any(|&dt| dt < BURST * mean);
+        let interval = if bursts { elapsed.max(mean) } else { elapsed };
+        interval.max(MIN_DT)
     }
 }
 
@@ -42,10 +49,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_steady_rate_is_its_own_interval() {
+    fn a_steady_rate_with_jitter_is_its_own_interval() {
         let mut clock = ScanClock::default();
-        for _ in 0..20 {
-            assert!((clock.interval(0.025) - 0.025).abs() < 1e-12);
+        for k in 0..40 {
+            let elapsed = if k % 2 == 0 { 0.02 } else { 0.03 };
+            assert_eq!(clock.interval(elapsed), elapsed);
         }
     }
 
