@@ -1,0 +1,9 @@
+//! # back-end
+//!
+//! Global SLAM, the layer above the scan-matching front end (Cartographer's split): the
+//! front end's poses and scans build submaps; a scan that comes back near an old submap is
+//! matched against it by a correlative search wide enough for the drift since, and the
+//! match becomes a loop closure only when the scan agrees with the submap (a share of its
+//! points explained, the same on every scanner); the path is a pose graph over the front
+//! end's steps and the closures, solved with a robust loss so that a wrong closure cannot
+//! bend it.
