@@ -7,3 +7,12 @@
 //! points explained, the same on every scanner); the path is a pose graph over the front
 //! end's steps and the closures, solved with a robust loss so that a wrong closure cannot
 //! bend it.
+
+pub mod branch_bound;
+pub mod closure;
+pub mod coverage;
+pub mod global_slam;
+pub mod pose_graph;
+pub mod submap;
+
+pub use global_slam::{GlobalConfig, GlobalSlam, GlobalStats};

@@ -263,6 +263,11 @@ impl LocalMap {
         self.nearest_exact(query, normal, radius)
     }
 
+    /// Every point of the map, in no particular order.
+    pub fn points(&self) -> impl Iterator<Item = &SurfacePoint> + '_ {
+        self.cells.values().flat_map(|entries| entries.iter().map(|e| &e.point))
+    }
+
     /// Raster tiles allocated (for tests of its upkeep).
     pub fn field_tiles(&self) -> usize {
         self.field.tiles()

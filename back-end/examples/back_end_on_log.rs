@@ -1,0 +1,107 @@
+//! Runs the front end and the back end over a recorded log, writes the back end's
+//! trajectory (TUM) and scores it and the front end's against the log's `.relations`.
+//!
+//!     cargo run --release -p back-end --example back_end_on_log -- \
+//!         ../shared/data/carmen/mit-csail.clf [--out FILE.tum] [--no-odometry] [--limit N]
+
+#[path = "../../scan-match/tests/support/logs.rs"]
+mod logs;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use back_end::{GlobalConfig, GlobalSlam};
+use lidar_replay::LogFormat;
+use scan_match::{FrontEnd, FrontEndConfig};
+use slam_eval::{Trajectory, read_relations, score};
+use slam_geom::Pose2;
+
+fn main() -> Result<()> {
+    let mut args = std::env::args().skip(1);
+    let mut log = None;
+    let mut out = PathBuf::from("back_end.tum");
+    let mut odometry = true;
+    let mut limit = usize::MAX;
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--out" => out = args.next().context("--out needs a value")?.into(),
+            "--no-odometry" => odometry = false,
+            "--limit" => limit = args.next().context("--limit needs a value")?.parse()?,
+            other if other.starts_with("--") => bail!("unknown option {other}"),
+            other => log = Some(PathBuf::from(other)),
+        }
+    }
+    let log = log.context("usage: back_end_on_log LOG [--out FILE] [--no-odometry] [--limit N]")?;
+    let scans = logs::load(&log, LogFormat::Carmen, limit)?;
+    let config = FrontEndConfig::default();
+    let mut front_end = FrontEnd::new(config.clone())?;
+    let mut back_end = GlobalSlam::new(GlobalConfig::for_front_end(&config));
+    let mut front_path = Vec::new();
+    let wall = Instant::now();
+    let mut back_ns = 0u128;
+    for scan in &scans {
+        let input = scan.input(odometry);
+        let output = front_end.process(&input)?;
+        front_path.push((output.stamp_ns, output.odom_from_robot));
+        let started = Instant::now();
+        let points = output.keyframe.then(|| {
+            scan_match::points::extract(
+                &input.geometry,
+                input.ranges,
+                config.range_sigma,
+                config.voxel_size,
+            )
+            .points
+        });
+        back_end.add_scan(
+            output.stamp_ns,
+            &output.odom_from_robot,
+            &output.increment,
+            &output.increment_covariance,
+            points.as_deref(),
+        )?;
+        back_ns += started.elapsed().as_nanos();
+    }
+    let finish = Instant::now();
+    back_end.finish()?;
+    back_ns += finish.elapsed().as_nanos();
+    println!(
+        "{} scans, wall {:.2} s, back end {:.2} s; {:?}",
+        scans.len(),
+        wall.elapsed().as_secs_f64(),
+        back_ns as f64 * 1e-9,
+        back_end.stats()
+    );
+    let front_file = out.with_extension("front.tum");
+    write_tum(&front_file, &front_path)?;
+    write_tum(&out, &back_end.path())?;
+    let relations = log.with_extension("relations");
+    if relations.exists() {
+        let relations = read_relations(&relations)?;
+        for (label, path) in [("front end", &front_file), ("back end", &out)] {
+            let s = score(&Trajectory::read_tum(path)?, &relations, 1_000_000);
+            println!(
+                "{label}: {} of {} relations: translation {:.4} +- {:.4} m (max {:.3}), rotation {:.4} deg",
+                s.used, s.relations, s.translation_m.mean, s.translation_m.std, s.translation_m.max, s.rotation_deg.mean
+            );
+        }
+    }
+    Ok(())
+}
+
+fn write_tum(path: &Path, poses: &[(u64, Pose2)]) -> Result<()> {
+    let mut text = String::new();
+    let mut last = None;
+    for (stamp, p) in poses {
+        if last.is_some_and(|s| *stamp <= s) {
+            continue;
+        }
+        last = Some(*stamp);
+        let (s, c) = (0.5 * p.yaw).sin_cos();
+        writeln!(text, "{} {:.6} {:.6} 0 0 0 {s:.9} {c:.9}", slam_geom::format_stamp(*stamp), p.x, p.y)?;
+    }
+    std::fs::write(path, text)?;
+    Ok(())
+}

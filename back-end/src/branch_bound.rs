@@ -1,0 +1,460 @@
+//! Branch-and-bound correlative matching (Cartographer's fast correlative scan matcher, after
+//! Olson's multi-resolution search): the exhaustive search over a window of poses gives the
+//! same answer as trying every pose on the grid, at a small share of the cost.
+//!
+//! A submap's points are stamped into a grid whose cells hold how well a scan point landing
+//! there is explained (1 on a surface, falling to 0 at [`EXPLAIN_RADIUS_CELLS`]). Level `h`
+//! of the pyramid holds, per cell, the best value of the `2^h x 2^h` block of level 0 that
+//! starts there, so a scan scored on level `h` at a translation bounds its score at every
+//! translation of that block. The search scores the coarsest blocks, and descends only into
+//! those whose bound beats the best exact score found so far.
+//!
+//! Scores are the mean over the scan's points, a share of the points explained: the same on
+//! a scan of 180 beams and of 1081, on a log and in a simulated world.
+
+use nalgebra::Vector2;
+use slam_geom::{Pose2, wrap_angle};
+
+/// Where a level-0 value falls to zero, in cells: a point that far from every surface is not
+/// explained. Two cells: the voxels the points were thinned to, plus the ranges' noise.
+pub const EXPLAIN_RADIUS_CELLS: f64 = 2.0;
+
+/// The match grid of one submap: the explained-value pyramid over the submap's frame.
+#[derive(Debug, Clone)]
+pub struct MatchGrid {
+    resolution: f64,
+    /// Submap-frame position of cell (0, 0)'s lower corner.
+    origin: Vector2<f64>,
+    /// `levels[h]`: the values of the blocks that start at each cell, values 0..=255.
+    levels: Vec<Level>,
+}
+
+/// One level of the pyramid. It reaches `2^h - 1` cells below level 0's first cell, where a
+/// block starts that still covers level 0, so a bound is never cut short at the edge.
+#[derive(Debug, Clone)]
+struct Level {
+    /// Cells below level 0's first, on each axis.
+    offset: i32,
+    width: i32,
+    height: i32,
+    /// Row-major.
+    cells: Vec<u8>,
+}
+
+impl Level {
+    #[inline]
+    fn get(&self, x: i32, y: i32) -> u8 {
+        let (x, y) = (x + self.offset, y + self.offset);
+        if x < 0 || y < 0 || x >= self.width || y >= self.height {
+            0
+        } else {
+            self.cells[(y * self.width + x) as usize]
+        }
+    }
+}
+
+/// A search window around a seed pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchWindow {
+    /// Half-width in x and y, metres.
+    pub translation: f64,
+    /// Half-width in yaw, radians.
+    pub yaw: f64,
+}
+
+/// The best pose found and its score (share of points explained, 0..1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridMatch {
+    pub pose: Pose2,
+    pub score: f64,
+}
+
+/// One candidate translation (in cells, from the seed) at one yaw of the search.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    yaw_index: usize,
+    dx: i32,
+    dy: i32,
+    score: u32,
+}
+
+impl MatchGrid {
+    /// The pyramid over `points` (submap frame) at `resolution`, deep enough for windows up
+    /// to `max_window` metres each way.
+    pub fn new(points: &[Vector2<f64>], resolution: f64, max_window: f64) -> Self {
+        let depth = depth_for(max_window / resolution);
+        let pad = EXPLAIN_RADIUS_CELLS.ceil() + 1.0;
+        let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
+        for p in points {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        if points.is_empty() {
+            lo = Vector2::zeros();
+            hi = Vector2::zeros();
+        }
+        let origin = lo - Vector2::repeat(pad * resolution);
+        let width = ((hi.x - lo.x) / resolution + 2.0 * pad).ceil() as i32 + 1;
+        let height = ((hi.y - lo.y) / resolution + 2.0 * pad).ceil() as i32 + 1;
+        let mut levels = vec![Level {
+            offset: 0,
+            width,
+            height,
+            cells: stamp(points, origin, resolution, width, height),
+        }];
+        for h in 1..=depth {
+            let next = pooled(&levels[h - 1], h);
+            levels.push(next);
+        }
+        Self {
+            resolution,
+            origin,
+            levels,
+        }
+    }
+
+    /// Memory held, bytes.
+    pub fn bytes(&self) -> usize {
+        self.levels.iter().map(|l| l.cells.len()).sum()
+    }
+
+    /// The pose within `window` of `seed` where the most of `scan` (robot frame) is
+    /// explained, if its score reaches `min_score`. Yaw steps move the farthest point by
+    /// about a cell; translations are whole cells.
+    pub fn search(
+        &self,
+        scan: &[Vector2<f64>],
+        seed: &Pose2,
+        window: SearchWindow,
+        min_score: f64,
+    ) -> Option<GridMatch> {
+        if scan.is_empty() {
+            return None;
+        }
+        let yaw_step = (self.resolution / yaw_lever(scan)).min(window.yaw.max(1e-9));
+        let yaw_half = (window.yaw / yaw_step).floor() as i64;
+        let half = (window.translation / self.resolution).ceil() as i32;
+        let depth = (self.levels.len() - 1).min(depth_for(f64::from(half)));
+        let yaws: Vec<f64> = (-yaw_half..=yaw_half)
+            .map(|k| wrap_angle(seed.yaw + k as f64 * yaw_step))
+            .collect();
+        // Each yaw's points in cells, relative to the seed's translation.
+        let rotated: Vec<Vec<(i32, i32)>> = yaws
+            .iter()
+            .map(|&yaw| self.discretize(scan, &Pose2::new(seed.x, seed.y, yaw)))
+            .collect();
+        let total = scan.len() as u32 * 255;
+        let floor = (min_score.clamp(0.0, 1.0) * f64::from(total)).ceil() as u32;
+        let step = 1i32 << depth;
+        let mut top = Vec::new();
+        for yaw_index in 0..yaws.len() {
+            let mut dx = -half;
+            while dx <= half {
+                let mut dy = -half;
+                while dy <= half {
+                    let score = self.score(&rotated[yaw_index], dx, dy, depth);
+                    if score >= floor {
+                        top.push(Candidate {
+                            yaw_index,
+                            dx,
+                            dy,
+                            score,
+                        });
+                    }
+                    dy += step;
+                }
+                dx += step;
+            }
+        }
+        top.sort_unstable_by(|a, b| b.score.cmp(&a.score));
+        let mut best: Option<Candidate> = None;
+        let mut bound = floor;
+        for candidate in top {
+            self.descend(&rotated, candidate, depth, half, &mut best, &mut bound);
+        }
+        let best = best?;
+        Some(GridMatch {
+            pose: Pose2::new(
+                seed.x + f64::from(best.dx) * self.resolution,
+                seed.y + f64::from(best.dy) * self.resolution,
+                yaws[best.yaw_index],
+            ),
+            score: f64::from(best.score) / f64::from(total),
+        })
+    }
+
+    /// Depth-first through the blocks under `candidate` (scored at `level`), children best
+    /// first, pruning every block whose bound does not beat `bound`.
+    fn descend(
+        &self,
+        rotated: &[Vec<(i32, i32)>],
+        candidate: Candidate,
+        level: usize,
+        half: i32,
+        best: &mut Option<Candidate>,
+        bound: &mut u32,
+    ) {
+        if candidate.score < *bound || (best.is_some() && candidate.score == *bound) {
+            return;
+        }
+        if level == 0 {
+            *bound = candidate.score;
+            *best = Some(candidate);
+            return;
+        }
+        let child = 1i32 << (level - 1);
+        let mut children = Vec::with_capacity(4);
+        for (ox, oy) in [(0, 0), (child, 0), (0, child), (child, child)] {
+            let (dx, dy) = (candidate.dx + ox, candidate.dy + oy);
+            if dx > half || dy > half {
+                continue;
+            }
+            let score = self.score(&rotated[candidate.yaw_index], dx, dy, level - 1);
+            children.push(Candidate {
+                dx,
+                dy,
+                score,
+                ..candidate
+            });
+        }
+        children.sort_unstable_by(|a, b| b.score.cmp(&a.score));
+        for c in children {
+            self.descend(rotated, c, level - 1, half, best, bound);
+        }
+    }
+
+    /// The summed level-`level` values under the points shifted by `(dx, dy)` cells.
+    fn score(&self, cells: &[(i32, i32)], dx: i32, dy: i32, level: usize) -> u32 {
+        let grid = &self.levels[level];
+        cells
+            .iter()
+            .map(|&(x, y)| u32::from(grid.get(x + dx, y + dy)))
+            .sum()
+    }
+
+    /// The cells `scan` falls in at `pose`.
+    fn discretize(&self, scan: &[Vector2<f64>], pose: &Pose2) -> Vec<(i32, i32)> {
+        scan.iter()
+            .map(|p| {
+                let q = (pose.transform(*p) - self.origin) / self.resolution;
+                (q.x.floor() as i32, q.y.floor() as i32)
+            })
+            .collect()
+    }
+
+    /// The level-0 score of `scan` at `pose`, a share of the points.
+    pub fn score_at(&self, scan: &[Vector2<f64>], pose: &Pose2) -> f64 {
+        if scan.is_empty() {
+            return 0.0;
+        }
+        let cells = self.discretize(scan, pose);
+        f64::from(self.score(&cells, 0, 0, 0)) / (255.0 * scan.len() as f64)
+    }
+}
+
+/// The lever a turn acts on: the RMS distance of the points. A yaw step moves a point at this
+/// distance by a cell; farther points move by more, and the registration after the search
+/// takes up what the grid's steps leave.
+fn yaw_lever(scan: &[Vector2<f64>]) -> f64 {
+    let mean_square = scan.iter().map(|p| p.norm_squared()).sum::<f64>() / scan.len() as f64;
+    mean_square.sqrt().max(1.0)
+}
+
+/// Deepest level: blocks of 32 cells. Coarser blocks bound so loosely that nearly every one
+/// is searched anyway, and the pyramid's cost grows with the block.
+const MAX_DEPTH: usize = 5;
+
+/// Levels so that the coarsest block spans the window's half-width, at most [`MAX_DEPTH`].
+fn depth_for(half_cells: f64) -> usize {
+    let mut depth = 0;
+    while ((1usize << depth) as f64) < half_cells && depth < MAX_DEPTH {
+        depth += 1;
+    }
+    depth
+}
+
+/// Level `h` from level `h - 1`: the max over a block twice as wide, in x then in y; it
+/// starts `2^(h-1)` cells lower than the level below.
+fn pooled(below: &Level, h: usize) -> Level {
+    let half = 1usize << (h - 1);
+    let offset = 2 * half as i32 - 1;
+    let grow = (offset - below.offset) as usize;
+    let (bw, bh) = (below.width as usize, below.height as usize);
+    let (width, height) = (bw + grow, bh + grow);
+    // Cell x of this level is the block from cell `x - grow` of the level below: its max
+    // with cell `x - grow + half`, each zero off the level.
+    let at = |row: &[u8], i: isize| -> u8 {
+        if i < 0 {
+            0
+        } else {
+            row.get(i as usize).copied().unwrap_or(0)
+        }
+    };
+    let mut rows = vec![0u8; width * bh];
+    for (y, out) in rows.chunks_exact_mut(width).enumerate() {
+        let row = &below.cells[y * bw..(y + 1) * bw];
+        for (x, cell) in out.iter_mut().enumerate() {
+            let i = x as isize - grow as isize;
+            *cell = at(row, i).max(at(row, i + half as isize));
+        }
+    }
+    let mut cells = vec![0u8; width * height];
+    let zero = vec![0u8; width];
+    let row = |y: isize| -> &[u8] {
+        if y < 0 || y as usize >= bh {
+            &zero
+        } else {
+            &rows[y as usize * width..(y as usize + 1) * width]
+        }
+    };
+    for (y, out) in cells.chunks_exact_mut(width).enumerate() {
+        let i = y as isize - grow as isize;
+        let (a, b) = (row(i), row(i + half as isize));
+        for ((cell, &a), &b) in out.iter_mut().zip(a).zip(b) {
+            *cell = a.max(b);
+        }
+    }
+    Level {
+        offset,
+        width: width as i32,
+        height: height as i32,
+        cells,
+    }
+}
+
+/// Level 0: each cell near a point holds `1 - (d / r)^2`, scaled to 255, at its best point.
+fn stamp(
+    points: &[Vector2<f64>],
+    origin: Vector2<f64>,
+    resolution: f64,
+    width: i32,
+    height: i32,
+) -> Vec<u8> {
+    let (width, height) = (width as usize, height as usize);
+    let mut cells = vec![0u8; width * height];
+    let reach = EXPLAIN_RADIUS_CELLS.ceil() as i64;
+    let r2 = EXPLAIN_RADIUS_CELLS * EXPLAIN_RADIUS_CELLS;
+    for p in points {
+        let q = (p - origin) / resolution;
+        let (cx, cy) = (q.x.floor() as i64, q.y.floor() as i64);
+        for x in (cx - reach).max(0)..=(cx + reach).min(width as i64 - 1) {
+            for y in (cy - reach).max(0)..=(cy + reach).min(height as i64 - 1) {
+                let d2 = (x as f64 + 0.5 - q.x).powi(2) + (y as f64 + 0.5 - q.y).powi(2);
+                if d2 >= r2 {
+                    continue;
+                }
+                let value = (255.0 * (1.0 - d2 / r2)).round() as u8;
+                let cell = &mut cells[y as usize * width + x as usize];
+                *cell = (*cell).max(value);
+            }
+        }
+    }
+    cells
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points every 2 cm along the walls of an L-shaped room with a pillar.
+    fn room() -> Vec<Vector2<f64>> {
+        let mut points = Vec::new();
+        let mut wall = |a: Vector2<f64>, b: Vector2<f64>| {
+            let n = ((b - a).norm() / 0.02).ceil() as usize;
+            for i in 0..=n {
+                points.push(a + (b - a) * (i as f64 / n as f64));
+            }
+        };
+        let corners = [(0.0, 0.0), (8.0, 0.0), (8.0, 3.0), (3.0, 3.0), (3.0, 7.0), (0.0, 7.0)];
+        for i in 0..corners.len() {
+            let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+            wall(Vector2::new(a.0, a.1), Vector2::new(b.0, b.1));
+        }
+        wall(Vector2::new(1.0, 4.0), Vector2::new(1.4, 4.0));
+        wall(Vector2::new(1.4, 4.0), Vector2::new(1.4, 4.4));
+        points
+    }
+
+    /// The room as seen from `pose`: the points within 6 m, in the robot frame.
+    fn seen_from(room: &[Vector2<f64>], pose: &Pose2) -> Vec<Vector2<f64>> {
+        let robot_from_world = pose.inverse();
+        room.iter()
+            .map(|p| robot_from_world.transform(*p))
+            .filter(|p| p.norm() < 6.0)
+            .step_by(5)
+            .collect()
+    }
+
+    #[test]
+    fn finds_the_pose_two_metres_and_twenty_degrees_from_the_seed() {
+        let room = room();
+        let grid = MatchGrid::new(&room, 0.05, 3.0);
+        let truth = Pose2::new(1.6, 1.4, 0.3);
+        let scan = seen_from(&room, &truth);
+        let seed = Pose2::new(truth.x - 1.5, truth.y + 1.2, truth.yaw - 0.35);
+        let window = SearchWindow {
+            translation: 2.0,
+            yaw: 0.5,
+        };
+        let found = grid.search(&scan, &seed, window, 0.5).unwrap();
+        assert!(
+            (found.pose.position() - truth.position()).norm() < 0.05,
+            "{found:?}"
+        );
+        assert!((found.pose.yaw - truth.yaw).abs() < 0.01, "{found:?}");
+        assert!(found.score > 0.9, "{found:?}");
+    }
+
+    #[test]
+    fn the_search_matches_trying_every_pose_on_its_grid() {
+        let room = room();
+        let grid = MatchGrid::new(&room, 0.05, 1.0);
+        let truth = Pose2::new(5.0, 1.5, -0.2);
+        let scan = seen_from(&room, &truth);
+        let seed = Pose2::new(5.3, 1.2, -0.15);
+        let window = SearchWindow {
+            translation: 0.4,
+            yaw: 0.08,
+        };
+        let found = grid.search(&scan, &seed, window, 0.0).unwrap();
+        // Exhaustive: every yaw step and every cell of the window.
+        let yaw_step = (0.05 / yaw_lever(&scan)).min(window.yaw);
+        let yaw_half = (window.yaw / yaw_step).floor() as i64;
+        let half = (window.translation / 0.05).ceil() as i32;
+        let mut best = 0.0f64;
+        for k in -yaw_half..=yaw_half {
+            for dx in -half..=half {
+                for dy in -half..=half {
+                    let pose = Pose2::new(
+                        seed.x + f64::from(dx) * 0.05,
+                        seed.y + f64::from(dy) * 0.05,
+                        seed.yaw + k as f64 * yaw_step,
+                    );
+                    best = best.max(grid.score_at(&scan, &pose));
+                }
+            }
+        }
+        assert!((found.score - best).abs() < 1e-9, "{} vs {best}", found.score);
+    }
+
+    #[test]
+    fn nothing_is_found_below_the_floor() {
+        let room = room();
+        let grid = MatchGrid::new(&room, 0.05, 1.0);
+        // A scan of a different place: a long corridor 2 m wide.
+        let scan: Vec<Vector2<f64>> = (0..200)
+            .map(|i| {
+                let x = -5.0 + 0.05 * f64::from(i);
+                Vector2::new(x, if i % 2 == 0 { 1.0 } else { -1.0 })
+            })
+            .collect();
+        let window = SearchWindow {
+            translation: 1.0,
+            yaw: 0.2,
+        };
+        assert!(
+            grid.search(&scan, &Pose2::new(4.0, 1.5, 0.0), window, 0.7)
+                .is_none()
+        );
+    }
+}

@@ -1,0 +1,387 @@
+//! Global SLAM over the front end's output: every keyframe becomes a node of the pose graph
+//! and goes into the submaps; each new node is checked against the finished submaps its
+//! predicted pose lies in ([`crate::closure::verify`]), and a closure the scans confirm is
+//! added to the graph, which is then solved again. A scan between keyframes follows its
+//! keyframe rigidly, by the front end's motion since.
+//!
+//! The search window is as wide as the drift the front end can have built up since the graph
+//! was last tied to an old place: a share of the path driven since the last closure (and a
+//! floor for the front end's own noise), so a robot that keeps seeing its old map searches
+//! narrow windows, cheaply, and one back from a long loop searches wide.
+
+use std::collections::VecDeque;
+
+use nalgebra::Matrix3;
+use scan_match::points::SurfacePoint;
+use slam_geom::Pose2;
+
+use crate::branch_bound::{MatchGrid, SearchWindow};
+use crate::closure::{Closure, ClosureCheck, Refusal, verify};
+use crate::pose_graph::{PoseGraph, PoseGraphError};
+use crate::submap::{SubmapConfig, Submaps};
+
+/// Match grids kept at once: the submaps around the robot.
+const GRID_CACHE: usize = 12;
+
+/// Nodes between two searches in one submap: neighbouring nodes see the same, and a
+/// closure every few nodes holds the path as well as one at each.
+const ATTEMPT_GAP: usize = 3;
+
+/// Closures that wait for one solve at most, when the graph already agrees with each.
+const UNSOLVED_CLOSURES: usize = 10;
+
+/// Submaps a node is checked against at most: those whose middle it is nearest.
+const MAX_CANDIDATES: usize = 2;
+
+/// The back end's settings.
+#[derive(Debug, Clone, Copy)]
+pub struct GlobalConfig {
+    pub submaps: SubmapConfig,
+    pub closure: ClosureCheck,
+    /// Cells of the match grid, metres.
+    pub resolution: f64,
+    /// Smallest search window: the front end's own error over a submap, metres...
+    pub min_window_m: f64,
+    /// ...and radians.
+    pub min_window_rad: f64,
+    /// Drift of the front end per metre driven: the window's growth, metres per metre...
+    pub drift_m_per_m: f64,
+    /// ...and radians per metre.
+    pub drift_rad_per_m: f64,
+    /// Widest window, metres and radians.
+    pub max_window_m: f64,
+    pub max_window_rad: f64,
+}
+
+impl GlobalConfig {
+    /// The defaults, with the front end's voxel, noise and registration.
+    pub fn for_front_end(front_end: &scan_match::FrontEndConfig) -> Self {
+        Self {
+            submaps: SubmapConfig {
+                keyframes: 20,
+                voxel: front_end.voxel_size,
+            },
+            closure: ClosureCheck {
+                min_agreement: 0.8,
+                min_overlap: 0.4,
+                radius: 2.0 * front_end.voxel_size,
+                registration: scan_match::registration::RegistrationParams {
+                    range_sigma: front_end.range_sigma,
+                    voxel: front_end.voxel_size,
+                    max_iterations: front_end.max_iterations,
+                    convergence: front_end.convergence,
+                    degeneracy_ratio: front_end.degeneracy_ratio,
+                    weak_steps: false,
+                },
+            },
+            resolution: front_end.voxel_size,
+            min_window_m: 0.3,
+            min_window_rad: 0.05,
+            drift_m_per_m: 0.05,
+            drift_rad_per_m: 0.005,
+            max_window_m: 4.0,
+            max_window_rad: 0.5,
+        }
+    }
+}
+
+/// One scan's place on the path: the node it follows and where it is from there.
+#[derive(Debug, Clone, Copy)]
+struct ScanPlace {
+    stamp_ns: u64,
+    node: usize,
+    node_from_robot: Pose2,
+}
+
+/// Counts over a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct GlobalStats {
+    pub nodes: usize,
+    pub submaps: usize,
+    pub attempts: usize,
+    pub closures: usize,
+    pub no_match: usize,
+    pub unexplained: usize,
+    pub contradicted: usize,
+    pub ambiguous: usize,
+    pub unconstrained: usize,
+    pub optimizations: usize,
+    pub grids_built: usize,
+    pub insert_us: usize,
+    pub grid_us: usize,
+    pub verify_us: usize,
+    pub solve_us: usize,
+}
+
+/// The back end's state over a run.
+pub struct GlobalSlam {
+    config: GlobalConfig,
+    graph: Option<PoseGraph>,
+    submaps: Submaps,
+    grids: VecDeque<(usize, MatchGrid)>,
+    /// The node each submap was last searched for.
+    last_attempt: Vec<usize>,
+    scans: Vec<ScanPlace>,
+    /// The front end's pose of the last node.
+    odom_from_node: Pose2,
+    /// The front end's motion since the last node, and its covariance in the node's frame.
+    pending: Pose2,
+    pending_covariance: Matrix3<f64>,
+    /// Path driven, metres: in all, and at each node.
+    travelled_m: f64,
+    node_travelled_m: Vec<f64>,
+    /// Per submap, the path driven when a closure last tied the robot to it.
+    tied_at_m: Vec<f64>,
+    /// Closures added since the graph was last solved.
+    unsolved: usize,
+    stats: GlobalStats,
+}
+
+impl GlobalSlam {
+    pub fn new(config: GlobalConfig) -> Self {
+        Self {
+            config,
+            graph: None,
+            submaps: Submaps::new(config.submaps),
+            grids: VecDeque::new(),
+            last_attempt: Vec::new(),
+            scans: Vec::new(),
+            odom_from_node: Pose2::IDENTITY,
+            pending: Pose2::IDENTITY,
+            pending_covariance: Matrix3::zeros(),
+            travelled_m: 0.0,
+            node_travelled_m: Vec::new(),
+            tied_at_m: Vec::new(),
+            unsolved: 0,
+            stats: GlobalStats::default(),
+        }
+    }
+
+    /// Adds one scan: its front-end pose, the increment since the last scan and its
+    /// covariance, and, for a keyframe, its points (robot frame).
+    pub fn add_scan(
+        &mut self,
+        stamp_ns: u64,
+        odom_from_robot: &Pose2,
+        increment: &Pose2,
+        increment_covariance: &Matrix3<f64>,
+        keyframe: Option<&[SurfacePoint]>,
+    ) -> Result<(), PoseGraphError> {
+        let Some(graph) = self.graph.as_mut() else {
+            self.graph = Some(PoseGraph::new(Pose2::IDENTITY)?);
+            self.odom_from_node = *odom_from_robot;
+            self.record(stamp_ns, 0, Pose2::IDENTITY);
+            if let Some(points) = keyframe {
+                self.insert(0, odom_from_robot, points);
+            }
+            return Ok(());
+        };
+        // The pending motion grows by the increment: the old part's error swings the
+        // increment's offset, the increment's own error is in the last scan's frame.
+        let a = self.pending.mount_jacobian(increment);
+        let b = self.pending.frame_jacobian();
+        self.pending_covariance =
+            a * self.pending_covariance * a.transpose() + b * increment_covariance * b.transpose();
+        self.pending = self.pending.compose(increment);
+        self.travelled_m += increment.translation_norm();
+        let Some(points) = keyframe else {
+            let node = graph.node_count() - 1;
+            self.record(stamp_ns, node, self.pending);
+            return Ok(());
+        };
+        let information = information_of(&self.pending_covariance);
+        let node = graph.add_node(self.pending, information)?;
+        self.pending = Pose2::IDENTITY;
+        self.pending_covariance = Matrix3::zeros();
+        self.odom_from_node = *odom_from_robot;
+        self.record(stamp_ns, node, Pose2::IDENTITY);
+        self.insert(node, odom_from_robot, points);
+        self.close_loops(node, points)
+    }
+
+    fn record(&mut self, stamp_ns: u64, node: usize, node_from_robot: Pose2) {
+        self.scans.push(ScanPlace {
+            stamp_ns,
+            node,
+            node_from_robot,
+        });
+    }
+
+    fn insert(&mut self, node: usize, odom_from_robot: &Pose2, points: &[SurfacePoint]) {
+        self.stats.nodes += 1;
+        self.node_travelled_m.resize(node + 1, self.travelled_m);
+        let t = std::time::Instant::now();
+        self.submaps.insert(node, odom_from_robot, points);
+        self.stats.insert_us += t.elapsed().as_micros() as usize;
+        self.stats.submaps = self.submaps.len();
+    }
+
+    /// Searches the finished submaps the node may be in; adds what the scans confirm.
+    fn close_loops(&mut self, node: usize, points: &[SurfacePoint]) -> Result<(), PoseGraphError> {
+        let recent = 2 * self.config.submaps.keyframes;
+        let Some(graph) = self.graph.as_ref() else {
+            return Ok(());
+        };
+        let world_from_node = graph.pose(node);
+        let mut candidates: Vec<(f64, usize, Pose2, SearchWindow)> = self
+            .submaps
+            .iter()
+            .filter(|(index, s)| {
+                s.is_finished()
+                    && s.last_node + recent < node
+                    && self
+                        .last_attempt
+                        .get(*index)
+                        .is_none_or(|&last| last == 0 || last + ATTEMPT_GAP <= node)
+            })
+            .filter_map(|(index, s)| {
+                let seed = graph.pose(s.anchor).between(&world_from_node);
+                let window = self.window(index, s.last_node);
+                let off_centre = (seed.position() - s.centre()).norm();
+                s.covers(seed.position(), window.translation)
+                    .then_some((off_centre, index, seed, window))
+            })
+            .collect();
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+        candidates.truncate(MAX_CANDIDATES);
+        for (_, index, seed, window) in candidates {
+            self.stats.attempts += 1;
+            if self.last_attempt.len() <= index {
+                self.last_attempt.resize(index + 1, 0);
+            }
+            self.last_attempt[index] = node;
+            let t = std::time::Instant::now();
+            self.cache_grid(index);
+            self.stats.grid_us += t.elapsed().as_micros() as usize;
+            let t = std::time::Instant::now();
+            let (Some(submap), Some((_, grid))) = (self.submaps.get(index), self.grids.front())
+            else {
+                continue;
+            };
+            let answer = verify(submap, grid, points, &seed, window, &self.config.closure);
+            if std::env::var_os("BE_DEBUG").is_some() {
+                eprintln!("t {:.1} node {node} submap {index} (nodes {}..{}) window {:.2} {:.2}: {:?}", self.scans.last().map_or(0.0, |s| s.stamp_ns as f64 * 1e-9), submap.first_node, submap.last_node, window.translation, window.yaw, answer.as_ref().map(|c| (c.explained, c.agreement)));
+            }
+            match answer {
+                Ok(closure) => {
+                    let anchor = submap.anchor;
+                    let innovation = seed.between(&closure.submap_from_robot);
+                    self.add_closure(anchor, node, &closure)?;
+                    if self.tied_at_m.len() <= index {
+                        self.tied_at_m.resize(index + 1, f64::NAN);
+                    }
+                    self.tied_at_m[index] = self.travelled_m;
+                    self.unsolved += 1;
+                    // A closure the graph already agrees with can wait for the next solve.
+                    if innovation.translation_norm() > 0.5 * self.config.min_window_m
+                        || innovation.yaw.abs() > 0.5 * self.config.min_window_rad
+                    {
+                        self.unsolved = UNSOLVED_CLOSURES;
+                    }
+                }
+                Err(Refusal::NoMatch) => self.stats.no_match += 1,
+                Err(Refusal::Unexplained(_)) => self.stats.unexplained += 1,
+                Err(Refusal::Contradicted(_)) => self.stats.contradicted += 1,
+                Err(Refusal::Ambiguous) => self.stats.ambiguous += 1,
+                Err(Refusal::Unconstrained) => self.stats.unconstrained += 1,
+            }
+            self.stats.verify_us += t.elapsed().as_micros() as usize;
+        }
+        if self.unsolved >= UNSOLVED_CLOSURES {
+            self.solve()?;
+        }
+        Ok(())
+    }
+
+    fn solve(&mut self) -> Result<(), PoseGraphError> {
+        if let Some(graph) = self.graph.as_mut() {
+            let t = std::time::Instant::now();
+            graph.optimize()?;
+            self.stats.solve_us += t.elapsed().as_micros() as usize;
+            self.stats.optimizations += 1;
+            self.unsolved = 0;
+        }
+        Ok(())
+    }
+
+    fn add_closure(
+        &mut self,
+        anchor: usize,
+        node: usize,
+        closure: &Closure,
+    ) -> Result<(), PoseGraphError> {
+        if let Some(graph) = self.graph.as_mut() {
+            graph.add_closure(
+                anchor,
+                node,
+                closure.submap_from_robot,
+                closure.information,
+            )?;
+            self.stats.closures += 1;
+        }
+        Ok(())
+    }
+
+    /// The search window for submap `index`: the drift the front end can have built up over
+    /// the path since the graph last tied the robot to it (or since it was made).
+    fn window(&self, index: usize, last_node: usize) -> SearchWindow {
+        let c = &self.config;
+        let tied = self
+            .tied_at_m
+            .get(index)
+            .copied()
+            .filter(|m| m.is_finite())
+            .unwrap_or_else(|| self.node_travelled_m.get(last_node).copied().unwrap_or(0.0));
+        let since = (self.travelled_m - tied).max(0.0);
+        SearchWindow {
+            translation: (c.min_window_m + c.drift_m_per_m * since).min(c.max_window_m),
+            yaw: (c.min_window_rad + c.drift_rad_per_m * since).min(c.max_window_rad),
+        }
+    }
+
+    /// Puts the match grid of submap `index` first in the cache, built on first use and
+    /// kept while it is recent.
+    fn cache_grid(&mut self, index: usize) {
+        if let Some(at) = self.grids.iter().position(|(i, _)| *i == index) {
+            if let Some(entry) = self.grids.remove(at) {
+                self.grids.push_front(entry);
+            }
+        } else if let Some(submap) = self.submaps.get(index) {
+            let grid = submap.match_grid(self.config.resolution, self.config.max_window_m);
+            self.stats.grids_built += 1;
+            self.grids.push_front((index, grid));
+            self.grids.truncate(GRID_CACHE);
+        }
+    }
+
+    /// Solves the graph once more with everything in it.
+    pub fn finish(&mut self) -> Result<(), PoseGraphError> {
+        self.solve()
+    }
+
+    /// Every scan's pose on the solved graph, with its stamp.
+    pub fn path(&self) -> Vec<(u64, Pose2)> {
+        let Some(graph) = self.graph.as_ref() else {
+            return Vec::new();
+        };
+        self.scans
+            .iter()
+            .map(|s| (s.stamp_ns, graph.pose(s.node).compose(&s.node_from_robot)))
+            .collect()
+    }
+
+    pub fn stats(&self) -> GlobalStats {
+        self.stats
+    }
+}
+
+/// The information of a step's covariance, with a floor on each variance so that a step
+/// the front end reports as exact (a robot standing still) cannot make the graph singular.
+fn information_of(covariance: &Matrix3<f64>) -> Matrix3<f64> {
+    let floored = covariance + Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-8, 1e-8, 1e-10));
+    let symmetric = 0.5 * (floored + floored.transpose());
+    symmetric
+        .try_inverse()
+        .map(|m| 0.5 * (m + m.transpose()))
+        .unwrap_or_else(|| Matrix3::identity() * 1e8)
+}

@@ -1,0 +1,194 @@
+//! Closures checked by the scans, on constructed worlds: a right closure after metres of
+//! drift is found and placed; a room that only looks like the old one is refused.
+
+use back_end::branch_bound::SearchWindow;
+use back_end::closure::{ClosureCheck, Refusal, verify};
+use back_end::submap::{SubmapConfig, Submaps};
+use lidar_sim::RayCaster;
+use lidar_sim::geometry::Segment;
+use scan_match::points::{SurfacePoint, extract};
+use scan_match::registration::RegistrationParams;
+use slam_geom::{Pose2, ScanGeometry};
+
+const VOXEL: f64 = 0.05;
+
+fn check() -> ClosureCheck {
+    ClosureCheck {
+        min_agreement: 0.9,
+        min_overlap: 0.4,
+        radius: 2.0 * VOXEL,
+        registration: RegistrationParams {
+            range_sigma: 0.01,
+            voxel: VOXEL,
+            max_iterations: 30,
+            convergence: 1e-3,
+            degeneracy_ratio: 0.02,
+            weak_steps: false,
+        },
+    }
+}
+
+/// A closed polygon's walls, with gaps where `doors` (pairs of indices of wall and span
+/// along it, metres from its start) open.
+fn walls(corners: &[(f64, f64)], doors: &[(usize, f64, f64)]) -> Vec<Segment> {
+    let mut out = Vec::new();
+    for i in 0..corners.len() {
+        let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+        let length = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+        let at = |s: f64| [a.0 + (b.0 - a.0) * s / length, a.1 + (b.1 - a.1) * s / length];
+        let mut start = 0.0;
+        let mut gaps: Vec<(f64, f64)> = doors
+            .iter()
+            .filter(|d| d.0 == i)
+            .map(|d| (d.1, d.2))
+            .collect();
+        gaps.sort_by(|x, y| x.0.total_cmp(&y.0));
+        for (from, to) in gaps {
+            out.push(Segment::new(at(start), at(from)));
+            start = to;
+        }
+        out.push(Segment::new(at(start), at(length)));
+    }
+    out
+}
+
+fn boxed(x: f64, y: f64, w: f64, h: f64) -> Vec<Segment> {
+    walls(&[(x, y), (x + w, y), (x + w, y + h), (x, y + h)], &[])
+}
+
+/// A 270-degree scanner of 541 beams reaching 20 m.
+fn geometry() -> ScanGeometry {
+    ScanGeometry {
+        angle_min: -0.75 * std::f64::consts::PI,
+        angle_increment: 1.5 * std::f64::consts::PI / 540.0,
+        time_increment: 0.0,
+        scan_time: 0.025,
+        range_min: 0.1,
+        range_max: 20.0,
+    }
+}
+
+fn scan(caster: &RayCaster, pose: &Pose2) -> Vec<SurfacePoint> {
+    let geometry = geometry();
+    let ranges: Vec<f32> = (0..541)
+        .map(|i| {
+            let bearing = pose.yaw + geometry.bearing(i);
+            caster
+                .cast([pose.x, pose.y], bearing, geometry.range_max)
+                .map_or(f32::NAN, |r| r as f32)
+        })
+        .collect();
+    extract(&geometry, &ranges, 0.01, VOXEL).points
+}
+
+/// A finished submap of `caster`'s world from poses along a line.
+fn submap_along(caster: &RayCaster, from: Pose2, step: Pose2) -> Submaps {
+    let mut submaps = Submaps::new(SubmapConfig {
+        keyframes: 4,
+        voxel: VOXEL,
+    });
+    let mut pose = from;
+    for node in 0..8 {
+        submaps.insert(node, &pose, &scan(caster, &pose));
+        pose = pose.compose(&step);
+    }
+    assert!(submaps.get(0).unwrap().is_finished());
+    submaps
+}
+
+/// Two rooms of the same shape and size, 10 m apart: the same four corners, but the doors
+/// in other walls and other furniture.
+fn look_alike_rooms() -> RayCaster {
+    let mut segments = walls(
+        &[(0.0, 0.0), (6.0, 0.0), (6.0, 5.0), (0.0, 5.0)],
+        &[(2, 3.5, 4.5)],
+    );
+    segments.extend(boxed(4.5, 0.5, 1.0, 0.6));
+    segments.extend(walls(
+        &[(10.0, 0.0), (16.0, 0.0), (16.0, 5.0), (10.0, 5.0)],
+        &[(1, 1.0, 2.0), (0, 1.0, 2.0)],
+    ));
+    segments.extend(boxed(10.6, 3.8, 1.6, 0.5));
+    RayCaster::from_segments(segments)
+}
+
+#[test]
+fn a_closure_after_two_metres_of_drift_is_found_where_it_is() {
+    let caster = look_alike_rooms();
+    let submaps = submap_along(&caster, Pose2::new(1.0, 1.5, 0.2), Pose2::new(0.25, 0.0, 0.05));
+    let submap = submaps.get(0).unwrap();
+    let grid = submap.match_grid(VOXEL, 2.5);
+    // The robot is back, at `truth` in the submap's frame; the drifted path puts it 2 m off.
+    let world_from_submap = Pose2::new(1.0, 1.5, 0.2);
+    let world_from_robot = Pose2::new(3.0, 2.5, 1.2);
+    let truth = world_from_submap.between(&world_from_robot);
+    let seed = truth.compose(&Pose2::new(1.3, -1.4, 0.2));
+    let window = SearchWindow {
+        translation: 2.5,
+        yaw: 0.3,
+    };
+    let closure = verify(
+        submap,
+        &grid,
+        &scan(&caster, &world_from_robot),
+        &seed,
+        window,
+        &check(),
+    )
+    .unwrap();
+    let error = truth.between(&closure.submap_from_robot);
+    assert!(error.translation_norm() < 0.02, "{error:?}");
+    assert!(error.yaw.abs() < 0.005, "{error:?}");
+    assert!(closure.explained > 0.8, "{}", closure.explained);
+    // The information is symmetric positive definite.
+    let information = closure.information;
+    assert!((information - information.transpose()).norm() < 1e-9 * information.norm());
+    assert!(information.cholesky().is_some());
+}
+
+#[test]
+fn a_room_that_only_looks_like_the_old_one_is_refused() {
+    let caster = look_alike_rooms();
+    let submaps = submap_along(&caster, Pose2::new(1.0, 1.5, 0.2), Pose2::new(0.25, 0.0, 0.05));
+    let submap = submaps.get(0).unwrap();
+    let grid = submap.match_grid(VOXEL, 1.0);
+    // The robot is in the second room; its corners say it is at the same place of the first.
+    let world_from_submap = Pose2::new(1.0, 1.5, 0.2);
+    let in_second_room = Pose2::new(13.0, 2.5, 1.2);
+    let proposed = Pose2::new(3.0, 2.5, 1.2);
+    let seed = world_from_submap.between(&proposed);
+    let window = SearchWindow {
+        translation: 1.0,
+        yaw: 0.2,
+    };
+    let answer = verify(
+        submap,
+        &grid,
+        &scan(&caster, &in_second_room),
+        &seed,
+        window,
+        &check(),
+    );
+    eprintln!("wrong room: {answer:?}");
+    assert!(
+        matches!(
+            answer,
+            Err(Refusal::NoMatch
+                | Refusal::Unexplained(_)
+                | Refusal::Contradicted(_)
+                | Refusal::Ambiguous)
+        ),
+        "{answer:?}"
+    );
+    // The same scan from the first room is a closure.
+    let answer = verify(
+        submap,
+        &grid,
+        &scan(&caster, &proposed),
+        &seed,
+        window,
+        &check(),
+    );
+    eprintln!("right room: {answer:?}");
+    assert!(answer.is_ok(), "{answer:?}");
+}
