@@ -7,6 +7,13 @@
 //! points explained, the same on every scanner); the path is a pose graph over the front
 //! end's steps and the closures, solved with a robust loss so that a wrong closure cannot
 //! bend it.
+//!
+//! [`PoseGraph`] ([`pose_graph`]) is that solver, the project's one: nodes joined by the
+//! front end's steps (trusted) and by closures (not), each closure weighted by dynamic
+//! covariance scaling, annealed so that loops that came back metres off still close, and
+//! reported accepted or rejected; every step is an exact sparse Cholesky solve, so a
+//! chain of 15,000 nodes with 500 closures is re-solved online in tens of milliseconds
+//! (`examples/pose_graph_timing.rs`).
 
 pub mod branch_bound;
 pub mod closure;
@@ -16,3 +23,6 @@ pub mod pose_graph;
 pub mod submap;
 
 pub use global_slam::{GlobalConfig, GlobalSlam, GlobalStats};
+pub use pose_graph::{
+    ACCEPTED_SCALE, ClosureId, PoseGraph, PoseGraphError, PoseGraphSettings, SolveReport,
+};
