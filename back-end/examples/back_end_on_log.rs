@@ -84,7 +84,12 @@ fn main() -> Result<()> {
             let s = score(&Trajectory::read_tum(path)?, &relations, 1_000_000);
             println!(
                 "{label}: {} of {} relations: translation {:.4} +- {:.4} m (max {:.3}), rotation {:.4} deg",
-                s.used, s.relations, s.translation_m.mean, s.translation_m.std, s.translation_m.max, s.rotation_deg.mean
+                s.used,
+                s.relations,
+                s.translation_m.mean,
+                s.translation_m.std,
+                s.translation_m.max,
+                s.rotation_deg.mean
             );
         }
     }
@@ -100,7 +105,13 @@ fn write_tum(path: &Path, poses: &[(u64, Pose2)]) -> Result<()> {
         }
         last = Some(*stamp);
         let (s, c) = (0.5 * p.yaw).sin_cos();
-        writeln!(text, "{} {:.6} {:.6} 0 0 0 {s:.9} {c:.9}", slam_geom::format_stamp(*stamp), p.x, p.y)?;
+        writeln!(
+            text,
+            "{} {:.6} {:.6} 0 0 0 {s:.9} {c:.9}",
+            slam_geom::format_stamp(*stamp),
+            p.x,
+            p.y
+        )?;
     }
     std::fs::write(path, text)?;
     Ok(())

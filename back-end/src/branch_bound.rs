@@ -84,7 +84,10 @@ impl MatchGrid {
     pub fn new(points: &[Vector2<f64>], resolution: f64, max_window: f64) -> Self {
         let depth = depth_for(max_window / resolution);
         let pad = EXPLAIN_RADIUS_CELLS.ceil() + 1.0;
-        let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
+        let (mut lo, mut hi) = (
+            Vector2::repeat(f64::INFINITY),
+            Vector2::repeat(f64::NEG_INFINITY),
+        );
         for p in points {
             lo = lo.inf(p);
             hi = hi.sup(p);
@@ -147,12 +150,12 @@ impl MatchGrid {
         let floor = (min_score.clamp(0.0, 1.0) * f64::from(total)).ceil() as u32;
         let step = 1i32 << depth;
         let mut top = Vec::new();
-        for yaw_index in 0..yaws.len() {
+        for (yaw_index, cells) in rotated.iter().enumerate() {
             let mut dx = -half;
             while dx <= half {
                 let mut dy = -half;
                 while dy <= half {
-                    let score = self.score(&rotated[yaw_index], dx, dy, depth);
+                    let score = self.score(cells, dx, dy, depth);
                     if score >= floor {
                         top.push(Candidate {
                             yaw_index,
@@ -166,7 +169,7 @@ impl MatchGrid {
                 dx += step;
             }
         }
-        top.sort_unstable_by(|a, b| b.score.cmp(&a.score));
+        top.sort_unstable_by_key(|c| std::cmp::Reverse(c.score));
         let mut best: Option<Candidate> = None;
         let mut bound = floor;
         for candidate in top {
@@ -217,7 +220,7 @@ impl MatchGrid {
                 ..candidate
             });
         }
-        children.sort_unstable_by(|a, b| b.score.cmp(&a.score));
+        children.sort_unstable_by_key(|c| std::cmp::Reverse(c.score));
         for c in children {
             self.descend(rotated, c, level - 1, half, best, bound);
         }
@@ -365,7 +368,14 @@ mod tests {
                 points.push(a + (b - a) * (i as f64 / n as f64));
             }
         };
-        let corners = [(0.0, 0.0), (8.0, 0.0), (8.0, 3.0), (3.0, 3.0), (3.0, 7.0), (0.0, 7.0)];
+        let corners = [
+            (0.0, 0.0),
+            (8.0, 0.0),
+            (8.0, 3.0),
+            (3.0, 3.0),
+            (3.0, 7.0),
+            (0.0, 7.0),
+        ];
         for i in 0..corners.len() {
             let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
             wall(Vector2::new(a.0, a.1), Vector2::new(b.0, b.1));
@@ -434,7 +444,11 @@ mod tests {
                 }
             }
         }
-        assert!((found.score - best).abs() < 1e-9, "{} vs {best}", found.score);
+        assert!(
+            (found.score - best).abs() < 1e-9,
+            "{} vs {best}",
+            found.score
+        );
     }
 
     #[test]

@@ -103,7 +103,8 @@ pub fn verify(
         submap_from_robot: fit.pose,
         // A direction the scan leaves open (a corridor's length) is known to a few metres:
         // the graph's other edges decide it, and the information stays positive definite.
-        information: fit.constraint.information(fit.variance, 0.0) + Matrix3::identity() * OPEN_INFORMATION,
+        information: fit.constraint.information(fit.variance, 0.0)
+            + Matrix3::identity() * OPEN_INFORMATION,
         explained,
         agreement,
     })

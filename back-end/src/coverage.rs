@@ -69,7 +69,10 @@ impl Coverage {
     }
 
     fn cell_of(&self, p: Vector2<f64>) -> (i32, i32) {
-        ((p.x / self.cell).floor() as i32, (p.y / self.cell).floor() as i32)
+        (
+            (p.x / self.cell).floor() as i32,
+            (p.y / self.cell).floor() as i32,
+        )
     }
 
     /// A beam from `origin` ending at `end`: the cells it crossed short of its last cell

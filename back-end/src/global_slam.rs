@@ -107,10 +107,6 @@ pub struct GlobalStats {
     pub unconstrained: usize,
     pub optimizations: usize,
     pub grids_built: usize,
-    pub insert_us: usize,
-    pub grid_us: usize,
-    pub verify_us: usize,
-    pub solve_us: usize,
 }
 
 /// The back end's state over a run.
@@ -210,9 +206,7 @@ impl GlobalSlam {
     fn insert(&mut self, node: usize, odom_from_robot: &Pose2, points: &[SurfacePoint]) {
         self.stats.nodes += 1;
         self.node_travelled_m.resize(node + 1, self.travelled_m);
-        let t = std::time::Instant::now();
         self.submaps.insert(node, odom_from_robot, points);
-        self.stats.insert_us += t.elapsed().as_micros() as usize;
         self.stats.submaps = self.submaps.len();
     }
 
@@ -250,18 +244,12 @@ impl GlobalSlam {
                 self.last_attempt.resize(index + 1, 0);
             }
             self.last_attempt[index] = node;
-            let t = std::time::Instant::now();
             self.cache_grid(index);
-            self.stats.grid_us += t.elapsed().as_micros() as usize;
-            let t = std::time::Instant::now();
             let (Some(submap), Some((_, grid))) = (self.submaps.get(index), self.grids.front())
             else {
                 continue;
             };
             let answer = verify(submap, grid, points, &seed, window, &self.config.closure);
-            if std::env::var_os("BE_DEBUG").is_some() {
-                eprintln!("t {:.1} node {node} submap {index} (nodes {}..{}) window {:.2} {:.2}: {:?}", self.scans.last().map_or(0.0, |s| s.stamp_ns as f64 * 1e-9), submap.first_node, submap.last_node, window.translation, window.yaw, answer.as_ref().map(|c| (c.explained, c.agreement)));
-            }
             match answer {
                 Ok(closure) => {
                     let anchor = submap.anchor;
@@ -278,6 +266,8 @@ impl GlobalSlam {
                     {
                         self.unsolved = UNSOLVED_CLOSURES;
                     }
+                    // One closure ties the node; a second to the next submap adds little.
+                    break;
                 }
                 Err(Refusal::NoMatch) => self.stats.no_match += 1,
                 Err(Refusal::Unexplained(_)) => self.stats.unexplained += 1,
@@ -285,7 +275,6 @@ impl GlobalSlam {
                 Err(Refusal::Ambiguous) => self.stats.ambiguous += 1,
                 Err(Refusal::Unconstrained) => self.stats.unconstrained += 1,
             }
-            self.stats.verify_us += t.elapsed().as_micros() as usize;
         }
         if self.unsolved >= UNSOLVED_CLOSURES {
             self.solve()?;
@@ -295,9 +284,7 @@ impl GlobalSlam {
 
     fn solve(&mut self) -> Result<(), PoseGraphError> {
         if let Some(graph) = self.graph.as_mut() {
-            let t = std::time::Instant::now();
             graph.optimize()?;
-            self.stats.solve_us += t.elapsed().as_micros() as usize;
             self.stats.optimizations += 1;
             self.unsolved = 0;
         }
@@ -311,12 +298,7 @@ impl GlobalSlam {
         closure: &Closure,
     ) -> Result<(), PoseGraphError> {
         if let Some(graph) = self.graph.as_mut() {
-            graph.add_closure(
-                anchor,
-                node,
-                closure.submap_from_robot,
-                closure.information,
-            )?;
+            graph.add_closure(anchor, node, closure.submap_from_robot, closure.information)?;
             self.stats.closures += 1;
         }
         Ok(())

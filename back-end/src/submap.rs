@@ -135,7 +135,7 @@ impl Submaps {
         scan: &[SurfacePoint],
     ) -> Option<usize> {
         let per = self.config.keyframes.max(1);
-        if self.keyframes % per == 0 {
+        if self.keyframes.is_multiple_of(per) {
             self.all
                 .push(Submap::new(node, *odom_from_robot, self.config.voxel));
         }
