@@ -46,7 +46,7 @@ fn main() -> Result<()> {
         let output = front_end.process(&input)?;
         front_path.push((output.stamp_ns, output.odom_from_robot));
         let started = Instant::now();
-        let points = output.keyframe.then(|| {
+        let points = back_end.wants_node(&output.odom_from_robot).then(|| {
             scan_match::points::extract(
                 &input.geometry,
                 input.ranges,

@@ -48,6 +48,10 @@ pub struct GlobalConfig {
     pub drift_m_per_m: f64,
     /// ...and radians per metre.
     pub drift_rad_per_m: f64,
+    /// A scan becomes a node once the robot moved this far from the last node, metres...
+    pub node_distance_m: f64,
+    /// ...or turned this much, radians.
+    pub node_angle_rad: f64,
     /// Widest window, metres and radians.
     pub max_window_m: f64,
     pub max_window_rad: f64,
@@ -75,6 +79,8 @@ impl GlobalConfig {
                 },
             },
             resolution: front_end.voxel_size,
+            node_distance_m: front_end.keyframe_distance,
+            node_angle_rad: front_end.keyframe_angle,
             min_window_m: 0.3,
             min_window_rad: 0.05,
             drift_m_per_m: 0.05,
@@ -153,8 +159,20 @@ impl GlobalSlam {
         }
     }
 
+    /// Whether the scan at `odom_from_robot` (the front end's pose) becomes a node, and so
+    /// needs its points: the first scan, and any the robot reached by moving or turning
+    /// enough since the last node (the front end's keyframe rule).
+    pub fn wants_node(&self, odom_from_robot: &Pose2) -> bool {
+        if self.graph.is_none() {
+            return true;
+        }
+        let moved = self.odom_from_node.between(odom_from_robot);
+        moved.translation_norm() >= self.config.node_distance_m
+            || moved.yaw.abs() >= self.config.node_angle_rad
+    }
+
     /// Adds one scan: its front-end pose, the increment since the last scan and its
-    /// covariance, and, for a keyframe, its points (robot frame).
+    /// covariance, and, for a node ([`Self::wants_node`]), its points (robot frame).
     pub fn add_scan(
         &mut self,
         stamp_ns: u64,
