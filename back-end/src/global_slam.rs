@@ -16,7 +16,8 @@ use scan_match::points::SurfacePoint;
 use slam_geom::Pose2;
 
 use crate::branch_bound::{MatchGrid, SearchWindow};
-use crate::closure::{Closure, ClosureCheck, Refusal, verify};
+use crate::closure::{ClosureCheck, Refusal, verify};
+use crate::confirmation::{Confirmations, Tie};
 use crate::pose_graph::{PoseGraph, PoseGraphError};
 use crate::submap::{SubmapConfig, Submaps};
 
@@ -106,6 +107,9 @@ pub struct GlobalStats {
     pub submaps: usize,
     pub attempts: usize,
     pub closures: usize,
+    /// Verified closures that moved the graph, held until another confirmed them (each
+    /// counted once when held; confirmed ones count in `closures` too).
+    pub held: usize,
     pub no_match: usize,
     pub unexplained: usize,
     pub contradicted: usize,
@@ -136,6 +140,8 @@ pub struct GlobalSlam {
     tied_at_m: Vec<f64>,
     /// Closures added since the graph was last solved.
     unsolved: usize,
+    /// Jumps waiting for confirmation.
+    held: Confirmations,
     stats: GlobalStats,
 }
 
@@ -155,6 +161,7 @@ impl GlobalSlam {
             node_travelled_m: Vec::new(),
             tied_at_m: Vec::new(),
             unsolved: 0,
+            held: Confirmations::default(),
             stats: GlobalStats::default(),
         }
     }
@@ -270,19 +277,23 @@ impl GlobalSlam {
             let answer = verify(submap, grid, points, &seed, window, &self.config.closure);
             match answer {
                 Ok(closure) => {
-                    let anchor = submap.anchor;
                     let innovation = seed.between(&closure.submap_from_robot);
-                    self.add_closure(anchor, node, &closure)?;
-                    if self.tied_at_m.len() <= index {
-                        self.tied_at_m.resize(index + 1, f64::NAN);
-                    }
-                    self.tied_at_m[index] = self.travelled_m;
-                    self.unsolved += 1;
-                    // A closure the graph already agrees with can wait for the next solve.
-                    if innovation.translation_norm() > 0.5 * self.config.min_window_m
-                        || innovation.yaw.abs() > 0.5 * self.config.min_window_rad
-                    {
-                        self.unsolved = UNSOLVED_CLOSURES;
+                    let tie = Tie {
+                        node,
+                        submap: index,
+                        anchor: submap.anchor,
+                        seen: closure.submap_from_robot,
+                        information: closure.information,
+                        at_m: self.travelled_m,
+                    };
+                    let agrees = innovation.translation_norm() <= 0.5 * self.config.min_window_m
+                        && innovation.yaw.abs() <= 0.5 * self.config.min_window_rad;
+                    if agrees {
+                        // A closure the graph already agrees with can wait for the next
+                        // solve.
+                        self.add_closure(&tie)?;
+                    } else {
+                        self.offer_jump(tie)?;
                     }
                     // One closure ties the node; a second to the next submap adds little.
                     break;
@@ -309,16 +320,42 @@ impl GlobalSlam {
         Ok(())
     }
 
-    fn add_closure(
-        &mut self,
-        anchor: usize,
-        node: usize,
-        closure: &Closure,
-    ) -> Result<(), PoseGraphError> {
+    /// Adds a closure to the graph; the submap is tied to the robot from here.
+    fn add_closure(&mut self, tie: &Tie) -> Result<(), PoseGraphError> {
         if let Some(graph) = self.graph.as_mut() {
-            graph.add_closure(anchor, node, closure.submap_from_robot, closure.information)?;
+            graph.add_closure(tie.anchor, tie.node, tie.seen, tie.information)?;
             self.stats.closures += 1;
+            self.unsolved += 1;
+            if self.tied_at_m.len() <= tie.submap {
+                self.tied_at_m.resize(tie.submap + 1, f64::NAN);
+            }
+            self.tied_at_m[tie.submap] = self.travelled_m;
         }
+        Ok(())
+    }
+
+    /// A closure that would move the graph waits for another to confirm it; confirmed,
+    /// they go in together and the graph is solved at once.
+    fn offer_jump(&mut self, tie: Tie) -> Result<(), PoseGraphError> {
+        let Some(graph) = self.graph.as_ref() else {
+            return Ok(());
+        };
+        let c = self.config;
+        let tolerance = |apart_m: f64| {
+            (
+                c.min_window_m + c.drift_m_per_m * apart_m,
+                c.min_window_rad + c.drift_rad_per_m * apart_m,
+            )
+        };
+        let confirmed = self.held.offer(tie, graph, tolerance);
+        if confirmed.is_empty() {
+            self.stats.held += 1;
+            return Ok(());
+        }
+        for tie in &confirmed {
+            self.add_closure(tie)?;
+        }
+        self.unsolved = UNSOLVED_CLOSURES;
         Ok(())
     }
 

@@ -17,6 +17,7 @@
 
 pub mod branch_bound;
 pub mod closure;
+pub mod confirmation;
 pub mod coverage;
 pub mod global_slam;
 pub mod pose_graph;

@@ -56,6 +56,9 @@ pub const POSE: Topic<PoseEstimate> = Topic::new("slam/pose");
 /// The filter's answer for the whole trajectory (the best particle's path), at the end of
 /// the stream, in chunks.
 pub const PATH: Topic<PathChunk> = Topic::new("slam/path");
+/// The back end's path (the pose graph over the front end's steps and the verified loop
+/// closures, solved), at the end of the stream, in chunks.
+pub const GRAPH_PATH: Topic<PathChunk> = Topic::new("graph/path");
 /// The best particle's map, every few scans and at the end.
 pub const MAP: Topic<MapSnapshot> = Topic::new("slam/map");
 /// Every particle's pose and weight every few scans, in pieces, for a recording (slam-proc

@@ -401,6 +401,7 @@ fn settings_args(
     let run = RunKind::of(config);
     let particles = topology::published(&run, ipc_types::topic::PARTICLES.name());
     let final_map = topology::published(&run, ipc_types::topic::MAP_GRID.name());
+    let graph_path = topology::published(&run, ipc_types::topic::GRAPH_PATH.name());
     let switch = |on: bool, flag: &str| on.then(|| flag.to_owned());
     Ok(match role {
         Role::Recorder => {
@@ -428,6 +429,7 @@ fn settings_args(
             args.push(format!("--refine-passes={}", config.grid.refine_passes));
             args.push(format!("--stop-budget={}", config.grid.stop_budget));
             args.extend(switch(final_map, "--publish-final"));
+            args.extend(switch(graph_path, "--graph-path"));
             args
         }
         Role::Filter => {
@@ -454,6 +456,10 @@ fn settings_args(
             let slam = text("slam", RunConfig::section_text(&config.slam.filter))?;
             args.extend(section_file("slam", slam, "--config")?);
             args
+        }
+        Role::Graph => {
+            let front_end = text("front_end", RunConfig::section_text(&config.front_end))?;
+            section_file("front_end", front_end, "--front-end-config")?
         }
         Role::Perception => {
             let features = text("features", RunConfig::section_text(&config.features))?;

@@ -54,6 +54,8 @@ pub enum When {
     Mapping,
     /// The run has a saved map (`--map DIR`), localizing on it or mapping on top of it.
     SavedMap,
+    /// The run maps from nothing: neither `--localize` nor `--map`.
+    NewMap,
     /// The run is recorded.
     Recorded,
 }
@@ -67,6 +69,7 @@ impl When {
             When::Localize => run.localize,
             When::Mapping => !run.localize,
             When::SavedMap => run.saved_map,
+            When::NewMap => !run.localize && !run.saved_map,
             When::Recorded => run.recorded,
         }
     }
@@ -81,6 +84,8 @@ pub enum Role {
     Perception,
     /// The particle filter: poses and maps.
     Filter,
+    /// Global SLAM: submaps, verified loop closures, the pose graph's path.
+    Graph,
     /// Writes the run's results.
     Sink,
     /// Records every topic into `run.mcap`.
@@ -179,6 +184,7 @@ const FEATURES: &str = topic::FEATURES.name();
 const POSE: &str = topic::POSE.name();
 const PATH: &str = topic::PATH.name();
 const MAP: &str = topic::MAP.name();
+const GRAPH_PATH: &str = topic::GRAPH_PATH.name();
 const PARTICLES: &str = topic::PARTICLES.name();
 const MAP_PATH: &str = topic::MAP_PATH.name();
 const MAP_GRID: &str = topic::MAP_GRID.name();
@@ -234,9 +240,21 @@ pub const STAGES: &[Stage] = &[
             reads(MAP),
             reads(POSE),
             reads(PATH),
+            // The back end's path is the final one where the run has it.
+            reads_if_published(GRAPH_PATH),
         ],
         waits_for: &[],
         saved_map: Some(When::Mapping),
+    },
+    Stage {
+        binary: "graph-proc",
+        role: Role::Graph,
+        // Its graph starts at the first scan: a saved map's frame is the filter's to find.
+        runs: When::NewMap,
+        publishes: &[publishes(GRAPH_PATH)],
+        reads: &[reads(FEATURES), reads(SCAN)],
+        waits_for: &[waits(GRAPH_PATH)],
+        saved_map: None,
     },
     Stage {
         binary: "slam-proc",
@@ -313,6 +331,7 @@ pub const TOPICS: &[&str] = &[
     POSE,
     MAP,
     PATH,
+    GRAPH_PATH,
     PARTICLES,
     MAP_PATH,
     MAP_GRID,
@@ -434,6 +453,7 @@ fn condition_text(when: When) -> Option<&'static str> {
         When::Localize => Some("--localize"),
         When::Mapping => Some("without --localize"),
         When::SavedMap => Some("--map"),
+        When::NewMap => Some("without --map or --localize"),
         When::Recorded => Some("--record"),
     }
 }

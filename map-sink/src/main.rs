@@ -61,6 +61,10 @@ struct Args {
     /// slam-launch gives what is left of its grace period after a margin.
     #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
     stop_budget: Option<Duration>,
+    /// The final path is graph-proc's (`graph/path`), not the filter's: the run waits for it
+    /// at its end, and does not refine it (--refine-passes is for the filter's path).
+    #[arg(long)]
+    graph_path: bool,
 }
 
 /// A budget in seconds, finite and not negative.
@@ -136,7 +140,13 @@ fn run(args: Args) -> Result<()> {
                 ..GridConfig::default()
             },
             refinement: PathRefinementConfig {
-                passes: args.refine_passes,
+                // The back end's path is solved against its own verified closures; the
+                // refinement is for the filter's.
+                passes: if args.graph_path {
+                    0
+                } else {
+                    args.refine_passes
+                },
                 ..PathRefinementConfig::default()
             },
             ..RecorderOptions::default()
@@ -169,10 +179,18 @@ fn run(args: Args) -> Result<()> {
     let maps = Inlet::open(&node, topic::MAP)?;
     let poses = Inlet::open(&node, topic::POSE)?;
     let path = Inlet::open(&node, topic::PATH)?;
+    let graph_path = if args.graph_path {
+        Some(Inlet::open(&node, topic::GRAPH_PATH)?)
+    } else {
+        None
+    };
     let scans = Inlet::open(&node, topic::SCAN)?;
     say("ready");
 
     let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps, &path];
+    if let Some(graph_path) = &graph_path {
+        wakeables.push(graph_path);
+    }
     if let Some(truth) = &truth {
         wakeables.push(truth);
     }
@@ -183,18 +201,20 @@ fn run(args: Args) -> Result<()> {
     let mut progress = Progress::default();
     let mut told = 0;
     let mut assembly = PathAssembly::new();
+    let mut graph_assembly = PathAssembly::new();
+    // The filter's path is final only in a run without the back end's.
+    let mut final_path = FinalPath::new(graph_path.is_some());
     let mut published = None;
     let mut last_status = Instant::now();
     let mut finished = false;
     let mut stop_seen = None;
-    let mut path_complete = false;
     while !finished {
         if wait_any(&wakeables, Duration::from_millis(100))? == Wake::Shutdown {
             let stopped = *stop_seen.get_or_insert_with(Instant::now);
             // slam-proc sends the best particle's path as it stops: take it, unless the
             // run localizes on a saved map (no path comes) or never started.
             let mapping = progress.poses > 0 && progress.localization == PoseEstimate::MAPPING;
-            if !mapping || path_complete || stopped.elapsed() >= PATH_WAIT_ON_STOP {
+            if !mapping || final_path.complete || stopped.elapsed() >= PATH_WAIT_ON_STOP {
                 break;
             }
             std::thread::sleep(PATH_POLL);
@@ -216,7 +236,16 @@ fn run(args: Args) -> Result<()> {
         while let Some(sample) = maps.receive()? {
             recorder.set_map(map_corners(&sample));
         }
-        path_complete |= drain_path(&path, &mut assembly, &mut recorder)?;
+        drain_path(&path, &mut assembly, &mut recorder, &mut final_path, false)?;
+        if let Some(graph_path) = &graph_path {
+            drain_path(
+                graph_path,
+                &mut graph_assembly,
+                &mut recorder,
+                &mut final_path,
+                true,
+            )?;
+        }
         while let Some(sample) = poses.receive()? {
             if sample.header.is_end_of_stream() {
                 finished = true;
@@ -225,7 +254,7 @@ fn run(args: Args) -> Result<()> {
                 while let Some(sample) = maps.receive()? {
                     recorder.set_map(map_corners(&sample));
                 }
-                drain_path(&path, &mut assembly, &mut recorder)?;
+                drain_path(&path, &mut assembly, &mut recorder, &mut final_path, false)?;
                 break;
             }
             if !recorder.knows_mount() {
@@ -252,6 +281,19 @@ fn run(args: Args) -> Result<()> {
             if sample.localization == PoseEstimate::CONVERGED {
                 recorder.record_converged(sample.header.seq, sample.header.stamp_ns);
             }
+        }
+        if finished
+            && let Some(graph_path) = &graph_path
+            && !final_path.complete
+        {
+            // The back end solves its graph once more at the end of the stream, then sends
+            // its path.
+            finished = wait_for_graph_path(
+                graph_path,
+                &mut graph_assembly,
+                &mut recorder,
+                &mut final_path,
+            )?;
         }
         tell_incomplete(&recorder, &mut told);
         if args.status && last_status.elapsed() >= STATUS_PERIOD {
@@ -426,15 +468,31 @@ fn tell_incomplete(recorder: &Recorder, told: &mut usize) {
     *told = recorder.incomplete_outputs().len();
 }
 
-/// Takes the final path's chunks; a complete path goes to the recorder (true when one
-/// did). A chunk that does not fit is reported and the path left incomplete (the online
-/// estimate stands in).
+/// Which path is the run's final one, and whether it has come whole.
+struct FinalPath {
+    from_graph: bool,
+    complete: bool,
+}
+
+impl FinalPath {
+    fn new(from_graph: bool) -> Self {
+        Self {
+            from_graph,
+            complete: false,
+        }
+    }
+}
+
+/// Takes a path's chunks; a complete path goes to the recorder when it is the final one
+/// (`from_graph` says whose it is). A chunk that does not fit is reported and the path left
+/// incomplete (the online estimate stands in).
 fn drain_path(
     inlet: &Inlet<PathChunk>,
     assembly: &mut PathAssembly,
     recorder: &mut Recorder,
-) -> Result<bool> {
-    let mut completed = false;
+    final_path: &mut FinalPath,
+    from_graph: bool,
+) -> Result<()> {
     while let Some(chunk) = inlet.receive()? {
         let poses: Vec<StampedPose> = chunk
             .poses()
@@ -445,12 +503,38 @@ fn drain_path(
             say_err(&format!("map-sink: {e}; the final path is incomplete"));
             continue;
         }
-        if let Some(path) = assembly.complete() {
+        if let Some(path) = assembly.complete()
+            && from_graph == final_path.from_graph
+        {
             recorder.set_final_path(path);
-            completed = true;
+            final_path.complete = true;
         }
     }
-    Ok(completed)
+    Ok(())
+}
+
+/// How long the end of a run waits for the back end's path after the filter's last pose:
+/// its last solve, bounded all the same (a back end that died must not hang the end).
+const GRAPH_PATH_WAIT: Duration = Duration::from_secs(30);
+
+/// Waits for the back end's path at the end of the stream; false when stopped first.
+fn wait_for_graph_path(
+    inlet: &Inlet<PathChunk>,
+    assembly: &mut PathAssembly,
+    recorder: &mut Recorder,
+    final_path: &mut FinalPath,
+) -> Result<bool> {
+    let since = Instant::now();
+    while !final_path.complete && since.elapsed() < GRAPH_PATH_WAIT {
+        if wait_any(&[inlet], PATH_POLL)? == Wake::Shutdown {
+            return Ok(false);
+        }
+        drain_path(inlet, assembly, recorder, final_path, true)?;
+    }
+    if !final_path.complete {
+        say_err("map-sink: the back end's path did not come; the filter's estimate stands in");
+    }
+    Ok(true)
 }
 
 fn drain_scans(

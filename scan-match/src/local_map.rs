@@ -265,7 +265,9 @@ impl LocalMap {
 
     /// Every point of the map, in no particular order.
     pub fn points(&self) -> impl Iterator<Item = &SurfacePoint> + '_ {
-        self.cells.values().flat_map(|entries| entries.iter().map(|e| &e.point))
+        self.cells
+            .values()
+            .flat_map(|entries| entries.iter().map(|e| &e.point))
     }
 
     /// Raster tiles allocated (for tests of its upkeep).

@@ -1,0 +1,253 @@
+//! `graph-proc`: global SLAM (the `back-end` library) as a stage. It reads the front end's
+//! motion from the features topic and, where the robot moved enough for a new node, the
+//! scan's beams; it builds submaps, closes the loops the scans confirm and solves the pose
+//! graph, and publishes the graph's path at the end of the stream (or when stopped).
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use back_end::{GlobalConfig, GlobalSlam, GlobalStats};
+use clap::Parser;
+use ipc_types::prelude::*;
+use nalgebra::Matrix3;
+use scan_match::FrontEndConfig;
+use slam_geom::ScanGeometry;
+use stage_kit::{say, say_err, shutdown};
+
+/// Subscribes to the features (the front end's motion) and the scans, and publishes the
+/// pose graph's path on `graph/path` at the end.
+#[derive(Debug, Parser)]
+#[command(name = "graph-proc", version)]
+struct Args {
+    /// iceoryx2 domain of the run.
+    #[arg(long, default_value = "default")]
+    domain: String,
+    /// TOML file with the front end's settings (every field optional; see
+    /// scan_match::FrontEndConfig): the back end thins and registers scans as it does.
+    #[arg(long, value_name = "FILE")]
+    front_end_config: Option<PathBuf>,
+    /// Path subscribers to wait for before the first lockstep publish.
+    #[arg(long, default_value_t = 1)]
+    subscribers: usize,
+}
+
+/// Scans held at most: feature-proc is never further behind than its queues hold.
+const HELD_SCANS: usize = 256;
+/// How long a node's features wait for its scan in lockstep, where the scan cannot be lost
+/// (a bound all the same: a source that died must not hang the stage) ...
+const SCAN_WAIT_LOCKSTEP: Duration = Duration::from_secs(10);
+/// ... and in real time, where it may have been.
+const SCAN_WAIT_REAL_TIME: Duration = Duration::from_millis(5);
+
+fn main() -> ExitCode {
+    stage_kit::run_stage("graph-proc", run)
+}
+
+fn run(args: Args) -> Result<()> {
+    let front_end: FrontEndConfig = stage_kit::settings::load(args.front_end_config.as_deref())?;
+    front_end.validate().context("front-end configuration")?;
+    let mut global = GlobalSlam::new(GlobalConfig::for_front_end(&front_end));
+
+    let domain = Domain::new(&args.domain)?;
+    let node = domain.node("graph-proc")?;
+    // The path goes out once, at the end, in many chunks: lossless whatever the run's
+    // delivery. Made first: map-sink waits for it.
+    let path = Outlet::create(&domain, &node, topic::GRAPH_PATH, Delivery::Lossless, 0)?;
+    let features = Inlet::open(&node, topic::FEATURES)?;
+    let scans = Inlet::open(&node, topic::SCAN)?;
+    let delivery = features.delivery();
+    say("ready");
+    if delivery == Delivery::Lossless {
+        path.wait_for_subscribers(args.subscribers, None)?;
+    }
+
+    let mut held: VecDeque<HeldScan> = VecDeque::new();
+    let mut counts = Counts::default();
+    let mut last_stamp = 0;
+    loop {
+        if wait_any(&[&features, &scans], Duration::from_millis(100))? == Wake::Shutdown {
+            break;
+        }
+        hold_scans(&scans, &mut held)?;
+        while let Some(sample) = features.receive()? {
+            if sample.header.is_end_of_stream() {
+                publish(&path, &mut global, sample.header.stamp_ns)?;
+                say_err(&summary(&global.stats(), &counts));
+                ipc_types::losses::report(&counts.losses());
+                return Ok(());
+            }
+            let Some(motion) = sample.motion() else {
+                counts.without_motion += 1;
+                continue;
+            };
+            let odom_from_robot = motion.pose.into();
+            let points = if global.wants_node(&odom_from_robot) {
+                let scan = wait_for_scan(&scans, &mut held, sample.header.seq, delivery)?;
+                if scan.is_none() {
+                    counts.nodes_without_scan += 1;
+                }
+                scan.map(|s| {
+                    scan_match::points::extract(
+                        &s.geometry,
+                        &s.ranges,
+                        front_end.range_sigma,
+                        front_end.voxel_size,
+                    )
+                    .points
+                })
+            } else {
+                None
+            };
+            global
+                .add_scan(
+                    sample.header.stamp_ns,
+                    &odom_from_robot,
+                    &motion.increment.into(),
+                    &Matrix3::from_row_slice(&motion.increment_covariance),
+                    points.as_deref(),
+                )
+                .context("the pose graph")?;
+            last_stamp = sample.header.stamp_ns;
+        }
+    }
+    // Stopped by a signal: the path as far as it got, solved once more.
+    publish(&path, &mut global, last_stamp)?;
+    say_err("graph-proc: stopped");
+    say_err(&summary(&global.stats(), &counts));
+    ipc_types::losses::report(&counts.losses());
+    Ok(())
+}
+
+/// Solves the graph with everything in it and publishes its path.
+fn publish(outlet: &Outlet<PathChunk>, global: &mut GlobalSlam, stamp_ns: u64) -> Result<()> {
+    let started = Instant::now();
+    global.finish().context("the pose graph's last solve")?;
+    let path: Vec<StampedPose> = global
+        .path()
+        .into_iter()
+        .map(|(stamp_ns, pose)| StampedPose {
+            stamp_ns,
+            pose: pose.into(),
+        })
+        .collect();
+    outlet.publish_path(&path, stamp_ns)?;
+    say_err(&format!(
+        "graph-proc: path of {} poses solved and published in {:.2} s",
+        path.len(),
+        started.elapsed().as_secs_f64()
+    ));
+    Ok(())
+}
+
+/// What the run made do without.
+#[derive(Debug, Default)]
+struct Counts {
+    /// Features without the front end's motion (a front end that did not run).
+    without_motion: u64,
+    /// Nodes whose scan never came (lost in real time).
+    nodes_without_scan: u64,
+}
+
+impl Counts {
+    /// What was lost, for the launcher (`ipc_types::losses`).
+    fn losses(&self) -> [(&'static str, u64); 2] {
+        [
+            ("scans_without_motion", self.without_motion),
+            ("nodes_without_scan", self.nodes_without_scan),
+        ]
+    }
+}
+
+/// The closing summary block.
+fn summary(stats: &GlobalStats, counts: &Counts) -> String {
+    let refused = stats.no_match
+        + stats.unexplained
+        + stats.contradicted
+        + stats.ambiguous
+        + stats.unconstrained;
+    let mut text = format!(
+        "graph-proc: summary of the back end\n  \
+         nodes:           {} in {} submaps\n  \
+         loop closures:   {} verified by the scans, of {} searched ({} refused: {} not found, \
+         {} overlapping too little, {} contradicted, {} ambiguous, {} unconstrained)\n  \
+         solves:          {}",
+        stats.nodes,
+        stats.submaps,
+        stats.closures,
+        stats.attempts,
+        refused,
+        stats.no_match,
+        stats.unexplained,
+        stats.contradicted,
+        stats.ambiguous,
+        stats.unconstrained,
+        stats.optimizations,
+    );
+    if counts.without_motion > 0 {
+        text.push_str(&format!(
+            "\n  {} scans without the front end's motion left out",
+            counts.without_motion
+        ));
+    }
+    if counts.nodes_without_scan > 0 {
+        text.push_str(&format!(
+            "\n  {} nodes whose scan was lost waited for the next",
+            counts.nodes_without_scan
+        ));
+    }
+    text
+}
+
+/// A scan's beams, kept until its features come.
+struct HeldScan {
+    seq: u64,
+    geometry: ScanGeometry,
+    ranges: Vec<f32>,
+}
+
+/// Takes the scans that have come, keeping their beams for the features to come.
+fn hold_scans(scans: &Inlet<LaserScan>, held: &mut VecDeque<HeldScan>) -> Result<()> {
+    while let Some(scan) = scans.receive()? {
+        if scan.header.is_end_of_stream() {
+            continue;
+        }
+        if held.len() == HELD_SCANS {
+            held.pop_front();
+        }
+        held.push_back(HeldScan {
+            seq: scan.header.seq,
+            geometry: scan.geometry(),
+            ranges: scan.ranges().to_vec(),
+        });
+    }
+    Ok(())
+}
+
+/// The scan numbered `seq`, once it has come (the features may overtake it: the scan goes
+/// to each subscriber in turn).
+fn wait_for_scan<'a>(
+    scans: &Inlet<LaserScan>,
+    held: &'a mut VecDeque<HeldScan>,
+    seq: u64,
+    delivery: Delivery,
+) -> Result<Option<&'a HeldScan>> {
+    let patience = match delivery {
+        Delivery::Lossless => SCAN_WAIT_LOCKSTEP,
+        Delivery::Latest => SCAN_WAIT_REAL_TIME,
+    };
+    let since = Instant::now();
+    while held.back().is_none_or(|s| s.seq < seq) && since.elapsed() < patience {
+        if shutdown::requested() {
+            break;
+        }
+        wait_any(&[scans], Duration::from_millis(10))?;
+        hold_scans(scans, held)?;
+    }
+    while held.front().is_some_and(|s| s.seq < seq) {
+        held.pop_front();
+    }
+    Ok(held.front().filter(|s| s.seq == seq))
+}
