@@ -408,6 +408,7 @@ fn settings_args(
             let mut args = flag_values([("--out", Some(out))]);
             args.extend(switch(particles, "--particles"));
             args.extend(switch(final_map, "--final-map"));
+            args.extend(switch(graph_path, "--graph-path"));
             args
         }
         Role::Sink => {

@@ -78,7 +78,8 @@ mod tests {
                 "perception/features",
                 "slam/pose",
                 "slam/map",
-                "slam/path"
+                "slam/path",
+                "graph/path"
             ]
         );
         config.source = SourceKind::Hokuyo;

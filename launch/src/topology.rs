@@ -220,6 +220,7 @@ pub const STAGES: &[Stage] = &[
             reads(POSE),
             reads(MAP),
             reads(PATH),
+            reads_if_published(GRAPH_PATH),
             reads(PARTICLES),
             reads(MAP_PATH),
             reads(MAP_GRID),
@@ -574,18 +575,24 @@ mod tests {
         };
         assert_eq!(
             counts(&PLAIN),
-            [("slam-proc", 1), ("feature-proc", 1), ("lidar-sim", 2)]
+            [
+                ("graph-proc", 1),
+                ("slam-proc", 1),
+                ("feature-proc", 2),
+                ("lidar-sim", 3)
+            ]
         );
         assert_eq!(
             services(&PLAIN),
             [
-                (SCAN, 2),
+                (SCAN, 3),
                 (GROUND_TRUTH, 1),
                 (WORLD_CORNERS, 1),
-                (FEATURES, 1),
+                (FEATURES, 2),
                 (POSE, 1),
                 (MAP, 1),
-                (PATH, 1)
+                (PATH, 1),
+                (GRAPH_PATH, 1)
             ]
         );
         let recorded = RunKind {
@@ -594,7 +601,12 @@ mod tests {
         };
         assert_eq!(
             counts(&recorded),
-            [("slam-proc", 2), ("feature-proc", 2), ("lidar-sim", 3)]
+            [
+                ("graph-proc", 2),
+                ("slam-proc", 2),
+                ("feature-proc", 3),
+                ("lidar-sim", 4)
+            ]
         );
         assert!(
             services(&recorded)
@@ -644,17 +656,17 @@ mod tests {
         // slam-record too when the run is recorded.
         type Waits = &'static [(&'static str, usize)];
         let expected: [(bool, bool, Waits); 4] = [
-            (false, false, &[("--subscribers", 2)]),
-            (false, true, &[("--subscribers", 3)]),
+            (false, false, &[("--subscribers", 3)]),
+            (false, true, &[("--subscribers", 4)]),
             (
                 true,
                 false,
-                &[("--subscribers", 2), ("--odometry-subscribers", 1)],
+                &[("--subscribers", 3), ("--odometry-subscribers", 1)],
             ),
             (
                 true,
                 true,
-                &[("--subscribers", 3), ("--odometry-subscribers", 2)],
+                &[("--subscribers", 4), ("--odometry-subscribers", 2)],
             ),
         ];
         for source in [SourceKind::Sim, SourceKind::Replay] {
@@ -672,7 +684,7 @@ mod tests {
             source: SourceKind::Hokuyo,
             ..PLAIN
         };
-        assert_eq!(source_waits(&hokuyo), [("--subscribers", 2)]);
+        assert_eq!(source_waits(&hokuyo), [("--subscribers", 3)]);
         for run in every_run() {
             for stage in stages(&run) {
                 for (option, readers) in waits_for_subscribers(stage, &run) {
@@ -717,7 +729,7 @@ mod tests {
         };
         assert_eq!(
             services(&run).iter().map(|s| s.0).collect::<Vec<_>>(),
-            [SCAN, FEATURES, POSE, MAP, PATH]
+            [SCAN, FEATURES, POSE, MAP, PATH, GRAPH_PATH]
         );
     }
 

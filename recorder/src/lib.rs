@@ -59,7 +59,7 @@ pub use map_scene::{MapScene, MapSceneTopic, MapScenes, corner_entity_id};
 pub use mcap_file::{CHUNK_BYTES, ChannelCount, FLUSH_PERIOD, McapFile};
 pub use own::MapMessage;
 pub use particles::{ParticlePieces, ParticlesMessage};
-pub use path::{MapPathMessage, PathChunks, PathMessage};
+pub use path::{GraphPathMessage, MapPathMessage, PathChunks, PathMessage};
 pub use pose::{MAP_FRAME, PoseMessage};
 pub use pose_in_frame::PoseInFrame;
 pub use reader::{

@@ -31,6 +31,9 @@ struct Args {
     /// dies).
     #[arg(long)]
     final_map: bool,
+    /// graph-proc publishes the back end's path at the end of the stream: record it.
+    #[arg(long)]
+    graph_path: bool,
     /// Output directory; the recording is DIR/run.mcap.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
@@ -56,6 +59,7 @@ struct Inlets {
     particles: Option<Inlet<ParticleCloud>>,
     map_path: Option<Inlet<PathChunk>>,
     map_grid: Option<Inlet<GridCells>>,
+    graph_path: Option<Inlet<PathChunk>>,
 }
 
 impl Inlets {
@@ -75,8 +79,10 @@ impl Inlets {
         let particles = open_if(args.particles, node, topic::PARTICLES)?;
         let map_path = open_if(args.final_map, node, topic::MAP_PATH)?;
         let map_grid = open_if(args.final_map, node, topic::MAP_GRID)?;
+        let graph_path = open_if(args.graph_path, node, topic::GRAPH_PATH)?;
         let scans = Inlet::open(node, topic::SCAN)?;
         Ok(Self {
+            graph_path,
             particles,
             map_path,
             map_grid,
@@ -111,6 +117,7 @@ impl Inlets {
         all.extend(self.particles.as_ref().map(|i| i as &dyn Wakeable));
         all.extend(self.map_path.as_ref().map(|i| i as &dyn Wakeable));
         all.extend(self.map_grid.as_ref().map(|i| i as &dyn Wakeable));
+        all.extend(self.graph_path.as_ref().map(|i| i as &dyn Wakeable));
         all
     }
 
@@ -135,6 +142,9 @@ impl Inlets {
         }
         if let Some(map_path) = &self.map_path {
             taken += drain(map_path, |m| recording.map_path_chunk(m))?;
+        }
+        if let Some(graph_path) = &self.graph_path {
+            taken += drain(graph_path, |m| recording.graph_path_chunk(m))?;
         }
         Ok(taken)
     }

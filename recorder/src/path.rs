@@ -51,6 +51,17 @@ impl ChannelMessage for MapPathMessage {
     const SCHEMA: &'static str = "foxglove.PosesInFrame";
 }
 
+/// The back end's path (graph-proc's pose graph, solved), one message at the end of the
+/// stream, in the form of [`PathMessage`].
+#[derive(Debug, Serialize, JsonSchema)]
+#[serde(transparent)]
+pub struct GraphPathMessage(pub PathMessage);
+
+impl ChannelMessage for GraphPathMessage {
+    const TOPIC: &'static str = "/graph/path";
+    const SCHEMA: &'static str = "foxglove.PosesInFrame";
+}
+
 /// Collects a path's chunks; they arrive in order on one lossless topic.
 #[derive(Debug, Default)]
 pub struct PathChunks {

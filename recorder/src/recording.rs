@@ -15,7 +15,7 @@ use crate::map_scene::MapScenes;
 use crate::mcap_file::{ChannelCount, McapFile};
 use crate::own::MapMessage;
 use crate::particles::{ParticlePieces, ParticlesMessage};
-use crate::path::{MapPathMessage, PathChunks, PathMessage};
+use crate::path::{GraphPathMessage, MapPathMessage, PathChunks, PathMessage};
 use crate::pose::{MAP_FRAME, PoseMessage};
 use crate::scan::ScanMessage;
 use crate::schema::ChannelMessage;
@@ -61,6 +61,7 @@ pub struct Recording {
     held_map: Option<(MapMessage, u64, u64)>,
     maps_left_out: u64,
     map_path: PathChunks,
+    graph_path: PathChunks,
     grid: GridPieces,
     particles: ParticlePieces,
     /// The recorded map snapshots drawn as scenes.
@@ -82,6 +83,7 @@ impl Recording {
             held_map: None,
             maps_left_out: 0,
             map_path: PathChunks::default(),
+            graph_path: PathChunks::default(),
             grid: GridPieces::default(),
             particles: ParticlePieces::default(),
             map_scenes: MapScenes::default(),
@@ -216,6 +218,19 @@ impl Recording {
         }
         if let Some(poses) = self.map_path.add(chunk) {
             let message = MapPathMessage(PathMessage::new(&poses));
+            self.file.write(&message, h.stamp_ns, h.sent_ns)?;
+        }
+        Ok(())
+    }
+
+    /// A chunk of the back end's path; recorded once all of it is in.
+    pub fn graph_path_chunk(&mut self, chunk: &PathChunk) -> Result<(), RecordError> {
+        let h = chunk.header;
+        if h.is_end_of_stream() {
+            return Ok(());
+        }
+        if let Some(poses) = self.graph_path.add(chunk) {
+            let message = GraphPathMessage(PathMessage::new(&poses));
             self.file.write(&message, h.stamp_ns, h.sent_ns)?;
         }
         Ok(())
