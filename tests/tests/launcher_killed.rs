@@ -31,7 +31,13 @@ fn stages_die_with_a_killed_launcher_and_map_sink_writes_its_results() {
     names.sort_unstable();
     assert_eq!(
         names,
-        ["feature-proc", "lidar-sim", "map-sink", "slam-proc"],
+        [
+            "feature-proc",
+            "graph-proc",
+            "lidar-sim",
+            "map-sink",
+            "slam-proc"
+        ],
         "{stages:?}"
     );
 

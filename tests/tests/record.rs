@@ -76,6 +76,7 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         ("/tf", "foxglove.FrameTransform"),
         ("/slam/pose", "foxglove.PoseInFrame"),
         ("/slam/path", "foxglove.PosesInFrame"),
+        ("/graph/path", "foxglove.PosesInFrame"),
         ("/sim/ground_truth", "foxglove.PoseInFrame"),
         ("/perception/features", "slam.Features"),
         ("/slam/map", "slam.MapSnapshot"),
@@ -126,6 +127,7 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(count("/slam/pose"), processed);
     assert_eq!(count("/sim/world_corners"), 1);
     assert_eq!(count("/slam/path"), 1);
+    assert_eq!(count("/graph/path"), 1);
     assert_eq!(count("/map/path"), 1);
     assert_eq!(count("/map/grid"), 1);
     assert_eq!(count("/slam/particles"), processed / CLOUD_EVERY);
@@ -167,8 +169,9 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(poses.first_log_time, scans.first_log_time);
     assert_eq!(poses.last_log_time, scans.last_log_time);
 
+    // trajectory.tum is the back end's path, as recorded.
     let trajectory = read_tum(&out.join("trajectory.tum"));
-    let path = topics["/slam/path"].last.as_ref().expect("the path");
+    let path = topics["/graph/path"].last.as_ref().expect("the path");
     let path_poses = path["poses"].as_array().expect("poses");
     assert_eq!(path_poses.len(), trajectory.len());
     let last = &trajectory[trajectory.len() - 1];

@@ -129,6 +129,36 @@ fn aces_closes_its_overlapping_loops_together() {
     assert!(shm_leftovers(&domain).is_empty());
 }
 
+#[test]
+fn fr079_s_final_path_is_no_worse_than_its_front_end() {
+    // fr079's corridors repeat: closures taken on thin evidence made its final path five
+    // times worse than the front end it started from. The back end's closures are verified
+    // by the scans and jumps confirmed, so the final path can only add to the front end.
+    let log = test_data::carmen_log("fr079");
+    let Run { domain, out, .. } = replayed("fr079-rpe", &log, &SEED_1_100_PARTICLES);
+    let scores = metrics(&out)
+        .relative_pose_error
+        .expect("metrics.json scores the run");
+    let final_path = errors(scores.trajectory.as_ref().expect("trajectory.tum scored"));
+    let front_end = errors(
+        scores
+            .dead_reckoning
+            .as_ref()
+            .expect("dead_reckoning.tum scored"),
+    );
+    assert!(
+        final_path.translation_m.mean <= front_end.translation_m.mean,
+        "final path {} m worse than the front end's {} m",
+        final_path.translation_m.mean,
+        front_end.translation_m.mean
+    );
+    assert!(
+        final_path.translation_m.max <= front_end.translation_m.max,
+        "{final_path:?} vs {front_end:?}"
+    );
+    assert!(shm_leftovers(&domain).is_empty());
+}
+
 /// Replays `name`'s log (../shared/data/carmen) with only every third scan published
 /// (`--replay-every 3`), `seed` and 100 particles, scored against the relations beside it:
 /// the front end has a third of the overlap, loops come back farther off, and the filter

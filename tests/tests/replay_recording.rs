@@ -165,6 +165,8 @@ fn check_recording_of(out: &Path, odometry: bool) {
         ("/tf", "foxglove.FrameTransform"),
         ("/slam/pose", "foxglove.PoseInFrame"),
         ("/slam/path", "foxglove.PosesInFrame"),
+        // The back end's path: these runs map from nothing.
+        ("/graph/path", "foxglove.PosesInFrame"),
         ("/perception/features", "slam.Features"),
         ("/slam/map", "slam.MapSnapshot"),
         ("/slam/map_scene", "foxglove.SceneUpdate"),
@@ -202,6 +204,7 @@ fn check_recording_of(out: &Path, odometry: bool) {
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(topics["/tf"].messages, processed + 1);
     assert_eq!(topics["/slam/path"].messages, 1);
+    assert_eq!(topics["/graph/path"].messages, 1);
     assert_eq!(topics["/map/path"].messages, 1);
     let count = |topic: &str| topics.get(topic).map_or(0, |t| t.messages);
     assert_eq!(count("/map/grid"), u64::from(grid));
