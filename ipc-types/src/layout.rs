@@ -24,7 +24,8 @@ const _: () = {
 
     assert!(size_of::<Odometry>() == 176);
     assert!(size_of::<GroundTruthPose>() == 88);
-    assert!(size_of::<PoseEstimate>() == 280);
+    assert!(size_of::<PoseEstimate>() == 296);
+    assert!(offset_of!(PoseEstimate, map_beams_judged) == 280);
     assert!(offset_of!(PoseEstimate, timing) == 232);
     assert!(offset_of!(PoseEstimate, localization) == 272);
 

@@ -288,6 +288,8 @@ fn small_messages_round_trip() {
         },
         localization: PoseEstimate::CONVERGED,
         reserved: 0,
+        map_beams_judged: 12_000,
+        map_beams_explained: 11_500,
     };
     assert_eq!(decode::<PoseEstimate>(&encode(&estimate)), estimate);
 }

@@ -13,7 +13,7 @@ use launch::stall::StallLimits;
 use launch::supervisor::{self, Display, Outcome, StagePlan};
 use launch::topology::{self, Role, RunKind};
 use map_sink::write_atomic;
-use slam_eval::{METRICS_FILE, Metrics, ScoreSummary};
+use slam_eval::{FitVerdict, METRICS_FILE, Metrics, ScoreSummary};
 use stage_kit::{say, say_err, shutdown};
 
 fn main() -> ExitCode {
@@ -219,8 +219,8 @@ fn run() -> Result<ExitCode> {
 
     match outcome {
         Outcome::Finished => {
-            print_summary(&out)?;
-            Ok(ExitCode::SUCCESS)
+            let metrics = print_summary(&out)?;
+            Ok(judge_map_fit(&config, &out, &metrics))
         }
         // A live sensor has no end: Ctrl-C is how its run finishes, but not a run that
         // never got a scan (a sensor that was never reached, or is no sensor).
@@ -234,8 +234,8 @@ fn run() -> Result<ExitCode> {
                 say_err(&format!("logs in {}", log_dir.display()));
                 return Ok(ExitCode::FAILURE);
             }
-            print_summary(&out)?;
-            Ok(ExitCode::SUCCESS)
+            let metrics = print_summary(&out)?;
+            Ok(judge_map_fit(&config, &out, &metrics))
         }
         Outcome::Interrupted { .. } => {
             say_err(&format!(
@@ -531,15 +531,50 @@ fn read_metrics(out: &Path) -> Option<Metrics> {
     serde_json::from_str(&text).ok()
 }
 
-/// Prints the key numbers of metrics.json.
-fn print_summary(out: &Path) -> Result<()> {
+/// Prints the key numbers of metrics.json, and returns them.
+fn print_summary(out: &Path) -> Result<Metrics> {
     let path = out.join(METRICS_FILE);
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("the run finished but {} is missing", path.display()))?;
     let metrics: Metrics = serde_json::from_str(&text)
         .with_context(|| format!("{} is not the metrics map-sink writes", path.display()))?;
     say(&summary(out, &metrics));
-    Ok(())
+    Ok(metrics)
+}
+
+/// The exit status of a finished run on a saved map whose scans the map does not explain:
+/// a localization on it fails (its poses are wherever another building's walls fitted
+/// best); mapping on it was done without it, which is said.
+fn judge_map_fit(config: &RunConfig, out: &Path, metrics: &Metrics) -> ExitCode {
+    let (Some(dir), Some(fit)) = (&config.map, &metrics.map_fit) else {
+        return ExitCode::SUCCESS;
+    };
+    if fit.verdict != FitVerdict::DoesNotFit {
+        return ExitCode::SUCCESS;
+    }
+    let how = format!(
+        "it explains {:.1} % of the {} beams it could judge, and a map is believed from {:.0} % \
+         (metrics.json: map_fit)",
+        100.0 * fit.explained_share.unwrap_or(0.0),
+        fit.beams_judged,
+        100.0 * fit.floor
+    );
+    if config.localize {
+        say_err(&format!(
+            "slam-launch: the map in {} does not fit this run's scans: once converged, {how}; \
+             the localization is not to be trusted",
+            dir.display()
+        ));
+        ExitCode::FAILURE
+    } else {
+        say_err(&format!(
+            "slam-launch: warning: the saved map in {} does not fit this run's scans: {how}; \
+             it was not merged, {} holds this run's map alone",
+            dir.display(),
+            out.display()
+        ));
+        ExitCode::SUCCESS
+    }
 }
 
 /// One line: where the results are and the numbers that matter.
@@ -554,6 +589,12 @@ fn summary(out: &Path, m: &Metrics) -> String {
     if let Some(duration) = m.duration_s.filter(|_| m.wall_s > 0.0) {
         parts.push(format!("{:.0} x real time", duration / m.wall_s));
     }
+    if let Some(search) = &m.search_phase {
+        parts.push(match m.converged_at_scan {
+            Some(scan) => format!("converged at scan {scan}, scored from there"),
+            None => format!("never converged in {} scans", search.scans),
+        });
+    }
     if let Some(ate) = m.ate_rmse_m {
         parts.push(format!("ATE RMSE {ate:.3} m"));
     }
@@ -561,6 +602,12 @@ fn summary(out: &Path, m: &Metrics) -> String {
         parts.push(format!("map RMSE {rmse:.3} m"));
     }
     parts.push(format!("map {} corners", m.map_corners));
+    if let Some(share) = m.map_fit.as_ref().and_then(|fit| fit.explained_share) {
+        parts.push(format!(
+            "saved map explains {:.1} % of beams",
+            100.0 * share
+        ));
+    }
     if let Some(rpe) = &m.relative_pose_error {
         for (name, summary) in [
             ("RPE", &rpe.trajectory),

@@ -23,7 +23,10 @@
 //!   own scans trace ([`refine_path`]), so that a stretch that came back off the map it
 //!   revisits does not draw its walls twice. Mapping on a saved map, the grid starts from
 //!   the saved one as prior evidence ([`prior_grid`]), whose walls the path is refined
-//!   against too.
+//!   against too, unless slam-proc found that the saved map does not explain the run's
+//!   scans ([`slam_eval::MapFit`], [`Recorder::set_map_fit`]).
+//! * Localizing on a saved map, the scores count from the first converged pose on, the
+//!   search before it scored apart ([`Recorder::record_localization`]).
 //! * Given ground-truth relations ([`RecorderOptions::relations`]), the trajectory files are
 //!   scored with the relative-pose error of Kuemmerle et al. 2009 through slam-eval
 //!   ([`slam_eval::score_run`]; why here and not in slam-launch is said there).

@@ -1,6 +1,6 @@
 //! `map-sink`: records a run (trajectory, map, picture, metrics) from the pipeline's topics.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -12,7 +12,7 @@ use map_sink::{
     EndClock, FinishedRun, GridConfig, OccupancyGrid, PathAssembly, PathRefinementConfig, Recorder,
     RecorderOptions, StampedPose, trinary_pixel,
 };
-use slam_eval::{FrameCounts, METRICS_FILE, RefinementState, RelationsFile};
+use slam_eval::{FrameCounts, METRICS_FILE, MapFit, RefinementState, RelationsFile};
 use stage_kit::{say, say_err, shutdown};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
@@ -278,8 +278,19 @@ fn run(args: Args) -> Result<()> {
             progress.particles = sample.particle_count;
             progress.map = sample.map_corners;
             progress.localization = sample.localization;
-            if sample.localization == PoseEstimate::CONVERGED {
-                recorder.record_converged(sample.header.seq, sample.header.stamp_ns);
+            if sample.localization != PoseEstimate::MAPPING {
+                recorder.record_localization(
+                    sample.header.seq,
+                    sample.header.stamp_ns,
+                    sample.localization == PoseEstimate::CONVERGED,
+                );
+            }
+            // On a saved map, slam-proc judges how well it explains the scans.
+            if sample.localization != PoseEstimate::MAPPING || saved.is_some() {
+                recorder.set_map_fit(MapFit {
+                    beams_judged: sample.map_beams_judged,
+                    beams_explained: sample.map_beams_explained,
+                });
             }
         }
         if finished
@@ -313,6 +324,14 @@ fn run(args: Args) -> Result<()> {
         });
     }
     tell_incomplete(&recorder, &mut told);
+    if recorder.saved_grid_set_aside() {
+        say_err(&format!(
+            "map-sink: the saved map in {} does not fit this run's scans: its grid is left \
+             out, {} holds this run's map alone (metrics.json: map_fit)",
+            args.map.as_deref().unwrap_or(Path::new("")).display(),
+            args.out.display()
+        ));
+    }
     let stopped = shutdown::requested;
     let clock = EndClock::new(args.stop_budget, &stopped);
     if let Some(at) = stop_seen {

@@ -21,9 +21,10 @@ use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
 use slam_eval::{
-    AteStats, DEAD_RECKONING_FILE, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput, METRICS_FILE,
-    Metrics, PathRefinement, RefinementState, RelationsFile, RelativePoseErrors, TRAJECTORY_FILE,
-    TRAJECTORY_ONLINE_FILE, ate, distance, nearest_rmse, percentile, score_run, score_tum_file,
+    AteStats, DEAD_RECKONING_FILE, FitVerdict, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput,
+    METRICS_FILE, MapFit, Metrics, PathRefinement, RefinementState, RelationsFile,
+    RelativePoseErrors, SearchPhase, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, ate, distance,
+    nearest_rmse, percentile, score_run, score_tum_file,
 };
 use slam_geom::MapCorner;
 use slam_geom::Pose2;
@@ -155,6 +156,10 @@ pub struct Recorder {
     stamps_ns: Option<(u64, u64)>,
     /// Localizing: the first converged pose's sequence number and stamp.
     converged_at: Option<(u64, u64)>,
+    /// Whether the run localizes on a saved map (its scores count from convergence).
+    localizing: bool,
+    /// On a saved map: how well it explained the scans, as slam-proc last counted.
+    map_fit: Option<MapFit>,
 }
 
 impl Recorder {
@@ -209,6 +214,8 @@ impl Recorder {
             wall_s: None,
             stamps_ns: None,
             converged_at: None,
+            localizing: false,
+            map_fit: None,
         })
     }
 
@@ -352,10 +359,32 @@ impl Recorder {
         self.counts = Some(counts);
     }
 
-    /// Localizing on a saved map: the pose of scan `seq` has converged. The first call is
-    /// kept.
-    pub fn record_converged(&mut self, seq: u64, stamp_ns: u64) {
-        self.converged_at.get_or_insert((seq, stamp_ns));
+    /// Localizing on a saved map: the pose of scan `seq` is the localizer's, `converged` or
+    /// still searching. The scores count from the first converged pose on.
+    pub fn record_localization(&mut self, seq: u64, stamp_ns: u64, converged: bool) {
+        self.localizing = true;
+        if converged {
+            self.converged_at.get_or_insert((seq, stamp_ns));
+        }
+    }
+
+    /// On a saved map: how well it explains the scans so far (the latest counts win). A
+    /// run mapping on its grid ([`Self::map_on`]) whose counts say it does not fit leaves
+    /// the saved grid out: slam-proc set the map aside, and the run's map is its own.
+    pub fn set_map_fit(&mut self, fit: MapFit) {
+        self.map_fit = Some(fit);
+    }
+
+    /// Whether the run mapped on a saved grid that did not fit its scans (and so was left
+    /// out of the run's map).
+    pub fn saved_grid_set_aside(&self) -> bool {
+        self.prior.is_some() && self.misfit()
+    }
+
+    /// The saved map's fit says it does not explain the scans.
+    fn misfit(&self) -> bool {
+        self.map_fit
+            .is_some_and(|fit| fit.verdict() == FitVerdict::DoesNotFit)
     }
 
     /// Overrides the measured wall time (first to last message recorded), seconds.
@@ -402,6 +431,10 @@ impl Recorder {
     pub fn finish_run_within(mut self, clock: &EndClock) -> Result<FinishedRun, SinkError> {
         for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
             self.incomplete.extend(stream.sync());
+        }
+        if self.misfit() {
+            // Neither the grid's start nor the refinement's walls: another building's.
+            self.prior = None;
         }
         let started = Instant::now();
         let asked = self.options.refinement.passes;
@@ -471,10 +504,8 @@ impl Recorder {
         self.write_result(TRAJECTORY_FILE, self.robot_path(path).as_bytes());
         let path_written = self.incomplete.len() == unwritten;
         let relative_pose_error = self
-            .options
-            .relations
-            .as_ref()
-            .map(|truth| score_run(&self.dir, truth, self.options.relations_tolerance_ns))
+            .scored_relations()
+            .map(|truth| score_run(&self.dir, &truth, self.options.relations_tolerance_ns))
             .transpose()?;
         let scored = self.scored(path, relative_pose_error, refinement);
         self.write_result(MAP_CORNERS_FILE, corners_csv(&self.map).as_bytes());
@@ -625,11 +656,11 @@ impl Recorder {
             self.robot_path(path).as_bytes(),
         )?;
         let relative_pose_error =
-            match (&self.options.relations, &first.metrics.relative_pose_error) {
+            match (self.scored_relations(), &first.metrics.relative_pose_error) {
                 (Some(truth), Some(before)) => Some(RelativePoseErrors {
                     trajectory: trajectory
                         .staged_at()
-                        .map(|at| score_tum_file(at, truth, self.options.relations_tolerance_ns))
+                        .map(|at| score_tum_file(at, &truth, self.options.relations_tolerance_ns))
                         .transpose()?
                         .flatten(),
                     ..before.clone()
@@ -754,6 +785,7 @@ impl Recorder {
             nearest_rmse(&aligned, &self.true_corners)
         });
         let mut metrics = self.metrics(&trajectory, stats, dead_reckoning_stats, map_corner_rmse_m);
+        metrics.search_phase = self.search_phase(stats.as_ref());
         metrics.relative_pose_error = relative_pose_error;
         metrics.online_ate_rmse_m = online_stats.map(|s| s.rmse_m);
         metrics.refinement = refinement;
@@ -816,10 +848,40 @@ impl Recorder {
         self.last_message = Some(now);
     }
 
-    /// ATE of the final path over the poses whose stamps have truth.
+    /// The sequence number and stamp of the first pose the scores count: every pose of a
+    /// mapping run, a localization's from its first converged one; `None` for a
+    /// localization that never converged (it has nothing to score but its search).
+    fn scored_from(&self) -> Option<(u64, u64)> {
+        if self.localizing {
+            self.converged_at
+        } else {
+            Some((0, 0))
+        }
+    }
+
+    /// The relations to score the trajectories against: those whose two stamps are both
+    /// from [`Self::scored_from`] on.
+    fn scored_relations(&self) -> Option<RelationsFile> {
+        let truth = self.options.relations.as_ref()?;
+        let (_, from_ns) = self.scored_from()?;
+        Some(RelationsFile {
+            path: truth.path.clone(),
+            relations: truth
+                .relations
+                .iter()
+                .filter(|r| r.t1_ns.min(r.t2_ns) >= from_ns)
+                .cloned()
+                .collect(),
+        })
+    }
+
+    /// ATE of the final path over the poses whose stamps have truth (from
+    /// [`Self::scored_from`]).
     fn score_path(&self, path: &[StampedPose]) -> Option<AteStats> {
+        let (_, from_ns) = self.scored_from()?;
         let (est, truth): (Vec<[f64; 2]>, Vec<[f64; 2]>) = path
             .iter()
+            .filter(|p| p.stamp_ns >= from_ns)
             .filter_map(|p| {
                 let truth = self.truth_by_stamp.get(&p.stamp_ns)?;
                 Some((xy(&p.pose), xy(truth)))
@@ -828,17 +890,54 @@ impl Recorder {
         ate(&est, &truth)
     }
 
-    /// ATE of the trajectory `pick` takes from each estimate, over the scans with truth.
+    /// ATE of the trajectory `pick` takes from each estimate, over the scans with truth
+    /// (from [`Self::scored_from`]).
     fn score(&self, pick: impl Fn(&Estimate) -> Option<Pose2>) -> Option<AteStats> {
-        let (est, truth): (Vec<[f64; 2]>, Vec<[f64; 2]>) = self
-            .estimates
-            .iter()
+        let (from, _) = self.scored_from()?;
+        let (est, truth) = self.paired(from.., pick);
+        ate(&est, &truth)
+    }
+
+    /// The positions `pick` takes from the estimates of the scans in `seqs` that have
+    /// truth, with the truth's.
+    fn paired(
+        &self,
+        seqs: impl std::ops::RangeBounds<u64>,
+        pick: impl Fn(&Estimate) -> Option<Pose2>,
+    ) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+        self.estimates
+            .range(seqs)
             .filter_map(|(seq, e)| {
                 let (estimate, truth) = (pick(e)?, self.truth.get(seq)?);
                 Some((xy(&estimate), xy(truth)))
             })
-            .unzip();
-        ate(&est, &truth)
+            .unzip()
+    }
+
+    /// A localization's search before convergence, its positions scored by `converged`'s
+    /// alignment (the converged poses'), or by their own when it never converged.
+    fn search_phase(&self, converged: Option<&AteStats>) -> Option<SearchPhase> {
+        if !self.localizing {
+            return None;
+        }
+        let until = self.converged_at.map_or(u64::MAX, |(seq, _)| seq);
+        let scans = self.estimates.range(..until).count() as u64;
+        let (est, truth) = self.paired(..until, |e| Some(e.pose));
+        let ate_rmse_m = match (converged, self.converged_at) {
+            (Some(stats), Some(_)) => {
+                let squares: Vec<f64> = est
+                    .iter()
+                    .zip(&truth)
+                    .map(|(e, t)| distance(stats.alignment.apply(*e), *t).powi(2))
+                    .collect();
+                (!squares.is_empty())
+                    .then(|| (squares.iter().sum::<f64>() / squares.len() as f64).sqrt())
+            }
+            (None, None) => ate(&est, &truth).map(|s| s.rmse_m),
+            // Converged, without truth to align by.
+            _ => None,
+        };
+        Some(SearchPhase { scans, ate_rmse_m })
     }
 
     fn metrics(
@@ -892,6 +991,8 @@ impl Recorder {
             converged_at_stamp: self
                 .converged_at
                 .map(|(_, stamp_ns)| slam_geom::format_stamp(stamp_ns)),
+            search_phase: None,
+            map_fit: self.map_fit.map(|fit| fit.summary()),
             incomplete_outputs: Vec::new(),
         }
     }

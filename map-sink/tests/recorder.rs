@@ -454,3 +454,108 @@ fn example_picture_of_a_full_run() -> TestResult {
     let _ = fs::remove_dir_all(&dir);
     Ok(())
 }
+
+/// A localization of `scans` scans on the synthetic lap that searches 5 m off the truth
+/// until scan `converged`, then follows it exactly.
+fn localized_run(
+    name: &str,
+    scans: usize,
+    converged: u64,
+) -> Result<(std::path::PathBuf, Metrics), Box<dyn std::error::Error>> {
+    let dir = common::scratch_dir(name);
+    let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+    for i in 0..scans {
+        let seq = i as u64;
+        let stamp_ns = 1_700_000_000_000_000_000 + seq * 100_000_000;
+        let truth = common::true_pose(i, scans);
+        let estimate = if seq < converged {
+            Pose2::new(truth.x + 5.0, truth.y - 1.0, truth.yaw)
+        } else {
+            truth
+        };
+        recorder.record_pose(seq, stamp_ns, estimate, Some(truth), None)?;
+        recorder.record_truth(seq, stamp_ns, truth)?;
+        recorder.record_localization(seq, stamp_ns, seq >= converged);
+    }
+    let metrics = recorder.finish()?;
+    Ok((dir, metrics))
+}
+
+#[test]
+fn a_localization_is_scored_from_convergence_with_its_search_apart() -> TestResult {
+    let (dir, metrics) = localized_run("localized", 200, 40)?;
+    assert_eq!(metrics.converged_at_scan, Some(40));
+    // From convergence on, the estimate is the truth.
+    let ate = metrics.ate_rmse_m.ok_or("no ATE")?;
+    assert!(ate < 1e-9, "ATE {ate}");
+    assert!(metrics.online_ate_rmse_m.is_some_and(|a| a < 1e-9));
+    // The search's poses, moved by that alignment, are 5.1 m off.
+    let search = metrics.search_phase.ok_or("no search phase")?;
+    assert_eq!(search.scans, 40);
+    let off = search.ate_rmse_m.ok_or("no search ATE")?;
+    assert!((off - 26f64.sqrt()).abs() < 1e-6, "{off}");
+    let json = fs::read_to_string(dir.join(METRICS_FILE))?;
+    assert!(json.contains("\"search_phase\""), "{json}");
+    let _ = fs::remove_dir_all(&dir);
+
+    // Never converged: nothing but the search to score, by its own alignment.
+    let (dir, metrics) = localized_run("never-localized", 100, u64::MAX)?;
+    assert_eq!(metrics.converged_at_scan, None);
+    assert_eq!(metrics.ate_rmse_m, None);
+    let search = metrics.search_phase.ok_or("no search phase")?;
+    assert_eq!(search.scans, 100);
+    assert!(search.ate_rmse_m.is_some_and(|a| a < 1e-6));
+    let _ = fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+#[test]
+fn a_saved_grid_that_does_not_fit_the_scans_is_not_merged() -> TestResult {
+    // A saved map 40 m away from the synthetic room, occupied throughout.
+    let saved = map_sink::GridMap {
+        yaml: map_sink::MapYaml::trinary("map.pgm", 0.05, [40.0, 40.0]),
+        width: 40,
+        height: 40,
+        cells: vec![CellState::Occupied; 1600],
+    };
+    let extent = |dir: &Path| -> Result<[f64; 2], Box<dyn std::error::Error>> {
+        let grid = SavedMap::load(dir)?.grid.ok_or("no grid")?;
+        Ok([
+            grid.yaml.origin[0] + grid.width as f64 * grid.yaml.resolution,
+            grid.yaml.origin[1] + grid.height as f64 * grid.yaml.resolution,
+        ])
+    };
+    for (fit, merged) in [
+        (
+            slam_eval::MapFit {
+                beams_judged: 20_000,
+                beams_explained: 19_000,
+            },
+            true,
+        ),
+        (
+            slam_eval::MapFit {
+                beams_judged: 20_000,
+                beams_explained: 2_000,
+            },
+            false,
+        ),
+    ] {
+        let (dir, mut recorder) = common::driven_recorder(
+            &format!("fit-merged-{merged}"),
+            RecorderOptions::default(),
+            Synthetic::lap(60, 181),
+        )?;
+        recorder.map_on(&saved)?;
+        recorder.set_map_fit(fit);
+        assert_eq!(recorder.saved_grid_set_aside(), !merged);
+        let metrics = recorder.finish()?;
+        let summary = metrics.map_fit.ok_or("no map fit")?;
+        assert_eq!(summary.verdict == slam_eval::FitVerdict::Fits, merged);
+        // The saved grid reaches x = 42 m; the room alone, a few metres.
+        let [x, y] = extent(&dir)?;
+        assert_eq!(x > 41.9 && y > 41.9, merged, "{x}, {y}");
+        let _ = fs::remove_dir_all(&dir);
+    }
+    Ok(())
+}

@@ -36,6 +36,7 @@ mod corner_score;
 mod error;
 mod gap;
 mod incomplete_output;
+mod map_fit;
 mod metrics;
 mod path_refinement;
 mod percentile;
@@ -53,7 +54,11 @@ mod trajectory;
 pub use ate::{AteStats, ate, distance};
 pub use corner_score::nearest_rmse;
 pub use incomplete_output::IncompleteOutput;
-pub use metrics::{FrameCounts, Metrics};
+pub use map_fit::{
+    FitVerdict, MAP_FIT_BEAMS_PER_SCAN, MAP_FIT_FLOOR, MAP_FIT_MIN_BEAMS, MAP_FIT_WITHIN_M, MapFit,
+    MapFitSummary,
+};
+pub use metrics::{FrameCounts, Metrics, SearchPhase};
 pub use path_refinement::{PathRefinement, RefinementState};
 pub use percentile::percentile;
 pub use run_files::{

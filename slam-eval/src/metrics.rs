@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::incomplete_output::IncompleteOutput;
+use crate::map_fit::MapFitSummary;
 use crate::path_refinement::PathRefinement;
 use crate::run_score::RelativePoseErrors;
 
@@ -62,13 +63,36 @@ pub struct Metrics {
     pub refinement: Option<PathRefinement>,
     /// Localizing on a saved map: the first scan (sequence number) whose pose had
     /// converged, and its stamp (seconds, as in the TUM files); absent when it never did
-    /// or the run mapped.
+    /// or the run mapped. The scores above (ATE, final error, map corners, relative-pose
+    /// errors) cover the poses from this scan on: the search before it is scored apart
+    /// (`search_phase`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub converged_at_scan: Option<u64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub converged_at_stamp: Option<String>,
+    /// Localizing on a saved map: the poses before convergence (all of them when it never
+    /// converged), which the scores above leave out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_phase: Option<SearchPhase>,
+    /// On a saved map (localizing, or mapping on its grid): how well it explained the run's
+    /// scans. Localizing, a map that does not fit fails the run; mapping, it was set aside
+    /// and not merged: the run's files hold this run's map alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map_fit: Option<MapFitSummary>,
     /// The run's files that stopped short or were not written (a full disk); absent when
     /// every file is whole.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub incomplete_outputs: Vec<IncompleteOutput>,
+}
+
+/// A localization's search for its pose, before the particles converged.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchPhase {
+    /// Poses before the first converged one.
+    pub scans: u64,
+    /// Their positions against the truth, moved by the alignment of the converged poses
+    /// (by their own, when the run never converged); absent without truth.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ate_rmse_m: Option<f64>,
 }

@@ -61,6 +61,7 @@ pub use localize::likelihood_field::{BeamModel, LikelihoodField};
 pub use localize::localizer::{
     Localization, LocalizeError, LocalizeStats, Localizer, ScanRanges, Start, sample_beam_ends,
 };
+pub use localize::map_fit::FitField;
 pub use localize::pose_arg::{PoseArgError, parse_pose};
 pub use localize::tracking_field::{TrackingField, beam_bearings};
 pub use localize_config::LocalizeConfig;

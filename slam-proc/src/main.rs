@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
 use map_sink::SavedMap;
+use slam_eval::{FitVerdict, MapFit};
 use slam_proc::{
     FastSlam, FilterStats, LocalizeStats, Localizer, MeasuredCorner, MeasuredLine, MeasuredMotion,
     OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
@@ -130,6 +131,8 @@ fn run(args: Args) -> Result<()> {
     let mut observations = Vec::new();
     let mut lines = Vec::new();
     let mut processed = 0u64;
+    let saved_dir = args.map.as_deref().unwrap_or(Path::new(""));
+    let mut told_set_aside = false;
     let mut last_header = Header::new(0, 0, "map");
     // The most corners a map snapshot had to leave out (MAX_MAP_CORNERS fit in one).
     let mut left_out = 0u64;
@@ -150,7 +153,7 @@ fn run(args: Args) -> Result<()> {
                 left_out = left_out.max(publish_map(&maps, &slam.best_map(), last_header)?);
                 publish_path(&path, &slam, last_header)?;
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
-                say_err(&summary(&slam.stats()));
+                say_err(&summary(&slam.stats(), saved_grid.map(|_| saved_dir)));
                 ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
                 return Ok(());
             }
@@ -192,7 +195,17 @@ fn run(args: Args) -> Result<()> {
                 fill_estimate(pose, &estimate);
                 pose.dead_reckoning = dead_reckoning;
                 pose.localization = PoseEstimate::MAPPING;
+                fill_map_fit(pose, &slam.map_fit());
             })?;
+            if let Some(at) = slam.stats().saved_map_set_aside_at
+                && !told_set_aside
+            {
+                told_set_aside = true;
+                say_err(&format!(
+                    "slam-proc: at scan {at}: {}",
+                    set_aside_text(&slam.map_fit(), saved_dir)
+                ));
+            }
             last_header = header;
             processed += 1;
             if processed.is_multiple_of(args.map_every) {
@@ -208,21 +221,67 @@ fn run(args: Args) -> Result<()> {
     left_out = left_out.max(publish_map(&maps, &slam.best_map(), last_header)?);
     publish_path(&path, &slam, last_header)?;
     say_err(&format!("slam-proc: stopped after {processed} scans"));
-    say_err(&summary(&slam.stats()));
+    say_err(&summary(&slam.stats(), saved_grid.map(|_| saved_dir)));
     ipc_types::losses::report(&[("map_corners_not_published", left_out)]);
     Ok(())
 }
 
-/// The closing summary block (launch shows it on the console at the end of a run).
-fn summary(stats: &FilterStats) -> String {
-    format!(
+/// The closing summary block (launch shows it on the console at the end of a run), with
+/// the saved map's fit when mapping on the grid of the map in `saved`.
+fn summary(stats: &FilterStats, saved: Option<&Path>) -> String {
+    let mut text = format!(
         "slam-proc: summary of the filter\n  \
          scans:           {} ({} updated the particles with their corners)\n  \
          resamplings:     {}\n  \
          loops closed:    {} by revisits of the best particle\n  \
          map:             {} corners",
         stats.scans, stats.updates, stats.resamplings, stats.loops_closed, stats.map_corners,
+    );
+    if let Some(dir) = saved {
+        let fit = match stats.saved_map_set_aside_at {
+            Some(at) => format!(
+                "set aside at scan {at}: {}",
+                set_aside_text(&stats.map_fit, dir)
+            ),
+            None => fit_text(&stats.map_fit),
+        };
+        text.push_str(&format!("\n  saved map:       {fit}"));
+    }
+    text
+}
+
+/// How well a saved map explained the beams: `explains 97.1 % of 12034 beams (at least
+/// 50 % needed)`, or that too few were judged to say.
+fn fit_text(fit: &MapFit) -> String {
+    match fit.share() {
+        Some(share) if fit.verdict() != FitVerdict::TooFewBeams => format!(
+            "explains {:.1} % of {} beams (at least {:.0} % needed)",
+            100.0 * share,
+            fit.beams_judged,
+            100.0 * slam_eval::MAP_FIT_FLOOR
+        ),
+        _ => format!(
+            "judged only {} beams, too few to say how well it fits (it takes {})",
+            fit.beams_judged,
+            slam_eval::MAP_FIT_MIN_BEAMS
+        ),
+    }
+}
+
+/// Why the saved map in `dir` was set aside while mapping on it.
+fn set_aside_text(fit: &MapFit, dir: &Path) -> String {
+    format!(
+        "the saved map in {} does not fit this run's scans, it {}; mapping on without it, \
+         its corners and grid left out",
+        dir.display(),
+        fit_text(fit)
     )
+}
+
+/// The saved map's fit so far, in a pose message.
+fn fill_map_fit(pose: &mut PoseEstimate, fit: &MapFit) {
+    pose.map_beams_judged = fit.beams_judged;
+    pose.map_beams_explained = fit.beams_explained;
 }
 
 /// Publishes a map (the best particle's, or the saved one being localized on); returns
@@ -462,6 +521,7 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
                 } else {
                     PoseEstimate::SEARCHING
                 };
+                fill_map_fit(pose, &localizer.stats().map_fit);
             })?;
             last_header = header;
             processed += 1;
@@ -538,6 +598,7 @@ fn localize_summary(stats: &LocalizeStats, step_ms: &[f64]) -> String {
         "slam-proc: summary of the localization\n  \
          scans:           {} ({} weighted the particles, {} of them tempered; {} without beams)\n  \
          converged:       {}\n  \
+         map fit:         {}\n  \
          particles:       at most {}\n  \
          time per scan:   median {:.3} ms, 99th percentile {:.3} ms, max {:.3} ms",
         stats.scans,
@@ -547,6 +608,7 @@ fn localize_summary(stats: &LocalizeStats, step_ms: &[f64]) -> String {
         stats
             .converged_at
             .map_or("never".to_owned(), |scan| format!("at scan {scan}")),
+        fit_text(&stats.map_fit),
         stats.peak_particles,
         at(50.0),
         at(99.0),

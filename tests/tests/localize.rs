@@ -1,6 +1,6 @@
 //! Localization on a saved map and mapping on top of one, through `slam-launch` (issue 15):
 //! map a run, then localize another run on its map from a known and from an unknown start,
-//! and refuse a damaged map.
+//! and refuse a damaged map, or one of another building (issue 47).
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -147,6 +147,118 @@ fn mapping_on_a_saved_map_extends_its_landmarks() {
     let ate = metrics(&out)
         .ate_rmse_m
         .expect("metrics.json has ate_rmse_m");
+    assert!(ate < 0.05, "ATE {ate} m");
+}
+
+/// The rectangle a run's grid covers, `[x0, y0, x1, y1]` in its map frame, as map_server
+/// reads `map.yaml` and `map.pgm`.
+fn grid_extent(out: &Path) -> [f64; 4] {
+    let yaml = tests::map_server::parse_yaml(
+        &std::fs::read_to_string(out.join("map.yaml")).expect("map.yaml"),
+    );
+    let (width, height, _) =
+        tests::map_server::parse_pgm(&std::fs::read(out.join(&yaml.image)).expect("map.pgm"));
+    let [x, y, _] = yaml.origin;
+    [
+        x,
+        y,
+        x + width as f64 * yaml.resolution,
+        y + height as f64 * yaml.resolution,
+    ]
+}
+
+/// Issue 47, point 6: a map of another building is not believed. The office world
+/// localized on the hall's map converges somewhere all the same; the share of its beams
+/// the map explains says it does not fit, and the run fails naming it. The office's own map
+/// explains nearly every beam, and that localization is scored from its convergence on.
+/// Mapping the office on the hall's map warns and maps the office alone.
+#[test]
+fn a_map_of_another_building_is_refused_and_not_merged() {
+    let hall = launched(
+        "hall-map-misfit",
+        &["--world", "hall", "--seed", "1", "--rate", "0"],
+    )
+    .out;
+    let hall_arg = hall.to_str().unwrap();
+    let office = office_map("misfit");
+    let office_seed_2 = ["--world", "office", "--seed", "2", "--rate", "0"];
+
+    let out = scratch("office-on-hall");
+    let output = launch(
+        &domain("office-on-hall"),
+        &out,
+        &[&office_seed_2[..], &["--map", hall_arg, "--localize"]].concat(),
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    let named = format!("the map in {hall_arg} does not fit this run's scans");
+    assert!(stderr.contains(&named), "{stderr}");
+    // Its results are written all the same, with the verdict.
+    let fit = metrics(&out).map_fit.expect("metrics.json has map_fit");
+    eprintln!("office on the hall's map: {fit:?}");
+    assert_eq!(fit.verdict, slam_eval::FitVerdict::DoesNotFit);
+    assert!(
+        fit.explained_share.is_some_and(|share| share < 0.4),
+        "{fit:?}"
+    );
+
+    // The office's own map: converged, believed, scored from convergence on.
+    let right = localize_office(&office, 2, None, "misfit-right");
+    let m = metrics(&right);
+    let fit = m.map_fit.expect("metrics.json has map_fit");
+    let converged = m.converged_at_scan.expect("converged");
+    let search = m.search_phase.expect("metrics.json has search_phase");
+    let ate = m.ate_rmse_m.expect("metrics.json has ate_rmse_m");
+    eprintln!(
+        "office on its own map: {fit:?}; converged at scan {converged}, then ATE {ate:.4} m, the search {:?} m",
+        search.ate_rmse_m
+    );
+    assert_eq!(fit.verdict, slam_eval::FitVerdict::Fits);
+    assert!(
+        fit.explained_share.is_some_and(|share| share > 0.9),
+        "{fit:?}"
+    );
+    assert_eq!(search.scans, converged);
+    assert!(ate <= 0.05, "ATE {ate} m after convergence");
+
+    // Mapping the office on the hall's map: a warning, and the office's map alone.
+    let onto = scratch("office-onto-hall");
+    let output = launch(
+        &domain("office-onto-hall"),
+        &onto,
+        &[&office_seed_2[..], &["--map", hall_arg]].concat(),
+    );
+    assert_success(&output);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains(&format!(
+            "warning: the saved map in {hall_arg} does not fit this run's scans"
+        )) && stderr.contains("it was not merged"),
+        "{stderr}"
+    );
+    let m = metrics(&onto);
+    assert_eq!(
+        m.map_fit.map(|fit| fit.verdict),
+        Some(slam_eval::FitVerdict::DoesNotFit)
+    );
+    // Not the hall's corners beside the office's, nor its grid.
+    let (alone, saved) = (
+        read_map_corners(&office).len(),
+        read_map_corners(&hall).len(),
+    );
+    let corners = read_map_corners(&onto).len();
+    assert!(
+        corners < alone + saved / 4,
+        "{corners} corners; the office alone has {alone}, the hall {saved}"
+    );
+    let ([hx0, hy0, hx1, hy1], [x0, y0, x1, y1]) = (grid_extent(&hall), grid_extent(&onto));
+    assert!(
+        !(x0 <= hx0 && y0 <= hy0 && x1 >= hx1 && y1 >= hy1),
+        "the grid {:?} covers the hall's {:?}",
+        [x0, y0, x1, y1],
+        [hx0, hy0, hx1, hy1]
+    );
+    let ate = m.ate_rmse_m.expect("metrics.json has ate_rmse_m");
     assert!(ate < 0.05, "ATE {ate} m");
 }
 

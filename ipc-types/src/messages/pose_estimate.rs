@@ -50,7 +50,7 @@ impl StageTiming {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros, Serialize, Deserialize)]
 #[cfg_attr(feature = "json-schema", derive(schemars::JsonSchema))]
-#[type_name("slam::PoseEstimate::v2")]
+#[type_name("slam::PoseEstimate::v3")]
 pub struct PoseEstimate {
     /// The source scan's header; `sent_ns` is this message's.
     pub header: Header,
@@ -77,6 +77,13 @@ pub struct PoseEstimate {
     /// Keeps the layout free of implicit padding; always 0.
     #[serde(skip)]
     pub reserved: u32,
+    /// On a saved map (`--map`): the beams whose ends the map could judge so far, from the
+    /// estimate (localizing: at the scans that weighted the converged particles; mapping:
+    /// at the filter's updates) ...
+    pub map_beams_judged: u64,
+    /// ... and those of them that ended on one of its walls (`slam_eval::MapFit`); both 0
+    /// without a saved map.
+    pub map_beams_explained: u64,
 }
 
 impl PoseEstimate {

@@ -27,6 +27,7 @@ use crate::motion::predict::{self, MotionNoise};
 use crate::path::particle_path::ScanLog;
 use crate::update::drift::revisit_covariance;
 use crate::update::free_space::WallSegment;
+use slam_eval::{FitVerdict, MapFit};
 use slam_geom::Pose2;
 use slam_geom::StampedPose;
 use stage_kit::SettingError;
@@ -74,6 +75,12 @@ pub struct FastSlam {
     resamplings: u64,
     /// The saved map's grid when mapping on top of it.
     saved_grid: Option<SavedGrid>,
+    /// The saved map's corners, the first ids of every particle's map.
+    saved_corners: u32,
+    /// How well the saved grid explains the scans, judged at the filter's updates.
+    map_fit: MapFit,
+    /// The scan at which the saved map was set aside for not fitting the scans.
+    set_aside_at: Option<u64>,
     /// The path length at the last scan the saved grid judged, metres.
     on_grid_at: f64,
 }
@@ -92,6 +99,12 @@ pub struct FilterStats {
     pub loops_closed: usize,
     /// Confirmed corners of the best particle's map.
     pub map_corners: usize,
+    /// Mapping on a saved grid: how well it explains the scans, from the best particle at
+    /// each update (all 0 without one).
+    pub map_fit: MapFit,
+    /// The scan at which the saved map was set aside: it did not fit the scans
+    /// ([`FastSlam::with_saved_grid`]).
+    pub saved_map_set_aside_at: Option<u64>,
 }
 
 /// The motion since the corners last updated the particles.
@@ -151,6 +164,7 @@ impl FastSlam {
     ) -> Result<Self, SettingError> {
         config.validate()?;
         let mut map = CornerMap::new(config.grid_cell_size);
+        let mut saved_corners = 0;
         for corner in corners {
             let state = CornerState {
                 mean: nalgebra::Vector4::new(corner.x, corner.y, corner.heading, corner.angle),
@@ -165,6 +179,7 @@ impl FastSlam {
                 .all(|v| v.is_finite())
             {
                 map.insert(state, config.confirm_observations);
+                saved_corners += 1;
             }
         }
         Ok(Self {
@@ -198,6 +213,9 @@ impl FastSlam {
             updates: 0,
             resamplings: 0,
             saved_grid: None,
+            saved_corners,
+            map_fit: MapFit::default(),
+            set_aside_at: None,
             on_grid_at: 0.0,
             config,
         })
@@ -206,6 +224,12 @@ impl FastSlam {
     /// The filter fitting its particles to the saved map's occupancy grid at every corner
     /// update (`saved_grid_refine`, `saved_grid_weight`), with the beams given by
     /// [`FastSlam::set_scan`]: mapping on top of a saved map stays in its frame.
+    ///
+    /// The grid also judges how well the saved map explains the scans ([`MapFit`], from the
+    /// best particle at each update). Once the verdict is that it does not, the saved map
+    /// is set aside for the rest of the run: its grid no longer holds the particles and its
+    /// corners leave every particle's map, so that the run maps on its own rather than
+    /// merging this building's corners with another's.
     pub fn with_saved_grid(mut self, grid: &map_sink::GridMap) -> Self {
         self.saved_grid = Some(SavedGrid::new(grid, &self.config));
         self
@@ -259,7 +283,15 @@ impl FastSlam {
             resamplings: self.resamplings,
             loops_closed: best.map_or(0, |p| p.path.closures()),
             map_corners: best.map_or(0, |p| p.map.confirmed_count()),
+            map_fit: self.map_fit,
+            saved_map_set_aside_at: self.set_aside_at,
         }
+    }
+
+    /// How well the saved grid explains the scans so far (all 0 without one); counting
+    /// stops when the saved map is set aside.
+    pub fn map_fit(&self) -> MapFit {
+        self.map_fit
     }
 
     /// The confirmed corners of the best particle's map.
@@ -424,7 +456,7 @@ impl FastSlam {
                     ),
                 }
             }
-            return self.finish([start, motion_done, predict_done, predict_done]);
+            return self.finish([start, motion_done, predict_done, predict_done], false);
         }
         let variance = std::mem::take(&mut self.since_update).noise;
         self.updates += 1;
@@ -521,17 +553,26 @@ impl FastSlam {
         }
         self.wall_memory.push(scan as usize, &self.walls);
         let update_done = Instant::now();
-        self.finish([start, motion_done, predict_done, update_done])
+        self.finish([start, motion_done, predict_done, update_done], true)
     }
 
-    /// Weighs and resamples, counts the scan and reports it; `times` are the step's start
-    /// and the ends of its motion estimate, prediction and update.
-    fn finish(&mut self, times: [Instant; 4]) -> Estimate {
+    /// Weighs and resamples, judges the saved map's fit after an update (`updated`),
+    /// counts the scan and reports it; `times` are the step's start and the ends of its
+    /// motion estimate, prediction and update.
+    fn finish(&mut self, times: [Instant; 4], updated: bool) -> Estimate {
         let [start, motion_done, predict_done, update_done] = times;
+        let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
         if let Some(grid) = &mut self.saved_grid {
+            // At updates only: the scans between them see the same walls from a few
+            // centimetres on, and would only weigh the fit towards where the robot stood.
+            if updated {
+                grid.judge_fit(&best, &mut self.map_fit);
+            }
             grid.clear_scan();
         }
-        let (effective_particles, best, mean, covariance) = self.weigh_and_resample();
+        if self.map_fit.verdict() == FitVerdict::DoesNotFit && self.set_aside_at.is_none() {
+            self.set_aside_saved_map();
+        }
         let map_size = self
             .particles
             .get(self.best)
@@ -547,6 +588,20 @@ impl FastSlam {
             dead_reckoning: self.dead_reckoning,
             map_size,
             timing: StageTiming::between([start, motion_done, predict_done, update_done, end]),
+        }
+    }
+
+    /// Leaves the saved map out from now on: its grid, and its corners from every
+    /// particle's map (those the run observed too: on a map that does not fit the scans,
+    /// their pairings were wrong).
+    fn set_aside_saved_map(&mut self) {
+        self.saved_grid = None;
+        self.set_aside_at = Some(self.scans);
+        let confirm_at = self.config.confirm_observations;
+        for particle in &mut self.particles {
+            for id in 0..self.saved_corners {
+                particle.map.remove(id, confirm_at);
+            }
         }
     }
 

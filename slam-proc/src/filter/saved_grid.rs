@@ -9,9 +9,11 @@ use crate::config::SlamConfig;
 use crate::localize::cell_frame::SeenCells;
 use crate::localize::hill_climb::HillClimb;
 use crate::localize::localizer::{ScanRanges, sample_beam_ends};
+use crate::localize::map_fit::FitField;
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use map_sink::GridMap;
 use nalgebra::Matrix3;
+use slam_eval::MapFit;
 use slam_geom::{Pose2, wrap_angle};
 
 /// The hill-climb from smaller first steps: a particle is at most a few centimetres and a
@@ -37,6 +39,10 @@ pub(crate) struct SavedGrid {
     known: Vec<[f64; 2]>,
     /// ... and the bearings they left the sensor at.
     bearings: Vec<f64>,
+    /// How the map's fit judges a beam ...
+    fit_field: FitField,
+    /// ... and the ends of this scan's beams it judges, sensor frame.
+    fit_beams: Vec<[f64; 2]>,
 }
 
 impl SavedGrid {
@@ -48,6 +54,8 @@ impl SavedGrid {
             beams: Vec::new(),
             known: Vec::new(),
             bearings: Vec::new(),
+            fit_field: FitField::new(grid, slam_eval::MAP_FIT_WITHIN_M),
+            fit_beams: Vec::new(),
         }
     }
 
@@ -59,9 +67,19 @@ impl SavedGrid {
         match scan {
             Some(scan) => {
                 sample_beam_ends(scan, beams, &mut self.beams);
+                sample_beam_ends(scan, slam_eval::MAP_FIT_BEAMS_PER_SCAN, &mut self.fit_beams);
             }
-            None => self.beams.clear(),
+            None => {
+                self.beams.clear();
+                self.fit_beams.clear();
+            }
         }
+    }
+
+    /// Judges the scan's beams from `pose` into `fit`: how well the saved map explains the
+    /// run's scans.
+    pub fn judge_fit(&self, pose: &Pose2, fit: &mut MapFit) {
+        self.fit_field.judge(&self.fit_beams, pose, fit);
     }
 
     /// Keeps the beams that end in seen cells from `pose` (the best particle's prediction);
@@ -117,6 +135,7 @@ impl SavedGrid {
     /// Forgets the scan once a step has used it.
     pub fn clear_scan(&mut self) {
         self.beams.clear();
+        self.fit_beams.clear();
         self.known.clear();
         self.bearings.clear();
     }
@@ -126,14 +145,15 @@ impl SavedGrid {
 mod tests {
     use super::SavedGrid;
     use crate::config::SlamConfig;
-    use crate::filter::fast_slam::FastSlam;
+    use crate::filter::fast_slam::{FastSlam, FilterStats};
     use crate::filter::observation::MeasuredMotion;
     use crate::localize::localizer::ScanRanges;
     use crate::localize::tracking_field::{TrackingField, beam_bearings};
     use crate::update::drift::revisit_covariance;
     use map_sink::{CellState, GridMap, MapYaml};
-    use nalgebra::Matrix3;
-    use slam_geom::Pose2;
+    use nalgebra::{Matrix3, Matrix4};
+    use slam_eval::{FitVerdict, MAP_FIT_BEAMS_PER_SCAN, MAP_FIT_MIN_BEAMS};
+    use slam_geom::{MapCorner, Pose2};
 
     /// A room's walls, x in [-1, 9], y in [-3, 3].
     const ROOM: [f64; 4] = [-1.0, 9.0, -3.0, 3.0];
@@ -142,13 +162,18 @@ mod tests {
 
     /// The room as a saved grid: its walls occupied, inside free, outside unknown.
     fn room_grid() -> GridMap {
+        grid_of(ROOM)
+    }
+
+    /// The grid of a room with walls at `[x0, x1, y0, y1]`, as [`room_grid`]'s.
+    fn grid_of(room: [f64; 4]) -> GridMap {
         let (width, height) = (240, 160);
         let mut cells = Vec::with_capacity(width * height);
         for row in 0..height {
             for col in 0..width {
                 let x = ORIGIN[0] + (col as f64 + 0.5) * RESOLUTION;
                 let y = ORIGIN[1] + (row as f64 + 0.5) * RESOLUTION;
-                let [x0, x1, y0, y1] = ROOM;
+                let [x0, x1, y0, y1] = room;
                 // Walls 0.1 m thick, their inner face on the room's edge: a beam that a
                 // drifted pose carries past the face still ends in a seen cell.
                 let thick = |v: f64, wall: f64, outward: f64| {
@@ -320,5 +345,66 @@ mod tests {
         // The last update was under half a metre of drift ago: a few centimetres.
         assert!(off < 0.06, "on the grid {on_grid:?} vs {truth:?}");
         assert!(on_grid.yaw.abs() < 0.03, "on the grid {on_grid:?}");
+    }
+
+    /// Maps the room on `grid` with `saved` as the saved map's corners, from its origin 7 m
+    /// along it (an update every step, so that the saved map's fit has its verdict on the
+    /// way); the filter's summary and its map.
+    fn map_the_room_on(grid: &GridMap, saved: &[MapCorner]) -> (FilterStats, Vec<MapCorner>) {
+        let config = SlamConfig {
+            particles: 20,
+            update_min_distance: 0.1,
+            ..SlamConfig::default()
+        };
+        let mut slam = FastSlam::with_prior_map_from(config, 7, saved, Pose2::IDENTITY)
+            .unwrap()
+            .with_saved_grid(grid);
+        let mut truth = Pose2::IDENTITY;
+        for k in 0..71u32 {
+            let step = if k == 0 { 0.0 } else { 0.1 };
+            truth = truth.compose(&Pose2::new(step, 0.0, 0.0));
+            let ranges = scan_from(&truth);
+            slam.set_scan(Some(&room_scan(&ranges)));
+            let motion = MeasuredMotion {
+                increment: Pose2::new(step, 0.0, 0.0),
+                covariance: Matrix3::identity() * 1e-6,
+                wheel_increment: None,
+            };
+            slam.process_measured(u64::from(k) * 25_000_000, &[], &[], &motion);
+        }
+        (slam.stats(), slam.best_map())
+    }
+
+    #[test]
+    fn a_saved_map_of_another_room_is_set_aside_and_its_corners_leave_the_map() {
+        // The saved map's corners: the room's four.
+        let [x0, x1, y0, y1] = ROOM;
+        let corners: Vec<MapCorner> = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+            .iter()
+            .map(|&(x, y)| MapCorner {
+                x,
+                y,
+                heading: (-y).atan2(-(x - 4.0)),
+                angle: std::f64::consts::FRAC_PI_2,
+                covariance: Matrix4::identity() * 1e-4,
+                observations: 5,
+            })
+            .collect();
+        // On the room's own map: every beam ends on its walls, and the map stays.
+        let (stats, map) = map_the_room_on(&room_grid(), &corners);
+        assert_eq!(stats.map_fit.verdict(), FitVerdict::Fits, "{stats:?}");
+        assert!(stats.map_fit.share().unwrap() > 0.95, "{stats:?}");
+        assert_eq!(stats.saved_map_set_aside_at, None);
+        assert_eq!(map.len(), corners.len());
+        // On the map of a smaller room that shares the start: the beams pass through its
+        // walls or end in its free space. Set aside once enough beams are judged, the
+        // saved corners gone and the counts stopped where the verdict was.
+        let (stats, map) = map_the_room_on(&grid_of([-1.0, 3.0, -1.5, 4.5]), &corners);
+        assert_eq!(stats.map_fit.verdict(), FitVerdict::DoesNotFit, "{stats:?}");
+        assert!(stats.map_fit.share().unwrap() < 0.3, "{stats:?}");
+        let at = stats.saved_map_set_aside_at.expect("set aside");
+        assert!(at < 71, "{stats:?}");
+        assert!(stats.map_fit.beams_judged < MAP_FIT_MIN_BEAMS + MAP_FIT_BEAMS_PER_SCAN as u64);
+        assert!(map.is_empty(), "{map:?}");
     }
 }

@@ -21,10 +21,12 @@ use crate::filter::rng::Streams;
 use crate::localize::hill_climb::{HillClimb, scan_score};
 use crate::localize::kld::{Bins, kld_count};
 use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
+use crate::localize::map_fit::FitField;
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use crate::localize_config::LocalizeConfig;
 use crate::motion::predict::{self, MotionNoise};
 use map_sink::GridMap;
+use slam_eval::MapFit;
 use slam_geom::Pose2;
 use stage_kit::SettingError;
 
@@ -109,6 +111,9 @@ pub struct LocalizeStats {
     pub peak_particles: usize,
     /// Weightings whose likelihood was tempered to keep enough particles effective.
     pub tempered_updates: u64,
+    /// The beams of the scans that weighted the converged particles, judged against the
+    /// map from the estimate: how well the map explains the scans.
+    pub map_fit: MapFit,
 }
 
 /// Monte Carlo localization on a fixed grid. The result depends only on the configuration,
@@ -121,6 +126,8 @@ pub struct Localizer {
     /// ... and for the search, smooth: a particle some way off the true pose still scores
     /// well there, and a map's small flaws do not decide between places that look alike.
     search_field: LikelihoodField,
+    /// The grid as the map's fit judges a beam.
+    fit_field: FitField,
     streams: Streams,
     poses: Vec<Pose2>,
     log_weights: Vec<f64>,
@@ -134,6 +141,8 @@ pub struct Localizer {
     points: Vec<[f64; 2]>,
     /// ... and the bearings of their beams.
     bearings: Vec<f64>,
+    /// The ends of this scan's beams the map's fit judges, sensor frame.
+    fit_points: Vec<[f64; 2]>,
     /// Each particle's log-likelihood of this scan's beams.
     scan_log_likelihoods: Vec<f64>,
     bins: Bins,
@@ -171,6 +180,7 @@ impl Localizer {
         let field = TrackingField::new(grid, &config);
         let search_field =
             LikelihoodField::new(grid, config.max_distance, model(config.search_sigma_hit));
+        let fit_field = FitField::new(grid, slam_eval::MAP_FIT_WITHIN_M);
         let streams = Streams::new(seed);
         let mut rng = streams.resample(u64::MAX);
         let poses: Vec<Pose2> = match start {
@@ -208,6 +218,7 @@ impl Localizer {
         Ok(Self {
             field,
             search_field,
+            fit_field,
             streams,
             log_weights: vec![0.0; n],
             weights: Vec::new(),
@@ -215,6 +226,7 @@ impl Localizer {
             dead_reckoning: Pose2::IDENTITY,
             points: Vec::new(),
             bearings: Vec::new(),
+            fit_points: Vec::new(),
             scan_log_likelihoods: Vec::new(),
             bins: Bins::default(),
             map_corners,
@@ -285,6 +297,16 @@ impl Localizer {
         let (best, mean, covariance, effective) = self.summarise_and_resample(weighted);
         let converged = self.is_converged(&covariance);
         self.converged = converged;
+        if let Some(scan) = scan.filter(|_| weighted && converged) {
+            // At the estimate the run publishes, whatever the beam count weighting takes.
+            sample_beam_ends(
+                scan,
+                slam_eval::MAP_FIT_BEAMS_PER_SCAN,
+                &mut self.fit_points,
+            );
+            self.fit_field
+                .judge(&self.fit_points, &mean, &mut self.stats.map_fit);
+        }
         if converged && self.stats.converged_at.is_none() {
             self.stats.converged_at = Some(self.stats.scans);
         }
@@ -628,6 +650,10 @@ mod tests {
         assert!(converged.is_some());
         // Converged, KLD keeps the fewest particles allowed or near it.
         assert!(localizer.particle_poses().len() < 1000);
+        // Every beam of the weighting scans, from the estimate, ends on a wall of the map.
+        let fit = localizer.stats().map_fit;
+        assert!(fit.beams_judged > 271 * 10, "{fit:?}");
+        assert!(fit.share().is_some_and(|share| share > 0.98), "{fit:?}");
     }
 
     /// Times the localizer went from converged to not over `steps` of [`drive`]'s loop.

@@ -7,5 +7,6 @@ pub(crate) mod hill_climb;
 pub(crate) mod kld;
 pub(crate) mod likelihood_field;
 pub(crate) mod localizer;
+pub(crate) mod map_fit;
 pub(crate) mod pose_arg;
 pub(crate) mod tracking_field;
