@@ -37,7 +37,7 @@ fn main() -> Result<()> {
     let scans = logs::load(&log, LogFormat::Carmen, limit)?;
     let config = FrontEndConfig::default();
     let mut front_end = FrontEnd::new(config.clone())?;
-    let mut back_end = GlobalSlam::new(GlobalConfig::for_front_end(&config));
+    let mut back_end = GlobalSlam::new(GlobalConfig::for_front_end(&config))?;
     let mut front_path = Vec::new();
     let wall = Instant::now();
     let mut back_ns = 0u128;

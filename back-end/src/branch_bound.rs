@@ -116,14 +116,9 @@ impl MatchGrid {
         }
     }
 
-    /// Memory held, bytes.
-    pub fn bytes(&self) -> usize {
-        self.levels.iter().map(|l| l.cells.len()).sum()
-    }
-
     /// The pose within `window` of `seed` where the most of `scan` (robot frame) is
-    /// explained, if its score reaches `min_score`. Yaw steps move the farthest point by
-    /// about a cell; translations are whole cells.
+    /// explained, if its score reaches `min_score`. Yaw steps move the points' RMS radius by
+    /// a cell; translations are whole cells.
     pub fn search(
         &self,
         scan: &[Vector2<f64>],

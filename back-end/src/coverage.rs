@@ -117,11 +117,6 @@ impl Coverage {
             Seen::NotFree
         }
     }
-
-    /// Memory held by the tiles, bytes.
-    pub fn bytes(&self) -> usize {
-        self.tiles.len() * (TILE * TILE) as usize * std::mem::size_of::<Counts>()
-    }
 }
 
 #[cfg(test)]

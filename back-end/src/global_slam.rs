@@ -92,6 +92,17 @@ impl GlobalConfig {
     }
 }
 
+impl GlobalConfig {
+    /// How far, in metres and radians, the front end can have drifted over `path_m` of path
+    /// (its own error over a submap at least).
+    pub fn drift_over(&self, path_m: f64) -> (f64, f64) {
+        (
+            self.min_window_m + self.drift_m_per_m * path_m,
+            self.min_window_rad + self.drift_rad_per_m * path_m,
+        )
+    }
+}
+
 /// One scan's place on the path: the node it follows and where it is from there.
 #[derive(Debug, Clone, Copy)]
 struct ScanPlace {
@@ -122,11 +133,11 @@ pub struct GlobalStats {
 /// The back end's state over a run.
 pub struct GlobalSlam {
     config: GlobalConfig,
-    graph: Option<PoseGraph>,
+    graph: PoseGraph,
     submaps: Submaps,
     grids: VecDeque<(usize, MatchGrid)>,
     /// The node each submap was last searched for.
-    last_attempt: Vec<usize>,
+    last_attempt: Vec<Option<usize>>,
     scans: Vec<ScanPlace>,
     /// The front end's pose of the last node.
     odom_from_node: Pose2,
@@ -146,10 +157,10 @@ pub struct GlobalSlam {
 }
 
 impl GlobalSlam {
-    pub fn new(config: GlobalConfig) -> Self {
-        Self {
+    pub fn new(config: GlobalConfig) -> Result<Self, PoseGraphError> {
+        Ok(Self {
             config,
-            graph: None,
+            graph: PoseGraph::new(Pose2::IDENTITY)?,
             submaps: Submaps::new(config.submaps),
             grids: VecDeque::new(),
             last_attempt: Vec::new(),
@@ -163,14 +174,14 @@ impl GlobalSlam {
             unsolved: 0,
             held: Confirmations::default(),
             stats: GlobalStats::default(),
-        }
+        })
     }
 
     /// Whether the scan at `odom_from_robot` (the front end's pose) becomes a node, and so
     /// needs its points: the first scan, and any the robot reached by moving or turning
     /// enough since the last node (the front end's keyframe rule).
     pub fn wants_node(&self, odom_from_robot: &Pose2) -> bool {
-        if self.graph.is_none() {
+        if self.scans.is_empty() {
             return true;
         }
         let moved = self.odom_from_node.between(odom_from_robot);
@@ -188,15 +199,15 @@ impl GlobalSlam {
         increment_covariance: &Matrix3<f64>,
         keyframe: Option<&[SurfacePoint]>,
     ) -> Result<(), PoseGraphError> {
-        let Some(graph) = self.graph.as_mut() else {
-            self.graph = Some(PoseGraph::new(Pose2::IDENTITY)?);
+        if self.scans.is_empty() {
+            // The first scan is node 0, the graph's origin.
             self.odom_from_node = *odom_from_robot;
             self.record(stamp_ns, 0, Pose2::IDENTITY);
             if let Some(points) = keyframe {
                 self.insert(0, odom_from_robot, points);
             }
             return Ok(());
-        };
+        }
         // The pending motion grows by the increment: the old part's error swings the
         // increment's offset, the increment's own error is in the last scan's frame.
         let a = self.pending.mount_jacobian(increment);
@@ -206,12 +217,12 @@ impl GlobalSlam {
         self.pending = self.pending.compose(increment);
         self.travelled_m += increment.translation_norm();
         let Some(points) = keyframe else {
-            let node = graph.node_count() - 1;
+            let node = self.graph.node_count() - 1;
             self.record(stamp_ns, node, self.pending);
             return Ok(());
         };
         let information = information_of(&self.pending_covariance);
-        let node = graph.add_node(self.pending, information)?;
+        let node = self.graph.add_node(self.pending, information)?;
         self.pending = Pose2::IDENTITY;
         self.pending_covariance = Matrix3::zeros();
         self.odom_from_node = *odom_from_robot;
@@ -238,9 +249,7 @@ impl GlobalSlam {
     /// Searches the finished submaps the node may be in; adds what the scans confirm.
     fn close_loops(&mut self, node: usize, points: &[SurfacePoint]) -> Result<(), PoseGraphError> {
         let recent = 2 * self.config.submaps.keyframes;
-        let Some(graph) = self.graph.as_ref() else {
-            return Ok(());
-        };
+        let graph = &self.graph;
         let world_from_node = graph.pose(node);
         let mut candidates: Vec<(f64, usize, Pose2, SearchWindow)> = self
             .submaps
@@ -251,7 +260,9 @@ impl GlobalSlam {
                     && self
                         .last_attempt
                         .get(*index)
-                        .is_none_or(|&last| last == 0 || last + ATTEMPT_GAP <= node)
+                        .copied()
+                        .flatten()
+                        .is_none_or(|last| last + ATTEMPT_GAP <= node)
             })
             .filter_map(|(index, s)| {
                 let seed = graph.pose(s.anchor).between(&world_from_node);
@@ -266,9 +277,9 @@ impl GlobalSlam {
         for (_, index, seed, window) in candidates {
             self.stats.attempts += 1;
             if self.last_attempt.len() <= index {
-                self.last_attempt.resize(index + 1, 0);
+                self.last_attempt.resize(index + 1, None);
             }
-            self.last_attempt[index] = node;
+            self.last_attempt[index] = Some(node);
             self.cache_grid(index);
             let (Some(submap), Some((_, grid))) = (self.submaps.get(index), self.grids.front())
             else {
@@ -312,42 +323,32 @@ impl GlobalSlam {
     }
 
     fn solve(&mut self) -> Result<(), PoseGraphError> {
-        if let Some(graph) = self.graph.as_mut() {
-            graph.optimize()?;
-            self.stats.optimizations += 1;
-            self.unsolved = 0;
-        }
+        self.graph.optimize()?;
+        self.stats.optimizations += 1;
+        self.unsolved = 0;
         Ok(())
     }
 
     /// Adds a closure to the graph; the submap is tied to the robot from here.
     fn add_closure(&mut self, tie: &Tie) -> Result<(), PoseGraphError> {
-        if let Some(graph) = self.graph.as_mut() {
-            graph.add_closure(tie.anchor, tie.node, tie.seen, tie.information)?;
-            self.stats.closures += 1;
-            self.unsolved += 1;
-            if self.tied_at_m.len() <= tie.submap {
-                self.tied_at_m.resize(tie.submap + 1, f64::NAN);
-            }
-            self.tied_at_m[tie.submap] = self.travelled_m;
+        self.graph
+            .add_closure(tie.anchor, tie.node, tie.seen, tie.information)?;
+        self.stats.closures += 1;
+        self.unsolved += 1;
+        if self.tied_at_m.len() <= tie.submap {
+            self.tied_at_m.resize(tie.submap + 1, f64::NAN);
         }
+        self.tied_at_m[tie.submap] = self.travelled_m;
         Ok(())
     }
 
     /// A closure that would move the graph waits for another to confirm it; confirmed,
     /// they go in together and the graph is solved at once.
     fn offer_jump(&mut self, tie: Tie) -> Result<(), PoseGraphError> {
-        let Some(graph) = self.graph.as_ref() else {
-            return Ok(());
-        };
-        let c = self.config;
-        let tolerance = |apart_m: f64| {
-            (
-                c.min_window_m + c.drift_m_per_m * apart_m,
-                c.min_window_rad + c.drift_rad_per_m * apart_m,
-            )
-        };
-        let confirmed = self.held.offer(tie, graph, tolerance);
+        let config = self.config;
+        let confirmed = self
+            .held
+            .offer(tie, &self.graph, |apart_m| config.drift_over(apart_m));
         if confirmed.is_empty() {
             self.stats.held += 1;
             return Ok(());
@@ -369,10 +370,10 @@ impl GlobalSlam {
             .copied()
             .filter(|m| m.is_finite())
             .unwrap_or_else(|| self.node_travelled_m.get(last_node).copied().unwrap_or(0.0));
-        let since = (self.travelled_m - tied).max(0.0);
+        let (metres, radians) = c.drift_over((self.travelled_m - tied).max(0.0));
         SearchWindow {
-            translation: (c.min_window_m + c.drift_m_per_m * since).min(c.max_window_m),
-            yaw: (c.min_window_rad + c.drift_rad_per_m * since).min(c.max_window_rad),
+            translation: metres.min(c.max_window_m),
+            yaw: radians.min(c.max_window_rad),
         }
     }
 
@@ -398,12 +399,14 @@ impl GlobalSlam {
 
     /// Every scan's pose on the solved graph, with its stamp.
     pub fn path(&self) -> Vec<(u64, Pose2)> {
-        let Some(graph) = self.graph.as_ref() else {
-            return Vec::new();
-        };
         self.scans
             .iter()
-            .map(|s| (s.stamp_ns, graph.pose(s.node).compose(&s.node_from_robot)))
+            .map(|s| {
+                (
+                    s.stamp_ns,
+                    self.graph.pose(s.node).compose(&s.node_from_robot),
+                )
+            })
             .collect()
     }
 

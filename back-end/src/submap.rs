@@ -29,8 +29,7 @@ pub struct SubmapConfig {
 pub struct Submap {
     /// The node whose pose is the submap's frame.
     pub anchor: usize,
-    /// Nodes inserted, first and last.
-    pub first_node: usize,
+    /// The last node inserted.
     pub last_node: usize,
     /// The submap frame's pose in the front end's frame, when it was started.
     odom_from_submap: Pose2,
@@ -47,7 +46,6 @@ impl Submap {
     fn new(anchor: usize, odom_from_submap: Pose2, voxel: f64) -> Self {
         Self {
             anchor,
-            first_node: anchor,
             last_node: anchor,
             odom_from_submap,
             inserted: 0,

@@ -3,7 +3,6 @@
 //! scan's beams; it builds submaps, closes the loops the scans confirm and solves the pose
 //! graph, and publishes the graph's path at the end of the stream (or when stopped).
 
-use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -14,8 +13,8 @@ use clap::Parser;
 use ipc_types::prelude::*;
 use nalgebra::Matrix3;
 use scan_match::FrontEndConfig;
-use slam_geom::ScanGeometry;
-use stage_kit::{say, say_err, shutdown};
+use stage_kit::held_scans::HeldScans;
+use stage_kit::{say, say_err};
 
 /// Subscribes to the features (the front end's motion) and the scans, and publishes the
 /// pose graph's path on `graph/path` at the end.
@@ -34,14 +33,6 @@ struct Args {
     subscribers: usize,
 }
 
-/// Scans held at most: feature-proc is never further behind than its queues hold.
-const HELD_SCANS: usize = 256;
-/// How long a node's features wait for its scan in lockstep, where the scan cannot be lost
-/// (a bound all the same: a source that died must not hang the stage) ...
-const SCAN_WAIT_LOCKSTEP: Duration = Duration::from_secs(10);
-/// ... and in real time, where it may have been.
-const SCAN_WAIT_REAL_TIME: Duration = Duration::from_millis(5);
-
 fn main() -> ExitCode {
     stage_kit::run_stage("graph-proc", run)
 }
@@ -49,7 +40,8 @@ fn main() -> ExitCode {
 fn run(args: Args) -> Result<()> {
     let front_end: FrontEndConfig = stage_kit::settings::load(args.front_end_config.as_deref())?;
     front_end.validate().context("front-end configuration")?;
-    let mut global = GlobalSlam::new(GlobalConfig::for_front_end(&front_end));
+    let mut global =
+        GlobalSlam::new(GlobalConfig::for_front_end(&front_end)).context("the pose graph")?;
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("graph-proc")?;
@@ -64,14 +56,14 @@ fn run(args: Args) -> Result<()> {
         path.wait_for_subscribers(args.subscribers, None)?;
     }
 
-    let mut held: VecDeque<HeldScan> = VecDeque::new();
+    let mut held = HeldScans::default();
     let mut counts = Counts::default();
     let mut last_stamp = 0;
     loop {
         if wait_any(&[&features, &scans], Duration::from_millis(100))? == Wake::Shutdown {
             break;
         }
-        hold_scans(&scans, &mut held)?;
+        held.hold(&scans)?;
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
                 publish(&path, &mut global, sample.header.stamp_ns)?;
@@ -85,7 +77,7 @@ fn run(args: Args) -> Result<()> {
             };
             let odom_from_robot = motion.pose.into();
             let points = if global.wants_node(&odom_from_robot) {
-                let scan = wait_for_scan(&scans, &mut held, sample.header.seq, delivery)?;
+                let scan = held.wait_for(&scans, sample.header.seq, delivery)?;
                 if scan.is_none() {
                     counts.nodes_without_scan += 1;
                 }
@@ -199,55 +191,4 @@ fn summary(stats: &GlobalStats, counts: &Counts) -> String {
         ));
     }
     text
-}
-
-/// A scan's beams, kept until its features come.
-struct HeldScan {
-    seq: u64,
-    geometry: ScanGeometry,
-    ranges: Vec<f32>,
-}
-
-/// Takes the scans that have come, keeping their beams for the features to come.
-fn hold_scans(scans: &Inlet<LaserScan>, held: &mut VecDeque<HeldScan>) -> Result<()> {
-    while let Some(scan) = scans.receive()? {
-        if scan.header.is_end_of_stream() {
-            continue;
-        }
-        if held.len() == HELD_SCANS {
-            held.pop_front();
-        }
-        held.push_back(HeldScan {
-            seq: scan.header.seq,
-            geometry: scan.geometry(),
-            ranges: scan.ranges().to_vec(),
-        });
-    }
-    Ok(())
-}
-
-/// The scan numbered `seq`, once it has come (the features may overtake it: the scan goes
-/// to each subscriber in turn).
-fn wait_for_scan<'a>(
-    scans: &Inlet<LaserScan>,
-    held: &'a mut VecDeque<HeldScan>,
-    seq: u64,
-    delivery: Delivery,
-) -> Result<Option<&'a HeldScan>> {
-    let patience = match delivery {
-        Delivery::Lossless => SCAN_WAIT_LOCKSTEP,
-        Delivery::Latest => SCAN_WAIT_REAL_TIME,
-    };
-    let since = Instant::now();
-    while held.back().is_none_or(|s| s.seq < seq) && since.elapsed() < patience {
-        if shutdown::requested() {
-            break;
-        }
-        wait_any(&[scans], Duration::from_millis(10))?;
-        hold_scans(scans, held)?;
-    }
-    while held.front().is_some_and(|s| s.seq < seq) {
-        held.pop_front();
-    }
-    Ok(held.front().filter(|s| s.seq == seq))
 }

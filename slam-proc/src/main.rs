@@ -1,6 +1,5 @@
 //! `slam-proc`: FastSLAM over corner maps, from the features topic to pose and map topics.
 
-use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
@@ -14,7 +13,8 @@ use slam_proc::{
     FastSlam, FilterStats, LocalizeStats, Localizer, MeasuredCorner, MeasuredLine, MeasuredMotion,
     OdometryInput, Pose2, ScanRanges, SlamConfig, Start,
 };
-use stage_kit::{say, say_err, shutdown};
+use stage_kit::held_scans::{HeldScan, HeldScans};
+use stage_kit::{say, say_err};
 
 /// Subscribes to features (each with the odometry at its scan's stamp, if the run has any),
 /// publishes a pose estimate for every scan, the best particle's map every few scans and at
@@ -113,7 +113,7 @@ fn run(args: Args) -> Result<()> {
         Some(_) => Some(Inlet::open(&node, topic::SCAN)?),
         None => None,
     };
-    let mut held: VecDeque<HeldScan> = VecDeque::new();
+    let mut held = HeldScans::default();
     let delivery = features.delivery();
     let maps = Outlet::create(&domain, &node, topic::MAP, delivery, 1)?;
     let poses = Outlet::create(&domain, &node, topic::POSE, delivery, 0)?;
@@ -146,7 +146,7 @@ fn run(args: Args) -> Result<()> {
             break;
         }
         if let Some(scans) = &scans {
-            hold_scans(scans, &mut held)?;
+            held.hold(scans)?;
         }
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
@@ -158,9 +158,10 @@ fn run(args: Args) -> Result<()> {
                 return Ok(());
             }
             if let Some(scans) = &scans {
-                hold_scans(scans, &mut held)?;
-                let scan = wait_for_scan(scans, &mut held, sample.header.seq, delivery)?
-                    .map(HeldScan::ranges);
+                held.hold(scans)?;
+                let scan = held
+                    .wait_for(scans, sample.header.seq, delivery)?
+                    .map(scan_ranges);
                 slam.set_scan(scan.as_ref());
             }
             observations.clear();
@@ -405,35 +406,17 @@ fn prior_corners(saved: &SavedMap) -> Vec<slam_proc::MapCorner> {
     saved.landmarks.map_corners()
 }
 
-/// A scan's beams kept until its features arrive.
-struct HeldScan {
-    seq: u64,
-    angle_min: f64,
-    angle_increment: f64,
-    range_min: f64,
-    range_max: f64,
-    ranges: Vec<f32>,
-}
-
-impl HeldScan {
-    fn ranges(&self) -> ScanRanges<'_> {
-        ScanRanges {
-            angle_min: self.angle_min,
-            angle_increment: self.angle_increment,
-            range_min: self.range_min,
-            range_max: self.range_max,
-            ranges: &self.ranges,
-        }
+/// A held scan's beams as the localizer and the saved grid take them.
+fn scan_ranges(scan: &HeldScan) -> ScanRanges<'_> {
+    let g = &scan.geometry;
+    ScanRanges {
+        angle_min: g.angle_min,
+        angle_increment: g.angle_increment,
+        range_min: g.range_min,
+        range_max: g.range_max,
+        ranges: &scan.ranges,
     }
 }
-
-/// Scans held at most: feature-proc is never further behind than its queues hold.
-const HELD_SCANS: usize = 256;
-/// How long a features message waits for its scan in lockstep, where the scan cannot be
-/// lost (a bound all the same: a source that died must not hang the filter) ...
-const SCAN_WAIT_LOCKSTEP: Duration = Duration::from_secs(10);
-/// ... and in real time, where it may have been.
-const SCAN_WAIT_REAL_TIME: Duration = Duration::from_millis(5);
 
 /// Localization on the saved map: scans and features in, a pose per scan out, the map
 /// published as it is.
@@ -473,7 +456,7 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
     if delivery == Delivery::Lossless {
         poses.wait_for_subscribers(args.subscribers, None)?;
     }
-    let mut held: VecDeque<HeldScan> = VecDeque::new();
+    let mut held = HeldScans::default();
     let mut last_header = Header::new(0, 0, "map");
     let mut left_out = publish_map(&maps, &corners, last_header)?;
     let mut step_ms: Vec<f64> = Vec::new();
@@ -482,10 +465,10 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
         if wait_any(&[&features, &scans], Duration::from_millis(100))? == Wake::Shutdown {
             break;
         }
-        hold_scans(&scans, &mut held)?;
+        held.hold(&scans)?;
         while let Some(sample) = features.receive()? {
             // Its scan was published before feature-proc could take it.
-            hold_scans(&scans, &mut held)?;
+            held.hold(&scans)?;
             if sample.header.is_end_of_stream() {
                 left_out = left_out.max(publish_map(&maps, &corners, last_header)?);
                 poses.publish_end_of_stream(sample.header.seq, sample.header.stamp_ns)?;
@@ -496,8 +479,9 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
                 ]);
                 return Ok(());
             }
-            let scan = wait_for_scan(&scans, &mut held, sample.header.seq, delivery)?
-                .map(HeldScan::ranges);
+            let scan = held
+                .wait_for(&scans, sample.header.seq, delivery)?
+                .map(scan_ranges);
             // A first scan, or a source without a front end, brings no step: stand still.
             let motion = sample
                 .motion()
@@ -538,56 +522,6 @@ fn localize(args: &Args, config: SlamConfig, saved: &SavedMap, dir: &Path) -> Re
         ("map_corners_not_published", left_out),
         ("scans_without_beams", localizer.stats().scans_without_beams),
     ]);
-    Ok(())
-}
-
-/// The beams of scan `seq`, once they have come (the features of a scan can arrive before
-/// its beams), or `None` when they were lost; older held scans are dropped.
-fn wait_for_scan<'a>(
-    scans: &Inlet<LaserScan>,
-    held: &'a mut VecDeque<HeldScan>,
-    seq: u64,
-    delivery: Delivery,
-) -> Result<Option<&'a HeldScan>> {
-    // The scan goes to every subscriber in turn: feature-proc may have had it (and
-    // sent its features) before it reached this queue. In lockstep it is on its way;
-    // in real time it may have been lost, and waiting would only add latency.
-    let patience = match delivery {
-        Delivery::Lossless => SCAN_WAIT_LOCKSTEP,
-        Delivery::Latest => SCAN_WAIT_REAL_TIME,
-    };
-    let since = std::time::Instant::now();
-    while held.back().is_none_or(|s| s.seq < seq) && since.elapsed() < patience {
-        if shutdown::requested() {
-            break;
-        }
-        wait_any(&[scans], Duration::from_millis(10))?;
-        hold_scans(scans, held)?;
-    }
-    while held.front().is_some_and(|s| s.seq < seq) {
-        held.pop_front();
-    }
-    Ok(held.front().filter(|s| s.seq == seq))
-}
-
-/// Takes the scans that have come, keeping their beams for the features to come.
-fn hold_scans(scans: &Inlet<LaserScan>, held: &mut VecDeque<HeldScan>) -> Result<()> {
-    while let Some(scan) = scans.receive()? {
-        if scan.header.is_end_of_stream() {
-            continue;
-        }
-        if held.len() == HELD_SCANS {
-            held.pop_front();
-        }
-        held.push_back(HeldScan {
-            seq: scan.header.seq,
-            angle_min: f64::from(scan.angle_min),
-            angle_increment: f64::from(scan.angle_increment),
-            range_min: f64::from(scan.range_min),
-            range_max: f64::from(scan.range_max),
-            ranges: scan.ranges().to_vec(),
-        });
-    }
     Ok(())
 }
 

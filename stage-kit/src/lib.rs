@@ -54,6 +54,7 @@
 
 mod console;
 mod exit;
+pub mod held_scans;
 pub mod input;
 pub mod launcher_watch;
 pub mod odometry_buffer;
