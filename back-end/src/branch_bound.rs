@@ -44,11 +44,12 @@ struct Level {
 impl Level {
     #[inline]
     fn get(&self, x: i32, y: i32) -> u8 {
-        let (x, y) = (x + self.offset, y + self.offset);
-        if x < 0 || y < 0 || x >= self.width || y >= self.height {
-            0
+        // Below zero wraps to beyond the width: one comparison per axis.
+        let (x, y) = ((x + self.offset) as u32, (y + self.offset) as u32);
+        if x < self.width as u32 && y < self.height as u32 {
+            self.cells[(y * self.width as u32 + x) as usize]
         } else {
-            self.cells[(y * self.width + x) as usize]
+            0
         }
     }
 }
@@ -155,7 +156,7 @@ impl MatchGrid {
             while dx <= half {
                 let mut dy = -half;
                 while dy <= half {
-                    let score = self.score(cells, dx, dy, depth);
+                    let score = self.score(cells, dx, dy, depth, floor);
                     if score >= floor {
                         top.push(Candidate {
                             yaw_index,
@@ -206,40 +207,56 @@ impl MatchGrid {
             return;
         }
         let child = 1i32 << (level - 1);
-        let mut children = Vec::with_capacity(4);
+        let mut children = [candidate; 4];
+        let mut count = 0;
         for (ox, oy) in [(0, 0), (child, 0), (0, child), (child, child)] {
             let (dx, dy) = (candidate.dx + ox, candidate.dy + oy);
             if dx > half || dy > half {
                 continue;
             }
-            let score = self.score(&rotated[candidate.yaw_index], dx, dy, level - 1);
-            children.push(Candidate {
+            let score = self.score(&rotated[candidate.yaw_index], dx, dy, level - 1, *bound);
+            children[count] = Candidate {
                 dx,
                 dy,
                 score,
                 ..candidate
-            });
+            };
+            count += 1;
         }
-        children.sort_unstable_by_key(|c| std::cmp::Reverse(c.score));
-        for c in children {
+        // Stable: of children that score the same, the first stays first.
+        children[..count].sort_by_key(|c| std::cmp::Reverse(c.score));
+        for &c in &children[..count] {
             self.descend(rotated, c, level - 1, half, best, bound);
         }
     }
 
-    /// The summed level-`level` values under the points shifted by `(dx, dy)` cells.
-    fn score(&self, cells: &[(i32, i32)], dx: i32, dy: i32, level: usize) -> u32 {
+    /// The summed level-`level` values under the points shifted by `(dx, dy)` cells. A sum
+    /// that can no longer reach `need`, even were every point left worth the most, is cut
+    /// short: it is pruned whatever it would have come to.
+    fn score(&self, cells: &[(i32, i32)], dx: i32, dy: i32, level: usize, need: u32) -> u32 {
         let grid = &self.levels[level];
-        cells
-            .iter()
-            .map(|&(x, y)| u32::from(grid.get(x + dx, y + dy)))
-            .sum()
+        let mut sum = 0;
+        let mut left = 255 * cells.len() as u32;
+        for chunk in cells.chunks(SCORE_CHUNK) {
+            sum += chunk
+                .iter()
+                .map(|&(x, y)| u32::from(grid.get(x + dx, y + dy)))
+                .sum::<u32>();
+            left -= 255 * chunk.len() as u32;
+            if sum + left < need {
+                break;
+            }
+        }
+        sum
     }
 
     /// The cells `scan` falls in at `pose`.
     fn discretize(&self, scan: &[Vector2<f64>], pose: &Pose2) -> Vec<(i32, i32)> {
+        let rotation = pose.rotation();
+        let translation = Vector2::new(pose.x, pose.y);
         scan.iter()
             .map(|p| {
-                let q = (pose.transform(*p) - self.origin) / self.resolution;
+                let q = (rotation * p + translation - self.origin) / self.resolution;
                 (q.x.floor() as i32, q.y.floor() as i32)
             })
             .collect()
@@ -251,9 +268,12 @@ impl MatchGrid {
             return 0.0;
         }
         let cells = self.discretize(scan, pose);
-        f64::from(self.score(&cells, 0, 0, 0)) / (255.0 * scan.len() as f64)
+        f64::from(self.score(&cells, 0, 0, 0, 0)) / (255.0 * scan.len() as f64)
     }
 }
+
+/// Points scored between two checks of whether a score can still reach what it needs.
+const SCORE_CHUNK: usize = 32;
 
 /// The lever a turn acts on: the RMS distance of the points. A yaw step moves a point at this
 /// distance by a cell; farther points move by more, and the registration after the search
