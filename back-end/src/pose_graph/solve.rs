@@ -179,28 +179,27 @@ impl PoseGraph {
 
     /// Each closure's squared error at the current poses under `information`.
     fn closure_chi2(&self, information: &[Matrix3<f64>]) -> Vec<f64> {
+        let frames = edge::frames(&self.poses);
         self.closures
             .iter()
             .zip(information)
             .map(|(c, w)| {
                 let m = &c.measurement;
-                chi2(
-                    &edge::error(&self.poses[c.from], &self.poses[c.to], &m.seen),
-                    w,
-                )
+                chi2(&edge::error(&frames[c.from], &self.poses[c.to], &m.seen), w)
             })
             .collect()
     }
 
     /// The robust cost at `poses`.
     fn cost(&self, poses: &[Pose2], information: &[Matrix3<f64>], phi: f64) -> f64 {
+        let frames = edge::frames(poses);
         let steps: f64 = self
             .steps
             .iter()
             .enumerate()
             .map(|(i, m)| {
                 chi2(
-                    &edge::error(&poses[i], &poses[i + 1], &m.seen),
+                    &edge::error(&frames[i], &poses[i + 1], &m.seen),
                     &m.information,
                 )
             })
@@ -215,7 +214,7 @@ impl PoseGraph {
             .iter()
             .zip(information)
             .map(|(c, w)| {
-                let e = edge::error(&poses[c.from], &poses[c.to], &c.measurement.seen);
+                let e = edge::error(&frames[c.from], &poses[c.to], &c.measurement.seen);
                 dcs_cost(chi2(&e, w), phi)
             })
             .sum();
@@ -259,8 +258,9 @@ impl PoseGraph {
         } = structure;
         equations.clear();
         let node = |i: usize| variable(i, *gauge_fixed);
+        let frames = edge::frames(&self.poses);
         for (i, (m, slot)) in self.steps.iter().zip(step_slots.iter()).enumerate() {
-            let edge = Linearized::new(&self.poses[i], &self.poses[i + 1], &m.seen);
+            let edge = Linearized::new(&frames[i], &self.poses[i + 1], &m.seen);
             let ends = (node(i), node(i + 1), *slot);
             add_edge(
                 pattern,
@@ -273,7 +273,7 @@ impl PoseGraph {
         }
         for (k, (c, slot)) in self.closures.iter().zip(closure_slots.iter()).enumerate() {
             let m = &c.measurement;
-            let edge = Linearized::new(&self.poses[c.from], &self.poses[c.to], &m.seen);
+            let edge = Linearized::new(&frames[c.from], &self.poses[c.to], &m.seen);
             let weighted = information[k] * dcs_scale(chi2[k], phi).powi(2);
             let mut hessian = weighted;
             if curvature == Curvature::Newton {
