@@ -1,8 +1,10 @@
 //! Global SLAM over the front end's output: every keyframe becomes a node of the pose graph
 //! and goes into the submaps; each new node is checked against the finished submaps its
 //! predicted pose lies in ([`crate::closure::verify`]), and a closure the scans confirm is
-//! added to the graph, which is then solved again. A scan between keyframes follows its
-//! keyframe rigidly, by the front end's motion since.
+//! added to the graph. The graph is solved again when a closure disagrees with it: the
+//! next nodes' searches start from its poses. A closure it already agrees with changes
+//! little and waits for the next solve (or the last, at the end). A scan between keyframes
+//! follows its keyframe rigidly, by the front end's motion since.
 //!
 //! The search window is as wide as the drift the front end can have built up since the graph
 //! was last tied to an old place: a share of the path driven since the last closure (and a
@@ -26,9 +28,6 @@ const GRID_CACHE: usize = 12;
 /// Nodes between two searches in one submap: neighbouring nodes see the same, and a
 /// closure every few nodes holds the path as well as one at each.
 const ATTEMPT_GAP: usize = 3;
-
-/// Closures that wait for one solve at most, when the graph already agrees with each.
-const UNSOLVED_CLOSURES: usize = 10;
 
 /// Submaps a node is checked against at most: those whose middle it is nearest.
 const MAX_CANDIDATES: usize = 2;
@@ -128,8 +127,6 @@ pub struct GlobalSlam {
     node_travelled_m: Vec<f64>,
     /// Per submap, the path driven when a closure last tied the robot to it.
     tied_at_m: Vec<f64>,
-    /// Closures added since the graph was last solved.
-    unsolved: usize,
     stats: GlobalStats,
 }
 
@@ -148,7 +145,6 @@ impl GlobalSlam {
             travelled_m: 0.0,
             node_travelled_m: Vec::new(),
             tied_at_m: Vec::new(),
-            unsolved: 0,
             stats: GlobalStats::default(),
         }
     }
@@ -238,6 +234,7 @@ impl GlobalSlam {
             .collect();
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
         candidates.truncate(MAX_CANDIDATES);
+        let mut disagrees = false;
         for (_, index, seed, window) in candidates {
             self.stats.attempts += 1;
             if self.last_attempt.len() <= index {
@@ -259,13 +256,9 @@ impl GlobalSlam {
                         self.tied_at_m.resize(index + 1, f64::NAN);
                     }
                     self.tied_at_m[index] = self.travelled_m;
-                    self.unsolved += 1;
                     // A closure the graph already agrees with can wait for the next solve.
-                    if innovation.translation_norm() > 0.5 * self.config.min_window_m
-                        || innovation.yaw.abs() > 0.5 * self.config.min_window_rad
-                    {
-                        self.unsolved = UNSOLVED_CLOSURES;
-                    }
+                    disagrees = innovation.translation_norm() > 0.5 * self.config.min_window_m
+                        || innovation.yaw.abs() > 0.5 * self.config.min_window_rad;
                     // One closure ties the node; a second to the next submap adds little.
                     break;
                 }
@@ -276,7 +269,7 @@ impl GlobalSlam {
                 Err(Refusal::Unconstrained) => self.stats.unconstrained += 1,
             }
         }
-        if self.unsolved >= UNSOLVED_CLOSURES {
+        if disagrees {
             self.solve()?;
         }
         Ok(())
@@ -286,7 +279,6 @@ impl GlobalSlam {
         if let Some(graph) = self.graph.as_mut() {
             graph.optimize()?;
             self.stats.optimizations += 1;
-            self.unsolved = 0;
         }
         Ok(())
     }
