@@ -264,10 +264,7 @@ impl MatchGrid {
         };
         for p in scan {
             let q = (rotation * p + translation - self.origin) / self.resolution;
-            let (x, y) = (
-                q.x.floor() as i32 + self.reach,
-                q.y.floor() as i32 + self.reach,
-            );
+            let (x, y) = (floor_i32(q.x) + self.reach, floor_i32(q.y) + self.reach);
             // Whether a coordinate stays on the grid at every shift of the window, and
             // whether at any.
             let always = |c: i32, size: i32| c - half >= 0 && c + half < size;
@@ -289,6 +286,13 @@ impl MatchGrid {
         let footprint = self.footprint(scan, pose, 0);
         f64::from(self.score(&footprint, 0, 0, 0, 0)) / (255.0 * scan.len() as f64)
     }
+}
+
+/// `floor(v)` as an integer (saturating, as `as` does), without the library call that
+/// `f64::floor` is on the baseline x86-64 target.
+fn floor_i32(v: f64) -> i32 {
+    let t = v as i32;
+    if f64::from(t) > v { t - 1 } else { t }
 }
 
 /// Points scored between two checks of whether a score can still reach what it needs.
