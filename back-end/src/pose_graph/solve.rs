@@ -189,13 +189,16 @@ impl PoseGraph {
 
     /// Each closure's squared error at the current poses under `information`.
     fn closure_chi2(&self, information: &[Matrix3<f64>]) -> Vec<f64> {
-        let frames = edge::frames(&self.poses);
+        // Fewer closures than nodes: each takes its own frame.
         self.closures
             .iter()
             .zip(information)
             .map(|(c, w)| {
-                let m = &c.measurement;
-                chi2(&edge::error(&frames[c.from], &self.poses[c.to], &m.seen), w)
+                let from = edge::Frame::new(&self.poses[c.from]);
+                chi2(
+                    &edge::error(&from, &self.poses[c.to], &c.measurement.seen),
+                    w,
+                )
             })
             .collect()
     }
