@@ -20,37 +20,23 @@ use slam_geom::{Pose2, wrap_angle};
 pub const EXPLAIN_RADIUS_CELLS: f64 = 2.0;
 
 /// The match grid of one submap: the explained-value pyramid over the submap's frame.
+///
+/// Every level has the same cells, so a point's cell is one index into all of them. They
+/// reach `2^depth - 1` cells below the stamped area, where a block still covering it starts,
+/// so a bound is never cut short at the edge.
 #[derive(Debug, Clone)]
 pub struct MatchGrid {
     resolution: f64,
-    /// Submap-frame position of cell (0, 0)'s lower corner.
+    /// Submap-frame position of the stamped area's first cell's lower corner: cell (0, 0).
     origin: Vector2<f64>,
-    /// `levels[h]`: the values of the blocks that start at each cell, values 0..=255.
-    levels: Vec<Level>,
-}
-
-/// One level of the pyramid. It reaches `2^h - 1` cells below level 0's first cell, where a
-/// block starts that still covers level 0, so a bound is never cut short at the edge.
-#[derive(Debug, Clone)]
-struct Level {
-    /// Cells below level 0's first, on each axis.
-    offset: i32,
+    /// Cells kept below cell (0, 0) on each axis.
+    reach: i32,
+    /// Cells kept on each axis, from `-reach`.
     width: i32,
     height: i32,
-    /// Row-major.
-    cells: Vec<u8>,
-}
-
-impl Level {
-    #[inline]
-    fn get(&self, x: i32, y: i32) -> u8 {
-        let (x, y) = (x + self.offset, y + self.offset);
-        if x < 0 || y < 0 || x >= self.width || y >= self.height {
-            0
-        } else {
-            self.cells[(y * self.width + x) as usize]
-        }
-    }
+    /// `levels[h]`: the values of the blocks that start at each cell, values 0..=255,
+    /// row-major.
+    levels: Vec<Vec<u8>>,
 }
 
 /// A search window around a seed pose.
@@ -78,11 +64,21 @@ struct Candidate {
     score: u32,
 }
 
+/// The scan at one yaw of a search, as cells of the grid at the seed's translation.
+struct Footprint {
+    /// Points that stay on the grid at every translation of the window: their cell's index.
+    inside: Vec<i32>,
+    /// Points that leave it at some: their cell, checked at each translation. Points off
+    /// the grid at every translation score nothing and are left out.
+    edge: Vec<(i32, i32)>,
+}
+
 impl MatchGrid {
     /// The pyramid over `points` (submap frame) at `resolution`, deep enough for windows up
     /// to `max_window` metres each way.
     pub fn new(points: &[Vector2<f64>], resolution: f64, max_window: f64) -> Self {
         let depth = depth_for(max_window / resolution);
+        let reach = (1 << depth) - 1;
         let pad = EXPLAIN_RADIUS_CELLS.ceil() + 1.0;
         let (mut lo, mut hi) = (
             Vector2::repeat(f64::INFINITY),
@@ -97,23 +93,22 @@ impl MatchGrid {
             hi = Vector2::zeros();
         }
         let origin = lo - Vector2::repeat(pad * resolution);
-        let width = ((hi.x - lo.x) / resolution + 2.0 * pad).ceil() as i32 + 1;
-        let height = ((hi.y - lo.y) / resolution + 2.0 * pad).ceil() as i32 + 1;
-        let mut levels = vec![Level {
-            offset: 0,
-            width,
-            height,
-            cells: stamp(points, origin, resolution, width, height),
-        }];
-        for h in 1..=depth {
-            let next = pooled(&levels[h - 1], h);
-            levels.push(next);
-        }
-        Self {
+        let width = ((hi.x - lo.x) / resolution + 2.0 * pad).ceil() as i32 + 1 + reach;
+        let height = ((hi.y - lo.y) / resolution + 2.0 * pad).ceil() as i32 + 1 + reach;
+        let mut grid = Self {
             resolution,
             origin,
-            levels,
+            reach,
+            width,
+            height,
+            levels: Vec::with_capacity(depth + 1),
+        };
+        grid.levels.push(grid.stamp(points));
+        for h in 1..=depth {
+            let next = pooled(&grid.levels[h - 1], width as usize, 1 << (h - 1));
+            grid.levels.push(next);
         }
+        grid
     }
 
     /// The pose within `window` of `seed` where the most of `scan` (robot frame) is
@@ -137,20 +132,20 @@ impl MatchGrid {
             .map(|k| wrap_angle(seed.yaw + k as f64 * yaw_step))
             .collect();
         // Each yaw's points in cells, relative to the seed's translation.
-        let rotated: Vec<Vec<(i32, i32)>> = yaws
+        let rotated: Vec<Footprint> = yaws
             .iter()
-            .map(|&yaw| self.discretize(scan, &Pose2::new(seed.x, seed.y, yaw)))
+            .map(|&yaw| self.footprint(scan, &Pose2::new(seed.x, seed.y, yaw), half))
             .collect();
         let total = scan.len() as u32 * 255;
         let floor = (min_score.clamp(0.0, 1.0) * f64::from(total)).ceil() as u32;
         let step = 1i32 << depth;
         let mut top = Vec::new();
-        for (yaw_index, cells) in rotated.iter().enumerate() {
+        for (yaw_index, footprint) in rotated.iter().enumerate() {
             let mut dx = -half;
             while dx <= half {
                 let mut dy = -half;
                 while dy <= half {
-                    let score = self.score(cells, dx, dy, depth);
+                    let score = self.score(footprint, dx, dy, depth, floor);
                     if score >= floor {
                         top.push(Candidate {
                             yaw_index,
@@ -185,7 +180,7 @@ impl MatchGrid {
     /// first, pruning every block whose bound does not beat `bound`.
     fn descend(
         &self,
-        rotated: &[Vec<(i32, i32)>],
+        rotated: &[Footprint],
         candidate: Candidate,
         level: usize,
         half: i32,
@@ -201,43 +196,81 @@ impl MatchGrid {
             return;
         }
         let child = 1i32 << (level - 1);
-        let mut children = Vec::with_capacity(4);
+        let mut children = [candidate; 4];
+        let mut count = 0;
         for (ox, oy) in [(0, 0), (child, 0), (0, child), (child, child)] {
             let (dx, dy) = (candidate.dx + ox, candidate.dy + oy);
             if dx > half || dy > half {
                 continue;
             }
-            let score = self.score(&rotated[candidate.yaw_index], dx, dy, level - 1);
-            children.push(Candidate {
+            let score = self.score(&rotated[candidate.yaw_index], dx, dy, level - 1, *bound);
+            children[count] = Candidate {
                 dx,
                 dy,
                 score,
                 ..candidate
-            });
+            };
+            count += 1;
         }
-        children.sort_unstable_by_key(|c| std::cmp::Reverse(c.score));
-        for c in children {
+        // Stable: of children that score the same, the first stays first.
+        children[..count].sort_by_key(|c| std::cmp::Reverse(c.score));
+        for &c in &children[..count] {
             self.descend(rotated, c, level - 1, half, best, bound);
         }
     }
 
-    /// The summed level-`level` values under the points shifted by `(dx, dy)` cells.
-    fn score(&self, cells: &[(i32, i32)], dx: i32, dy: i32, level: usize) -> u32 {
-        let grid = &self.levels[level];
-        cells
-            .iter()
-            .map(|&(x, y)| u32::from(grid.get(x + dx, y + dy)))
-            .sum()
+    /// The summed level-`level` values under the points shifted by `(dx, dy)` cells. A sum
+    /// that can no longer reach `need`, even were every point left worth the most, is cut
+    /// short: it is pruned whatever it would have come to.
+    fn score(&self, footprint: &Footprint, dx: i32, dy: i32, level: usize, need: u32) -> u32 {
+        let cells = &self.levels[level];
+        let shift = dy * self.width + dx;
+        let mut sum = 0;
+        let mut left = 255 * (footprint.inside.len() + footprint.edge.len()) as u32;
+        for chunk in footprint.inside.chunks(SCORE_CHUNK) {
+            sum += chunk
+                .iter()
+                .map(|&index| u32::from(cells[(index + shift) as usize]))
+                .sum::<u32>();
+            left -= 255 * chunk.len() as u32;
+            if sum + left < need {
+                return sum;
+            }
+        }
+        let (width, height) = (self.width as u32, self.height as u32);
+        for &(x, y) in &footprint.edge {
+            // Below zero wraps to beyond the width: one comparison per axis.
+            let (x, y) = ((x + dx) as u32, (y + dy) as u32);
+            if x < width && y < height {
+                sum += u32::from(cells[(y * width + x) as usize]);
+            }
+        }
+        sum
     }
 
-    /// The cells `scan` falls in at `pose`.
-    fn discretize(&self, scan: &[Vector2<f64>], pose: &Pose2) -> Vec<(i32, i32)> {
-        scan.iter()
-            .map(|p| {
-                let q = (pose.transform(*p) - self.origin) / self.resolution;
-                (q.x.floor() as i32, q.y.floor() as i32)
-            })
-            .collect()
+    /// The kept cells `scan` falls in at `pose` (counted from `-reach`), sorted by whether
+    /// they stay on the grid at every translation within `half` cells.
+    fn footprint(&self, scan: &[Vector2<f64>], pose: &Pose2, half: i32) -> Footprint {
+        let rotation = pose.rotation();
+        let translation = Vector2::new(pose.x, pose.y);
+        let mut footprint = Footprint {
+            inside: Vec::with_capacity(scan.len()),
+            edge: Vec::new(),
+        };
+        for p in scan {
+            let q = (rotation * p + translation - self.origin) / self.resolution;
+            let (x, y) = (floor_i32(q.x) + self.reach, floor_i32(q.y) + self.reach);
+            // Whether a coordinate stays on the grid at every shift of the window, and
+            // whether at any.
+            let always = |c: i32, size: i32| c - half >= 0 && c + half < size;
+            let ever = |c: i32, size: i32| c + half >= 0 && c - half < size;
+            if always(x, self.width) && always(y, self.height) {
+                footprint.inside.push(y * self.width + x);
+            } else if ever(x, self.width) && ever(y, self.height) {
+                footprint.edge.push((x, y));
+            }
+        }
+        footprint
     }
 
     /// The level-0 score of `scan` at `pose`, a share of the points.
@@ -245,10 +278,20 @@ impl MatchGrid {
         if scan.is_empty() {
             return 0.0;
         }
-        let cells = self.discretize(scan, pose);
-        f64::from(self.score(&cells, 0, 0, 0)) / (255.0 * scan.len() as f64)
+        let footprint = self.footprint(scan, pose, 0);
+        f64::from(self.score(&footprint, 0, 0, 0, 0)) / (255.0 * scan.len() as f64)
     }
 }
+
+/// `floor(v)` as an integer (saturating, as `as` does), without the library call that
+/// `f64::floor` is on the baseline x86-64 target.
+fn floor_i32(v: f64) -> i32 {
+    let t = v as i32;
+    if f64::from(t) > v { t - 1 } else { t }
+}
+
+/// Points scored between two checks of whether a score can still reach what it needs.
+const SCORE_CHUNK: usize = 32;
 
 /// The lever a turn acts on: the RMS distance of the points. A yaw step moves a point at this
 /// distance by a cell; farther points move by more, and the registration after the search
@@ -271,83 +314,50 @@ fn depth_for(half_cells: f64) -> usize {
     depth
 }
 
-/// Level `h` from level `h - 1`: the max over a block twice as wide, in x then in y; it
-/// starts `2^(h-1)` cells lower than the level below.
-fn pooled(below: &Level, h: usize) -> Level {
-    let half = 1usize << (h - 1);
-    let offset = 2 * half as i32 - 1;
-    let grow = (offset - below.offset) as usize;
-    let (bw, bh) = (below.width as usize, below.height as usize);
-    let (width, height) = (bw + grow, bh + grow);
-    // Cell x of this level is the block from cell `x - grow` of the level below: its max
-    // with cell `x - grow + half`, each zero off the level.
-    let at = |row: &[u8], i: isize| -> u8 {
-        if i < 0 {
-            0
-        } else {
-            row.get(i as usize).copied().unwrap_or(0)
-        }
-    };
-    let mut rows = vec![0u8; width * bh];
-    for (y, out) in rows.chunks_exact_mut(width).enumerate() {
-        let row = &below.cells[y * bw..(y + 1) * bw];
-        for (x, cell) in out.iter_mut().enumerate() {
-            let i = x as isize - grow as isize;
-            *cell = at(row, i).max(at(row, i + half as isize));
+/// Level `h` from level `h - 1` (`width` cells a row): the max over a block twice as wide,
+/// each cell with the cell `half` (`2^(h-1)`) beyond it, in x then in y; zero off the grid.
+fn pooled(below: &[u8], width: usize, half: usize) -> Vec<u8> {
+    let mut rows = below.to_vec();
+    for (out, row) in rows.chunks_exact_mut(width).zip(below.chunks_exact(width)) {
+        let beyond = row.get(half..).unwrap_or_default();
+        for (cell, &b) in out.iter_mut().zip(beyond) {
+            *cell = (*cell).max(b);
         }
     }
-    let mut cells = vec![0u8; width * height];
-    let zero = vec![0u8; width];
-    let row = |y: isize| -> &[u8] {
-        if y < 0 || y as usize >= bh {
-            &zero
-        } else {
-            &rows[y as usize * width..(y as usize + 1) * width]
-        }
-    };
-    for (y, out) in cells.chunks_exact_mut(width).enumerate() {
-        let i = y as isize - grow as isize;
-        let (a, b) = (row(i), row(i + half as isize));
-        for ((cell, &a), &b) in out.iter_mut().zip(a).zip(b) {
-            *cell = a.max(b);
-        }
-    }
-    Level {
-        offset,
-        width: width as i32,
-        height: height as i32,
-        cells,
-    }
-}
-
-/// Level 0: each cell near a point holds `1 - (d / r)^2`, scaled to 255, at its best point.
-fn stamp(
-    points: &[Vector2<f64>],
-    origin: Vector2<f64>,
-    resolution: f64,
-    width: i32,
-    height: i32,
-) -> Vec<u8> {
-    let (width, height) = (width as usize, height as usize);
-    let mut cells = vec![0u8; width * height];
-    let reach = EXPLAIN_RADIUS_CELLS.ceil() as i64;
-    let r2 = EXPLAIN_RADIUS_CELLS * EXPLAIN_RADIUS_CELLS;
-    for p in points {
-        let q = (p - origin) / resolution;
-        let (cx, cy) = (q.x.floor() as i64, q.y.floor() as i64);
-        for x in (cx - reach).max(0)..=(cx + reach).min(width as i64 - 1) {
-            for y in (cy - reach).max(0)..=(cy + reach).min(height as i64 - 1) {
-                let d2 = (x as f64 + 0.5 - q.x).powi(2) + (y as f64 + 0.5 - q.y).powi(2);
-                if d2 >= r2 {
-                    continue;
-                }
-                let value = (255.0 * (1.0 - d2 / r2)).round() as u8;
-                let cell = &mut cells[y as usize * width + x as usize];
-                *cell = (*cell).max(value);
-            }
-        }
+    let mut cells = rows.clone();
+    let beyond = rows.get(half * width..).unwrap_or_default();
+    for (cell, &b) in cells.iter_mut().zip(beyond) {
+        *cell = (*cell).max(b);
     }
     cells
+}
+
+impl MatchGrid {
+    /// Level 0: each cell near a point holds `1 - (d / r)^2`, scaled to 255, at its best
+    /// point.
+    fn stamp(&self, points: &[Vector2<f64>]) -> Vec<u8> {
+        let (width, height) = (self.width as usize, self.height as usize);
+        let mut cells = vec![0u8; width * height];
+        let radius = EXPLAIN_RADIUS_CELLS.ceil() as i64;
+        let r2 = EXPLAIN_RADIUS_CELLS * EXPLAIN_RADIUS_CELLS;
+        let reach = i64::from(self.reach);
+        for p in points {
+            let q = (p - self.origin) / self.resolution;
+            let (cx, cy) = (q.x.floor() as i64, q.y.floor() as i64);
+            for x in (cx - radius).max(0)..=(cx + radius).min(width as i64 - 1 - reach) {
+                for y in (cy - radius).max(0)..=(cy + radius).min(height as i64 - 1 - reach) {
+                    let d2 = (x as f64 + 0.5 - q.x).powi(2) + (y as f64 + 0.5 - q.y).powi(2);
+                    if d2 >= r2 {
+                        continue;
+                    }
+                    let value = (255.0 * (1.0 - d2 / r2)).round() as u8;
+                    let cell = &mut cells[(y + reach) as usize * width + (x + reach) as usize];
+                    *cell = (*cell).max(value);
+                }
+            }
+        }
+        cells
+    }
 }
 
 #[cfg(test)]

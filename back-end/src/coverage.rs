@@ -11,8 +11,9 @@ use std::collections::HashMap;
 
 use nalgebra::Vector2;
 
-/// Cells per tile edge.
-const TILE: i32 = 32;
+/// Cells per tile edge, a power of two.
+const TILE_BITS: i32 = 5;
+const TILE: i32 = 1 << TILE_BITS;
 
 /// A cell's counts: beams through, beams ending.
 #[derive(Debug, Clone, Copy, Default)]
@@ -25,7 +26,9 @@ struct Counts {
 #[derive(Debug, Clone)]
 pub struct Coverage {
     cell: f64,
-    tiles: HashMap<(i32, i32), Box<[Counts]>>,
+    /// Tile coordinates to the tile's place in `tiles`.
+    index: HashMap<(i32, i32), usize>,
+    tiles: Vec<Box<[Counts]>>,
 }
 
 /// What the submap says about a point.
@@ -48,24 +51,26 @@ impl Coverage {
     pub fn new(cell: f64) -> Self {
         Self {
             cell,
-            tiles: HashMap::new(),
+            index: HashMap::new(),
+            tiles: Vec::new(),
         }
     }
 
-    fn counts_mut(&mut self, x: i32, y: i32) -> &mut Counts {
-        let key = (x.div_euclid(TILE), y.div_euclid(TILE));
-        let tile = self
-            .tiles
-            .entry(key)
-            .or_insert_with(|| vec![Counts::default(); (TILE * TILE) as usize].into());
-        &mut tile[(y.rem_euclid(TILE) * TILE + x.rem_euclid(TILE)) as usize]
+    /// The place of tile `key` in `tiles`, allocated if new.
+    fn tile(&mut self, key: (i32, i32)) -> usize {
+        let next = self.tiles.len();
+        let index = *self.index.entry(key).or_insert(next);
+        if index == next {
+            self.tiles
+                .push(vec![Counts::default(); (TILE * TILE) as usize].into());
+        }
+        index
     }
 
-    fn counts(&self, x: i32, y: i32) -> Counts {
-        let key = (x.div_euclid(TILE), y.div_euclid(TILE));
-        self.tiles.get(&key).map_or(Counts::default(), |tile| {
-            tile[(y.rem_euclid(TILE) * TILE + x.rem_euclid(TILE)) as usize]
-        })
+    fn counts(&self, (x, y): (i32, i32)) -> Counts {
+        self.index
+            .get(&(x >> TILE_BITS, y >> TILE_BITS))
+            .map_or(Counts::default(), |&tile| self.tiles[tile][offset(x, y)])
     }
 
     fn cell_of(&self, p: Vector2<f64>) -> (i32, i32) {
@@ -86,36 +91,103 @@ impl Coverage {
         } else {
             origin
         };
-        let (origin, length) = (start, length.min(TRACED_M));
         let last = self.cell_of(end);
-        let steps = (length / (0.5 * self.cell)).floor() as usize;
-        let mut previous = None;
-        for i in 0..steps {
-            let p = origin + (end - origin) * (i as f64 * 0.5 * self.cell / length);
-            let c = self.cell_of(p);
+        // Consecutive cells mostly share a tile: it is looked up when the beam enters one.
+        let mut tile = ((i32::MAX, i32::MAX), 0);
+        for c in Traversal::new(
+            start / self.cell,
+            end / self.cell,
+            self.cell_of(start),
+            last,
+        ) {
             // Stop a cell short: a beam ending near a cell border grazes the wall's cell.
             if (c.0 - last.0).abs() <= 1 && (c.1 - last.1).abs() <= 1 {
                 break;
             }
-            if previous != Some(c) {
-                let counts = self.counts_mut(c.0, c.1);
-                counts.passes = counts.passes.saturating_add(1);
-                previous = Some(c);
+            let key = (c.0 >> TILE_BITS, c.1 >> TILE_BITS);
+            if key != tile.0 {
+                tile = (key, self.tile(key));
             }
+            let counts = &mut self.tiles[tile.1][offset(c.0, c.1)];
+            counts.passes = counts.passes.saturating_add(1);
         }
-        let counts = self.counts_mut(last.0, last.1);
+        let tile = self.tile((last.0 >> TILE_BITS, last.1 >> TILE_BITS));
+        let counts = &mut self.tiles[tile][offset(last.0, last.1)];
         counts.hits = counts.hits.saturating_add(1);
     }
 
     /// What the submap says about `point`.
     pub fn seen(&self, point: Vector2<f64>) -> Seen {
-        let c = self.cell_of(point);
-        let counts = self.counts(c.0, c.1);
+        let counts = self.counts(self.cell_of(point));
         if counts.hits == 0 && counts.passes >= FREE_PASSES {
             Seen::Free
         } else {
             Seen::NotFree
         }
+    }
+}
+
+/// The place of cell `(x, y)` in its tile.
+fn offset(x: i32, y: i32) -> usize {
+    (((y & (TILE - 1)) << TILE_BITS) | (x & (TILE - 1))) as usize
+}
+
+/// The cells a segment crosses, in order from its first (Amanatides and Woo's walk): at each
+/// step it moves into the neighbour across the cell border it meets first.
+struct Traversal {
+    cell: (i32, i32),
+    step: (i32, i32),
+    /// Where along the segment (0 to 1) it next crosses a border in x, and in y...
+    next: (f64, f64),
+    /// ...and how far along it the borders of each axis are apart.
+    delta: (f64, f64),
+    /// Cells still to give: the segment crosses one border per step.
+    left: u32,
+}
+
+impl Traversal {
+    /// The cells from `first` to `last` crossed by the segment between `a` and `b`, both in
+    /// cells.
+    fn new(a: Vector2<f64>, b: Vector2<f64>, first: (i32, i32), last: (i32, i32)) -> Self {
+        let d = b - a;
+        let axis = |from: f64, cell: i32, d: f64| -> (i32, f64, f64) {
+            if d > 0.0 {
+                (1, (f64::from(cell) + 1.0 - from) / d, 1.0 / d)
+            } else if d < 0.0 {
+                (-1, (f64::from(cell) - from) / d, -1.0 / d)
+            } else {
+                (0, f64::INFINITY, f64::INFINITY)
+            }
+        };
+        let (sx, nx, dx) = axis(a.x, first.0, d.x);
+        let (sy, ny, dy) = axis(a.y, first.1, d.y);
+        Self {
+            cell: first,
+            step: (sx, sy),
+            next: (nx, ny),
+            delta: (dx, dy),
+            left: (last.0 - first.0).unsigned_abs() + (last.1 - first.1).unsigned_abs() + 1,
+        }
+    }
+}
+
+impl Iterator for Traversal {
+    type Item = (i32, i32);
+
+    fn next(&mut self) -> Option<(i32, i32)> {
+        if self.left == 0 {
+            return None;
+        }
+        self.left -= 1;
+        let cell = self.cell;
+        if self.next.0 < self.next.1 {
+            self.cell.0 += self.step.0;
+            self.next.0 += self.delta.0;
+        } else {
+            self.cell.1 += self.step.1;
+            self.next.1 += self.delta.1;
+        }
+        Some(cell)
     }
 }
 
@@ -135,5 +207,34 @@ mod tests {
         // Never crossed: unknown, not free.
         assert_eq!(coverage.seen(Vector2::new(-2.0, 0.0)), Seen::NotFree);
         assert_eq!(coverage.seen(Vector2::new(7.0, 0.0)), Seen::NotFree);
+    }
+
+    #[test]
+    fn the_walk_gives_every_cell_the_segment_crosses_and_only_those() {
+        let mut state = 7_u64;
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0
+        };
+        let cell = |p: Vector2<f64>| (p.x.floor() as i32, p.y.floor() as i32);
+        for _ in 0..200 {
+            let (a, b) = (
+                Vector2::new(uniform(), uniform()),
+                Vector2::new(uniform(), uniform()),
+            );
+            let walk: Vec<(i32, i32)> = Traversal::new(a, b, cell(a), cell(b)).collect();
+            assert_eq!(walk.first(), Some(&cell(a)));
+            assert_eq!(walk.last(), Some(&cell(b)), "{a:?} {b:?}");
+            for pair in walk.windows(2) {
+                let step = (pair[1].0 - pair[0].0).abs() + (pair[1].1 - pair[0].1).abs();
+                assert_eq!(step, 1, "{a:?} {b:?}");
+            }
+            for i in 0..=1000 {
+                let p = a + (b - a) * (f64::from(i) / 1000.0);
+                assert!(walk.contains(&cell(p)), "{a:?} {b:?} {p:?}");
+            }
+        }
     }
 }

@@ -1,8 +1,11 @@
 //! Global SLAM over the front end's output: every keyframe becomes a node of the pose graph
 //! and goes into the submaps; each new node is checked against the finished submaps its
 //! predicted pose lies in ([`crate::closure::verify`]), and a closure the scans confirm is
-//! added to the graph, which is then solved again. A scan between keyframes follows its
-//! keyframe rigidly, by the front end's motion since.
+//! added to the graph. A closure that disagrees with the graph waits for a second to
+//! confirm it; confirmed, both go in and the graph is solved at once: the next nodes'
+//! searches start from its poses. A closure the graph already agrees with changes little
+//! and waits for the next solve (or the last, at the end). A scan between keyframes
+//! follows its keyframe rigidly, by the front end's motion since.
 //!
 //! The search window is as wide as the drift the front end can have built up since the graph
 //! was last tied to an old place: a share of the path driven since the last closure (and a
@@ -27,9 +30,6 @@ const GRID_CACHE: usize = 12;
 /// Nodes between two searches in one submap: neighbouring nodes see the same, and a
 /// closure every few nodes holds the path as well as one at each.
 const ATTEMPT_GAP: usize = 3;
-
-/// Closures that wait for one solve at most, when the graph already agrees with each.
-const UNSOLVED_CLOSURES: usize = 10;
 
 /// Submaps a node is checked against at most: those whose middle it is nearest.
 const MAX_CANDIDATES: usize = 2;
@@ -149,8 +149,6 @@ pub struct GlobalSlam {
     node_travelled_m: Vec<f64>,
     /// Per submap, the path driven when a closure last tied the robot to it.
     tied_at_m: Vec<f64>,
-    /// Closures added since the graph was last solved.
-    unsolved: usize,
     /// Jumps waiting for confirmation.
     held: Confirmations,
     stats: GlobalStats,
@@ -171,7 +169,6 @@ impl GlobalSlam {
             travelled_m: 0.0,
             node_travelled_m: Vec::new(),
             tied_at_m: Vec::new(),
-            unsolved: 0,
             held: Confirmations::default(),
             stats: GlobalStats::default(),
         })
@@ -274,6 +271,7 @@ impl GlobalSlam {
             .collect();
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
         candidates.truncate(MAX_CANDIDATES);
+        let mut moved = false;
         for (_, index, seed, window) in candidates {
             self.stats.attempts += 1;
             if self.last_attempt.len() <= index {
@@ -304,7 +302,7 @@ impl GlobalSlam {
                         // solve.
                         self.add_closure(&tie)?;
                     } else {
-                        self.offer_jump(tie)?;
+                        moved |= self.offer_jump(tie)?;
                     }
                     // One closure ties the node; a second to the next submap adds little.
                     break;
@@ -316,7 +314,7 @@ impl GlobalSlam {
                 Err(Refusal::Unconstrained) => self.stats.unconstrained += 1,
             }
         }
-        if self.unsolved >= UNSOLVED_CLOSURES {
+        if moved {
             self.solve()?;
         }
         Ok(())
@@ -325,7 +323,6 @@ impl GlobalSlam {
     fn solve(&mut self) -> Result<(), PoseGraphError> {
         self.graph.optimize()?;
         self.stats.optimizations += 1;
-        self.unsolved = 0;
         Ok(())
     }
 
@@ -334,7 +331,6 @@ impl GlobalSlam {
         self.graph
             .add_closure(tie.anchor, tie.node, tie.seen, tie.information)?;
         self.stats.closures += 1;
-        self.unsolved += 1;
         if self.tied_at_m.len() <= tie.submap {
             self.tied_at_m.resize(tie.submap + 1, f64::NAN);
         }
@@ -343,21 +339,20 @@ impl GlobalSlam {
     }
 
     /// A closure that would move the graph waits for another to confirm it; confirmed,
-    /// they go in together and the graph is solved at once.
-    fn offer_jump(&mut self, tie: Tie) -> Result<(), PoseGraphError> {
+    /// they go in together and the graph must be solved at once (returns true).
+    fn offer_jump(&mut self, tie: Tie) -> Result<bool, PoseGraphError> {
         let config = self.config;
         let confirmed = self
             .held
             .offer(tie, &self.graph, |apart_m| config.drift_over(apart_m));
         if confirmed.is_empty() {
             self.stats.held += 1;
-            return Ok(());
+            return Ok(false);
         }
         for tie in &confirmed {
             self.add_closure(tie)?;
         }
-        self.unsolved = UNSOLVED_CLOSURES;
-        Ok(())
+        Ok(true)
     }
 
     /// The search window for submap `index`: the drift the front end can have built up over

@@ -6,6 +6,13 @@
 //! Submaps overlap by half: every keyframe goes into the two newest, and a submap is finished
 //! after twice [`SubmapConfig::keyframes`] of them. A scan anywhere on the path then has a
 //! finished submap around it that it did not help build only from the middle of one.
+//!
+//! A submap keeps its keyframes' scans; the local map and the free space that judge a
+//! closure are built from them the first time a scan is found in the submap, which many
+//! submaps never see.
+
+use std::collections::HashMap;
+use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector2;
 use scan_match::local_map::LocalMap;
@@ -33,10 +40,16 @@ pub struct Submap {
     pub last_node: usize,
     /// The submap frame's pose in the front end's frame, when it was started.
     odom_from_submap: Pose2,
-    inserted: usize,
+    voxel: f64,
     finished: bool,
-    map: LocalMap,
-    coverage: Coverage,
+    /// Each keyframe's pose in the submap frame and its points (robot frame), shared with
+    /// the other submap it went into.
+    keyframes: Vec<(Pose2, Arc<[SurfacePoint]>)>,
+    /// Once finished: the points thinned to one per voxel (the newest), submap frame.
+    points: Vec<Vector2<f64>>,
+    /// Built on first use: only the submaps a scan is found in need them.
+    map: OnceLock<LocalMap>,
+    coverage: OnceLock<Coverage>,
     /// Lowest and highest point, submap frame.
     lo: Vector2<f64>,
     hi: Vector2<f64>,
@@ -48,28 +61,45 @@ impl Submap {
             anchor,
             last_node: anchor,
             odom_from_submap,
-            inserted: 0,
+            voxel,
             finished: false,
-            map: LocalMap::new(voxel, usize::MAX),
-            coverage: Coverage::new(2.0 * voxel),
+            keyframes: Vec::new(),
+            points: Vec::new(),
+            map: OnceLock::new(),
+            coverage: OnceLock::new(),
             lo: Vector2::repeat(f64::INFINITY),
             hi: Vector2::repeat(f64::NEG_INFINITY),
         }
     }
 
     /// Adds a keyframe's points (robot frame) at its front-end pose.
-    fn insert(&mut self, node: usize, odom_from_robot: &Pose2, scan: &[SurfacePoint]) {
+    fn insert(&mut self, node: usize, odom_from_robot: &Pose2, scan: &Arc<[SurfacePoint]>) {
         let submap_from_robot = self.odom_from_submap.between(odom_from_robot);
-        let origin = submap_from_robot.position();
-        for p in scan {
+        for p in scan.iter() {
             let q = submap_from_robot.transform(p.point);
             self.lo = self.lo.inf(&q);
             self.hi = self.hi.sup(&q);
-            self.coverage.add_beam(origin, q);
         }
-        self.map.insert(submap_from_robot, scan);
+        self.keyframes.push((submap_from_robot, Arc::clone(scan)));
         self.last_node = node;
-        self.inserted += 1;
+    }
+
+    /// Ends the submap: its points are thinned as the local map thins them, the newest
+    /// point of each voxel kept.
+    fn finish(&mut self) {
+        let mut voxels = HashMap::new();
+        for (pose, scan) in &self.keyframes {
+            for p in scan.iter() {
+                let q = pose.transform(p.point);
+                let voxel = (
+                    (q.x / self.voxel).floor() as i32,
+                    (q.y / self.voxel).floor() as i32,
+                );
+                voxels.insert(voxel, q);
+            }
+        }
+        self.points = voxels.into_values().collect();
+        self.finished = true;
     }
 
     /// Whether no more keyframes go in.
@@ -77,14 +107,28 @@ impl Submap {
         self.finished
     }
 
-    /// The points, for matching and registration.
+    /// The points, for registration (a finished submap's; built on first use).
     pub fn map(&self) -> &LocalMap {
-        &self.map
+        self.map.get_or_init(|| {
+            let mut map = LocalMap::new(self.voxel, usize::MAX);
+            for (pose, scan) in &self.keyframes {
+                map.insert(*pose, scan);
+            }
+            map
+        })
     }
 
-    /// Where the submap's beams went.
+    /// Where the submap's beams went (built on first use).
     pub fn coverage(&self) -> &Coverage {
-        &self.coverage
+        self.coverage.get_or_init(|| {
+            let mut coverage = Coverage::new(2.0 * self.voxel);
+            for (pose, scan) in &self.keyframes {
+                for p in scan.iter() {
+                    coverage.add_beam(pose.position(), pose.transform(p.point));
+                }
+            }
+            coverage
+        })
     }
 
     /// Whether `point` (submap frame) lies within `margin` of the submap's points' box.
@@ -100,10 +144,9 @@ impl Submap {
         (self.lo + self.hi) / 2.0
     }
 
-    /// The match grid over the submap's points.
+    /// The match grid over the submap's points (a finished submap's).
     pub fn match_grid(&self, resolution: f64, max_window: f64) -> MatchGrid {
-        let points: Vec<Vector2<f64>> = self.map.points().map(|p| p.point).collect();
-        MatchGrid::new(&points, resolution, max_window)
+        MatchGrid::new(&self.points, resolution, max_window)
     }
 }
 
@@ -138,14 +181,15 @@ impl Submaps {
                 .push(Submap::new(node, *odom_from_robot, self.config.voxel));
         }
         self.keyframes += 1;
+        let scan: Arc<[SurfacePoint]> = scan.into();
         let mut finished = None;
         for (index, submap) in self.all.iter_mut().enumerate().rev().take(2) {
-            if submap.finished {
+            if submap.is_finished() {
                 continue;
             }
-            submap.insert(node, odom_from_robot, scan);
-            if submap.inserted >= 2 * per {
-                submap.finished = true;
+            submap.insert(node, odom_from_robot, &scan);
+            if submap.keyframes.len() >= 2 * per {
+                submap.finish();
                 finished = Some(index);
             }
         }

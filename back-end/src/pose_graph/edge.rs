@@ -18,9 +18,9 @@ pub(super) struct Linearized {
 
 impl Linearized {
     /// The error of `seen` (pose `to` measured in the frame of `from`) at `from`, `to`.
-    pub(super) fn new(from: &Pose2, to: &Pose2, seen: &Pose2) -> Self {
-        let (s, c) = from.yaw.sin_cos();
-        let now = relative(from, to, s, c);
+    pub(super) fn new(from: &Frame, to: &Pose2, seen: &Pose2) -> Self {
+        let (s, c) = (from.sin, from.cos);
+        let now = relative(from, to);
         let error = Vector3::new(
             now.x - seen.x,
             now.y - seen.y,
@@ -37,22 +37,45 @@ impl Linearized {
     }
 }
 
-/// `from.between(to)` given `from`'s yaw's sine and cosine: one `sin_cos` where composing
-/// with the inverse takes two more, and the cost and the equations take this for every
-/// edge at every step.
-fn relative(from: &Pose2, to: &Pose2, s: f64, c: f64) -> Pose2 {
-    let (dx, dy) = (to.x - from.x, to.y - from.y);
+/// A node's pose with its yaw's sine and cosine: taken once per pose for all the edges that
+/// leave it, rather than once per edge, at every evaluation of the cost and the equations.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Frame {
+    pose: Pose2,
+    sin: f64,
+    cos: f64,
+}
+
+impl Frame {
+    pub(super) fn new(pose: &Pose2) -> Self {
+        let (sin, cos) = pose.yaw.sin_cos();
+        Self {
+            pose: *pose,
+            sin,
+            cos,
+        }
+    }
+}
+
+/// Every pose as a frame.
+pub(super) fn frames(poses: &[Pose2]) -> Vec<Frame> {
+    poses.iter().map(Frame::new).collect()
+}
+
+/// `from.between(to)`.
+fn relative(from: &Frame, to: &Pose2) -> Pose2 {
+    let (s, c) = (from.sin, from.cos);
+    let (dx, dy) = (to.x - from.pose.x, to.y - from.pose.y);
     Pose2 {
         x: c * dx + s * dy,
         y: -s * dx + c * dy,
-        yaw: wrap_angle(to.yaw - from.yaw),
+        yaw: wrap_angle(to.yaw - from.pose.yaw),
     }
 }
 
 /// The error of `seen` at `from`, `to` only (no derivatives).
-pub(super) fn error(from: &Pose2, to: &Pose2, seen: &Pose2) -> Vector3<f64> {
-    let (s, c) = from.yaw.sin_cos();
-    let now = relative(from, to, s, c);
+pub(super) fn error(from: &Frame, to: &Pose2, seen: &Pose2) -> Vector3<f64> {
+    let now = relative(from, to);
     Vector3::new(
         now.x - seen.x,
         now.y - seen.y,
@@ -106,7 +129,7 @@ mod tests {
         let from = Pose2::new(1.0, -2.0, 2.9);
         let to = Pose2::new(-0.5, 0.7, -2.8);
         let seen = Pose2::new(0.3, 0.2, 0.4);
-        let linear = Linearized::new(&from, &to, &seen);
+        let linear = Linearized::new(&Frame::new(&from), &to, &seen);
         let h = 1e-6;
         for k in 0..3 {
             let nudge = |p: &Pose2| {
@@ -114,8 +137,8 @@ mod tests {
                 v[k] += h;
                 Pose2::new(v[0], v[1], v[2])
             };
-            let d_from = (error(&nudge(&from), &to, &seen) - linear.error) / h;
-            let d_to = (error(&from, &nudge(&to), &seen) - linear.error) / h;
+            let d_from = (error(&Frame::new(&nudge(&from)), &to, &seen) - linear.error) / h;
+            let d_to = (error(&Frame::new(&from), &nudge(&to), &seen) - linear.error) / h;
             for r in 0..3 {
                 assert!((d_from[r] - linear.jacobian_from[(r, k)]).abs() < 1e-5);
                 assert!((d_to[r] - linear.jacobian_to[(r, k)]).abs() < 1e-5);
@@ -127,8 +150,7 @@ mod tests {
     fn the_relative_pose_is_the_increment_between_the_poses() {
         let from = Pose2::new(1.0, -2.0, 2.9);
         let to = Pose2::new(-0.5, 0.7, -2.8);
-        let (s, c) = from.yaw.sin_cos();
-        let fast = relative(&from, &to, s, c);
+        let fast = relative(&Frame::new(&from), &to);
         let slow = from.between(&to);
         assert!((fast.x - slow.x).abs() < 1e-12 && (fast.y - slow.y).abs() < 1e-12);
         assert!(wrap_angle(fast.yaw - slow.yaw).abs() < 1e-12);

@@ -88,14 +88,15 @@ impl PoseGraph {
         candidates: &[bool],
     ) -> Result<(usize, bool), PoseGraphError> {
         let target = self.settings.robust_threshold;
-        let mut phi = self
-            .closure_chi2(information)
+        let mut chi2 = self.closure_chi2(information);
+        let mut phi = chi2
             .iter()
             .zip(candidates)
             .filter(|(_, candidate)| **candidate)
             .fold(target, |most, (chi2, _)| most.max(*chi2));
+        // The robust cost at the current poses, once a settling step has found it.
+        let mut cost = None;
         for iteration in 1..=self.settings.max_iterations {
-            let chi2 = self.closure_chi2(information);
             // A threshold above every closure's error is plain least squares, as the lowest
             // such one is: the annealing goes on from there.
             phi = phi.min(chi2.iter().fold(target, |most, c| most.max(*c)));
@@ -104,10 +105,14 @@ impl PoseGraph {
                 if direction.largest()? >= self.settings.tolerance {
                     self.poses = direction.apply(&self.poses, 1.0);
                 }
-                let chi2 = self.closure_chi2(information);
+                chi2 = self.closure_chi2(information);
                 phi = next_threshold(&chi2, phi).max(target);
-            } else if !self.settle(information, &chi2)? {
-                return Ok((iteration, true));
+            } else {
+                match self.settle(information, &chi2, cost)? {
+                    Some(settled) => cost = Some(settled),
+                    None => return Ok((iteration, true)),
+                }
+                chi2 = self.closure_chi2(information);
             }
         }
         Ok((self.settings.max_iterations, false))
@@ -116,37 +121,42 @@ impl PoseGraph {
     /// One step at the final threshold: Newton's, the robust kernel's curvature included,
     /// when the equations stay positive definite with it (reweighting alone crawls where a
     /// closure is being let go: each step's weights lag behind), else reweighted
-    /// Gauss-Newton's; the line search then picks how far to go. `false` when no step
-    /// moves the poses: they have converged.
+    /// Gauss-Newton's; the line search then picks how far to go. `cost` is the robust cost
+    /// at the current poses, if known. Gives the cost where the step went, or `None` when
+    /// no step moves the poses: they have converged.
     fn settle(
         &mut self,
         information: &[Matrix3<f64>],
         chi2: &[f64],
-    ) -> Result<bool, PoseGraphError> {
+        cost: Option<f64>,
+    ) -> Result<Option<f64>, PoseGraphError> {
         let phi = self.settings.robust_threshold;
-        let cost = self.cost(&self.poses, information, phi);
+        let cost = cost.unwrap_or_else(|| self.cost(&self.poses, information, phi));
         for curvature in [Curvature::Newton, Curvature::Reweighted] {
             let direction = match self.direction(information, chi2, phi, curvature) {
                 Err(PoseGraphError::Singular) if curvature == Curvature::Newton => continue,
                 other => other?,
             };
             if direction.largest()? < self.settings.tolerance {
-                return Ok(false);
+                return Ok(None);
             }
             // Newton's step is the right length near the minimum; a reweighted step may
             // be far too short.
             let longer = curvature == Curvature::Reweighted;
-            if let Some(poses) = self.line_search(&direction, information, phi, cost, longer) {
+            if let Some((poses, lower)) =
+                self.line_search(&direction, information, phi, cost, longer)
+            {
                 self.poses = poses;
-                return Ok(true);
+                return Ok(Some(lower));
             }
         }
-        Ok(false)
+        Ok(None)
     }
 
     /// The poses moved along `direction` by the multiple of it that lowers the robust cost
     /// below `cost` (the current one) most: the whole step, or half of it and so on if it
-    /// does not; twice it and so on while that helps, if `longer`. `None` if none lowers it.
+    /// does not; twice it and so on while that helps, if `longer`; with their cost. `None` if
+    /// none lowers it.
     fn line_search(
         &self,
         direction: &Direction,
@@ -154,7 +164,7 @@ impl PoseGraph {
         phi: f64,
         cost: f64,
         longer: bool,
-    ) -> Option<Vec<Pose2>> {
+    ) -> Option<(Vec<Pose2>, f64)> {
         let mut best_cost = cost;
         let mut best = None;
         let mut multiple = 1.0;
@@ -174,18 +184,19 @@ impl PoseGraph {
                 multiple *= 0.5;
             }
         }
-        best
+        best.map(|poses| (poses, best_cost))
     }
 
     /// Each closure's squared error at the current poses under `information`.
     fn closure_chi2(&self, information: &[Matrix3<f64>]) -> Vec<f64> {
+        // Fewer closures than nodes: each takes its own frame.
         self.closures
             .iter()
             .zip(information)
             .map(|(c, w)| {
-                let m = &c.measurement;
+                let from = edge::Frame::new(&self.poses[c.from]);
                 chi2(
-                    &edge::error(&self.poses[c.from], &self.poses[c.to], &m.seen),
+                    &edge::error(&from, &self.poses[c.to], &c.measurement.seen),
                     w,
                 )
             })
@@ -194,13 +205,14 @@ impl PoseGraph {
 
     /// The robust cost at `poses`.
     fn cost(&self, poses: &[Pose2], information: &[Matrix3<f64>], phi: f64) -> f64 {
+        let frames = edge::frames(poses);
         let steps: f64 = self
             .steps
             .iter()
             .enumerate()
             .map(|(i, m)| {
                 chi2(
-                    &edge::error(&poses[i], &poses[i + 1], &m.seen),
+                    &edge::error(&frames[i], &poses[i + 1], &m.seen),
                     &m.information,
                 )
             })
@@ -215,7 +227,7 @@ impl PoseGraph {
             .iter()
             .zip(information)
             .map(|(c, w)| {
-                let e = edge::error(&poses[c.from], &poses[c.to], &c.measurement.seen);
+                let e = edge::error(&frames[c.from], &poses[c.to], &c.measurement.seen);
                 dcs_cost(chi2(&e, w), phi)
             })
             .sum();
@@ -259,8 +271,9 @@ impl PoseGraph {
         } = structure;
         equations.clear();
         let node = |i: usize| variable(i, *gauge_fixed);
+        let frames = edge::frames(&self.poses);
         for (i, (m, slot)) in self.steps.iter().zip(step_slots.iter()).enumerate() {
-            let edge = Linearized::new(&self.poses[i], &self.poses[i + 1], &m.seen);
+            let edge = Linearized::new(&frames[i], &self.poses[i + 1], &m.seen);
             let ends = (node(i), node(i + 1), *slot);
             add_edge(
                 pattern,
@@ -273,7 +286,7 @@ impl PoseGraph {
         }
         for (k, (c, slot)) in self.closures.iter().zip(closure_slots.iter()).enumerate() {
             let m = &c.measurement;
-            let edge = Linearized::new(&self.poses[c.from], &self.poses[c.to], &m.seen);
+            let edge = Linearized::new(&frames[c.from], &self.poses[c.to], &m.seen);
             let weighted = information[k] * dcs_scale(chi2[k], phi).powi(2);
             let mut hessian = weighted;
             if curvature == Curvature::Newton {

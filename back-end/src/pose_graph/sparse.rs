@@ -41,12 +41,18 @@ impl Pattern {
     /// The pattern of `variables` block rows joined by `edges` (pairs of distinct variables;
     /// repeats are allowed).
     pub(super) fn new(variables: usize, edges: impl IntoIterator<Item = (usize, usize)>) -> Self {
-        let mut adjacency = vec![Vec::new(); variables];
+        // Each variable's neighbours, allocated once at their number.
+        let edges: Vec<(usize, usize)> = edges.into_iter().filter(|(a, b)| a != b).collect();
+        let mut degree = vec![0; variables];
+        for &(a, b) in &edges {
+            degree[a] += 1;
+            degree[b] += 1;
+        }
+        let mut adjacency: Vec<Vec<usize>> =
+            degree.iter().map(|&d| Vec::with_capacity(d)).collect();
         for (a, b) in edges {
-            if a != b {
-                adjacency[a].push(b);
-                adjacency[b].push(a);
-            }
+            adjacency[a].push(b);
+            adjacency[b].push(a);
         }
         for neighbours in &mut adjacency {
             neighbours.sort_unstable();
@@ -157,6 +163,7 @@ fn minimum_degree(mut adjacency: Vec<Vec<usize>>) -> (Vec<usize>, Vec<Vec<usize>
 /// Writes the sorted union of `a` and `b` without `u` and `v` into `out`.
 fn merge_without(a: &[usize], b: &[usize], u: usize, v: usize, out: &mut Vec<usize>) {
     out.clear();
+    out.reserve(a.len() + b.len());
     let (mut i, mut j) = (0, 0);
     while i < a.len() || j < b.len() {
         let next = match (a.get(i), b.get(j)) {
