@@ -41,12 +41,19 @@ fn run_degraded(
     let mut poses = Vec::new();
     for scan in &loaded {
         let out = front_end.process(&scan.input(with_odometry)).unwrap();
-        let p = out.odom_from_robot;
-        poses.push((out.stamp_ns, from_xyz_rpy([p.x, p.y, 0.0], 0.0, 0.0, p.yaw)));
+        // The robot's pose: the front end tracks the sensor's.
+        let p = out
+            .odom_from_robot
+            .compose(&scan.robot_from_sensor.inverse());
+        // Under the log's own stamp, which the relations name.
+        poses.push((
+            scan.log_stamp_ns,
+            from_xyz_rpy([p.x, p.y, 0.0], 0.0, 0.0, p.yaw),
+        ));
     }
     let trajectory = Trajectory::new(poses).unwrap();
     let relations = read_relations(&log.with_extension("relations")).unwrap();
-    let last = loaded[loaded.len() - 1].stamp_ns;
+    let last = loaded.iter().map(|s| s.log_stamp_ns).max().unwrap_or(0);
     let inside: Vec<_> = relations
         .into_iter()
         .filter(|r| r.t1_ns <= last && r.t2_ns <= last)
