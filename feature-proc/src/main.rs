@@ -305,6 +305,8 @@ fn front_end_summary(stats: &FrontEndStats, odometry_scale: f64) -> String {
          registered)\n  \
          odometry steps:  {} used, {}; wheel distances x {odometry_scale:.3} \
          (learnt from the fits)\n  \
+         recoveries:      {} wide searches (after a gap, a fast turn or scans not \
+         registered), {} of them taken; longest stretch not registered: {} scans\n  \
          keyframes:       {}\n  \
          time:            {per_scan_ms:.3} ms per scan",
         stats.scans,
@@ -313,6 +315,9 @@ fn front_end_summary(stats: &FrontEndStats, odometry_scale: f64) -> String {
         stats.failed_matches,
         stats.odometry_used,
         rejected_summary(&stats.odometry_rejected),
+        stats.wide_searches,
+        stats.recovered,
+        stats.longest_unregistered,
         stats.keyframes,
     )
 }

@@ -16,11 +16,12 @@ const _: () = {
     assert!(size_of::<Line>() == 88);
     assert!(size_of::<StageTiming>() == 40);
 
-    assert!(size_of::<LaserScan>() == 64 + 56 + 2 * 4 * crate::MAX_BEAMS);
+    assert!(size_of::<LaserScan>() == 64 + 64 + 2 * 4 * crate::MAX_BEAMS);
     assert!(align_of::<LaserScan>() == 8);
     assert!(offset_of!(LaserScan, robot_from_sensor) == 88);
-    assert!(offset_of!(LaserScan, beam_count) == 112);
-    assert!(offset_of!(LaserScan, ranges) == 120);
+    assert!(offset_of!(LaserScan, source_stamp_offset_ns) == 112);
+    assert!(offset_of!(LaserScan, beam_count) == 120);
+    assert!(offset_of!(LaserScan, ranges) == 128);
 
     assert!(size_of::<Odometry>() == 176);
     assert!(size_of::<GroundTruthPose>() == 88);

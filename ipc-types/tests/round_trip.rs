@@ -72,6 +72,8 @@ fn laser_scan_round_trips_with_rep117_values() {
     scan.scan_time = 0.025;
     scan.range_min = 0.1;
     scan.range_max = 30.0;
+    // A scan re-stamped by its source: its own stamp lies 0.4 s after the header's.
+    scan.source_stamp_offset_ns = 400_000_000;
     let ranges: Vec<f32> = (0..1081)
         .map(|i| match i % 97 {
             0 => f32::INFINITY,
@@ -90,6 +92,7 @@ fn laser_scan_round_trips_with_rep117_values() {
     assert_eq!(*back, *scan);
     assert_eq!(back.header.frame_id(), "laser");
     assert_eq!(back.ranges().len(), 1081);
+    assert_eq!(back.source_stamp_ns(), 1_234_567_890_523_456_789);
 }
 
 #[test]
@@ -116,6 +119,7 @@ fn too_many_beams_is_an_error_not_a_panic() {
         range_min: 0.0,
         range_max: 1.0,
         robot_from_sensor: Default::default(),
+        source_stamp_offset_ns: 0,
         ranges: Cow::Owned(vec![1.0; 3]),
         intensities: Cow::Owned(vec![1.0; 2]),
     };

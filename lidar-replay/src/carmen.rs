@@ -13,7 +13,9 @@
 //!
 //! Stamps are the `ipc_timestamp`, kept to the nanosecond. Records come out in time order
 //! within a window ([`crate::reorder`]): a line written after later ones is put in its
-//! place, and one too late for that, or repeating a stamp, is dropped and counted.
+//! place, and one too late for that, or repeating a stamp, is dropped and counted. Scans
+//! keep the log's order instead when the scans show that it is the order they were taken in
+//! ([`crate::scan_order`]), one stamped late going out under a stamp between its neighbours'.
 //!
 //! A log may carry two odometry sources: `ODOM` lines, and the reading a scan line holds
 //! (`odom_*` of `FLASER`, `robot_*` of `ROBOTLASER1`, taken with the scan). One of them is
@@ -33,6 +35,7 @@ use crate::lines::{NumberedLines, snippet};
 use crate::odometry_judge::Verdict;
 use crate::record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
 use crate::reorder::{Entry, ReorderConfig, ReorderCounts, ReorderWindow};
+use crate::scan_order::OrderVerdict;
 use slam_geom::wrap_angle;
 use slam_geom::{Pose2, parse_stamp_ns};
 
@@ -68,6 +71,8 @@ pub struct CarmenReader<R> {
     odometry: OdometryChoice,
     /// The judgement the choice came from, for the console.
     verdict: Option<Verdict>,
+    /// The judgement of the scans' order, if they were judged.
+    order: Option<OrderVerdict>,
     /// The `FLASER` laser's mount, from the log's `PARAM` lines so far.
     front_laser: FrontLaser,
     /// Whether an `ODOM` line has been read (what [`OdometrySource::Auto`] goes by).
@@ -97,6 +102,7 @@ impl<R: BufRead> CarmenReader<R> {
             ready: VecDeque::new(),
             odometry: OdometryChoice::default(),
             verdict: None,
+            order: None,
             front_laser: FrontLaser::default(),
             odom_lines: false,
             last_scan: None,
@@ -121,6 +127,18 @@ impl<R: BufRead> CarmenReader<R> {
     /// What the judgement of the odometry found, if it was judged.
     pub fn verdict(&self) -> Option<&Verdict> {
         self.verdict.as_ref()
+    }
+
+    /// Orders the scans among themselves as `verdict` found.
+    pub(crate) fn with_scan_order(mut self, verdict: OrderVerdict) -> Self {
+        self.window.set_scan_order(verdict.order);
+        self.order = Some(verdict);
+        self
+    }
+
+    /// What the judgement of the scans' order found, if they were judged.
+    pub fn order_verdict(&self) -> Option<&OrderVerdict> {
+        self.order.as_ref()
     }
 
     /// Record types skipped so far (`PARAM`, `SYNC`, ...) and how many lines of each.
@@ -523,6 +541,7 @@ fn parse_flaser(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRecord),
     let scan = ScanRecord {
         line,
         stamp_ns,
+        log_stamp_ns: stamp_ns,
         // Beam 1 on the right (-y), counter-clockwise in the mode's steps.
         geometry: ScanGeometry {
             angle_min: -PI / 2.0,
@@ -600,6 +619,7 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRec
     let scan = ScanRecord {
         line: fields.line,
         stamp_ns,
+        log_stamp_ns: stamp_ns,
         // CARMEN places beam i at start_angle + i * angular_res, as here; each line has its
         // own, which may differ from the previous line's.
         geometry: ScanGeometry {

@@ -141,6 +141,7 @@ mod tests {
         let mut scan = ScanRecord {
             line: 1,
             stamp_ns: 0,
+            log_stamp_ns: 0,
             geometry: GEOMETRY,
             ranges: vec![0.5, 5.0, 5.01, 40.0, f32::NAN, f32::INFINITY],
             intensities: Vec::new(),

@@ -14,6 +14,8 @@ pub fn fill_scan(scan: &mut LaserScan, seq: u64, record: &ScanRecord) -> Result<
     scan.header = Header::new(seq, record.stamp_ns, SCAN_FRAME);
     scan.set_geometry(&record.geometry);
     scan.robot_from_sensor = record.robot_from_sensor.into();
+    // Within the reordering window of each other, so far within an i64.
+    scan.source_stamp_offset_ns = record.log_stamp_ns.wrapping_sub(record.stamp_ns) as i64;
     scan.set_beams(&record.ranges, &record.intensities)
 }
 
@@ -45,6 +47,7 @@ mod tests {
         let record = ScanRecord {
             line: 3,
             stamp_ns: 1_134_864_629_895_182_000,
+            log_stamp_ns: 1_134_864_629_895_182_000,
             geometry: GEOMETRY,
             ranges: vec![1.0, f32::INFINITY, f32::NAN],
             intensities: Vec::new(),
@@ -60,6 +63,25 @@ mod tests {
         assert_eq!(scan.ranges()[..2], [1.0, f32::INFINITY]);
         assert!(scan.ranges()[2].is_nan());
         assert_eq!(scan.intensities(), [0.0; 3]);
+        assert_eq!(scan.source_stamp_offset_ns, 0);
+    }
+
+    #[test]
+    fn a_restamped_scan_carries_the_logs_own_stamp() {
+        let record = ScanRecord {
+            line: 9,
+            stamp_ns: 1_000_000_000,
+            log_stamp_ns: 1_700_000_000,
+            geometry: GEOMETRY,
+            ranges: vec![1.0],
+            intensities: Vec::new(),
+            robot_from_sensor: slam_geom::Pose2::IDENTITY,
+        };
+        let mut scan = LaserScan::boxed_zeroed();
+        fill_scan(&mut scan, 0, &record).unwrap();
+        assert_eq!(scan.header.stamp_ns, 1_000_000_000);
+        assert_eq!(scan.source_stamp_offset_ns, 700_000_000);
+        assert_eq!(scan.source_stamp_ns(), 1_700_000_000);
     }
 
     #[test]
@@ -67,6 +89,7 @@ mod tests {
         let record = ScanRecord {
             line: 1,
             stamp_ns: 0,
+            log_stamp_ns: 0,
             geometry: GEOMETRY,
             ranges: vec![1.0; ipc_types::MAX_BEAMS + 1],
             intensities: Vec::new(),

@@ -11,7 +11,9 @@ use crate::lines::{NumberedLines, StopFlag, never};
 use crate::odometry_judge::{self, Verdict};
 use crate::record::LogRecord;
 use crate::reorder::{ReorderConfig, ReorderCounts};
+use crate::scan_order::{self, OrderVerdict};
 use crate::seed_csv::SeedCsvReader;
+use crate::start;
 
 /// A file whose first scan is not among its first this many lines is refused: CARMEN logs
 /// open with a few hundred `PARAM` lines at most.
@@ -136,6 +138,23 @@ impl<R: BufRead> LogReader<R> {
     pub fn odometry_verdict(&self) -> Option<&Verdict> {
         match self {
             Self::Carmen(reader) => reader.verdict(),
+            _ => None,
+        }
+    }
+
+    /// Orders the scans among themselves as `verdict` found (CARMEN logs; others have
+    /// their scans in order).
+    pub fn with_order_verdict(mut self, verdict: OrderVerdict) -> Self {
+        if let Self::Carmen(reader) = self {
+            self = Self::Carmen(Box::new(reader.with_scan_order(verdict)));
+        }
+        self
+    }
+
+    /// What the judgement of the order of the log's scans found, if they were judged.
+    pub fn order_verdict(&self) -> Option<&OrderVerdict> {
+        match self {
+            Self::Carmen(reader) => reader.order_verdict(),
             _ => None,
         }
     }
@@ -294,16 +313,25 @@ pub fn open_log_until(
             path: path.to_path_buf(),
         },
     })?;
-    let verdict = match format {
-        LogFormat::Carmen => odometry_judge::judge(open()?, stop),
-        LogFormat::SeedCsv | LogFormat::Mcap => None,
+    let (verdict, order) = match format {
+        LogFormat::Carmen => {
+            let start = start::read(open()?, stop);
+            (
+                odometry_judge::judge_start(&start),
+                Some(scan_order::judge_start(&start)),
+            )
+        }
+        LogFormat::SeedCsv | LogFormat::Mcap => (None, None),
     };
     // Read again from the top, so the lines looked at are replayed and reported as usual.
-    let reader = LogReader::with_reorder(format, open()?, reorder).stop_when(stop);
-    Ok(match verdict {
-        Some(verdict) => reader.with_odometry_verdict(verdict),
-        None => reader,
-    })
+    let mut reader = LogReader::with_reorder(format, open()?, reorder).stop_when(stop);
+    if let Some(verdict) = verdict {
+        reader = reader.with_odometry_verdict(verdict);
+    }
+    if let Some(order) = order {
+        reader = reader.with_order_verdict(order);
+    }
+    Ok(reader)
 }
 
 #[cfg(test)]

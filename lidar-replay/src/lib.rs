@@ -9,6 +9,9 @@
 //!   and reading goes on after it.
 //! * A CARMEN log that is not quite in time order is put in order within a bounded window of
 //!   log time ([`reorder`], [`ReorderConfig`]); what cannot be placed is dropped and counted.
+//!   Its scans keep the log's order instead when the scans show that some were stamped late
+//!   ([`scan_order`]): those are re-stamped, their own stamps travelling with them for the
+//!   run's results.
 //! * [`ReplaySummary`] is the block a replay ends with: everything skipped, reordered or
 //!   dropped, and why.
 //! * A [`Degradation`] makes a harder version of a log on the fly: every n-th scan, ranges
@@ -39,8 +42,12 @@ mod odometry_noise;
 mod pacing;
 mod record;
 pub mod reorder;
+pub mod scan_order;
 pub mod seed_csv;
+mod start;
 mod summary;
+#[cfg(test)]
+mod test_log;
 
 pub use carmen::{CarmenReader, OdometryChoice, OdometrySource};
 pub use degradation::{Degradation, DegradationError};
@@ -55,7 +62,8 @@ pub use odometry_judge::Verdict;
 pub use odometry_noise::LOG_ODOMETRY_NOISE;
 pub use pacing::{RATE_RANGE, SPEED_FACTOR, check_rate, parse_rate};
 pub use record::{LogRecord, OdometryRecord, ScanGeometry, ScanRecord};
-pub use reorder::{Records, ReorderConfig, ReorderCounts};
+pub use reorder::{Records, ReorderConfig, ReorderCounts, ScanOrder};
+pub use scan_order::OrderVerdict;
 pub use seed_csv::SeedCsvReader;
 pub use stage_kit::odometry_covariance::{OdometryCovariance, OdometryNoise};
 pub use summary::{ReplaySummary, SUMMARY_HEAD};

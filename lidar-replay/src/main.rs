@@ -22,7 +22,9 @@ use stage_kit::{SourceArgs, say, say_err, shutdown};
 ///
 /// Stamps are the log's own at full precision; seed-csv has none and is stamped every 0.1 s
 /// from 0. A CARMEN log's records are put in time order within --reorder-window; what comes
-/// later than that, or repeats a stamp, is dropped. Malformed lines are reported with their
+/// later than that, or repeats a stamp, is dropped. When its scans show that the log has
+/// them in the order they were taken, some stamped late, they keep that order and the late
+/// ones are re-stamped, their own stamps carried along for the results. Malformed lines are reported with their
 /// line numbers and skipped; a file that is not of the format is refused. The replay ends
 /// with a summary of everything not published, and why.
 ///
@@ -240,6 +242,9 @@ fn replay_log(args: &Args) -> Result<()> {
         && !args.no_odometry
     {
         say(&format!("lidar-replay: {}", verdict.describe()));
+    }
+    if let Some(order) = log.order_verdict().and_then(|verdict| verdict.describe()) {
+        say(&format!("lidar-replay: {order}"));
     }
     let mut streams = Streams::open(args, args.format.can_have_odometry() && !args.no_odometry)?;
     let mut odometry_covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);

@@ -13,23 +13,18 @@
 //! published. Only the turn is compared: it needs no map, and the wheels' distance scale and
 //! the laser's mount do not change it.
 
-use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::io::BufRead;
 
 use slam_geom::wrap_angle;
 
-use crate::carmen::{FrontLaser, OdometryChoice, OdometrySource, Parsed, parse_record};
-use crate::lines::{NumberedLines, StopFlag};
+use crate::carmen::{OdometryChoice, OdometrySource};
+use crate::lines::StopFlag;
 use crate::record::{OdometryRecord, ScanRecord};
+use crate::start::{self, LogStart};
 
-/// Scans the judgement reads at most: a few minutes of a log, enough turns to tell the
-/// sources apart, and a bound on the time before the replay starts.
-const MAX_SCANS: usize = 4000;
-
-/// Bytes of the log the judgement reads at most, so that a log with huge or endless lines
-/// does not hold up the replay's start.
-pub const MAX_BYTES: u64 = 64 << 20;
+/// Bytes of the log the judgement reads at most ([`start::MAX_BYTES`]).
+pub const MAX_BYTES: u64 = start::MAX_BYTES;
 
 /// The largest clock lead looked for, seconds, either way.
 pub const MAX_LEAD_S: f64 = 1.0;
@@ -97,19 +92,24 @@ impl Verdict {
 /// Judges the odometry of the CARMEN log `reader` reads; malformed lines are passed over
 /// (the replay reports them). `None` when the log has no odometry at all.
 pub fn judge<R: BufRead>(reader: R, stop: StopFlag) -> Option<Verdict> {
-    let (scans, odom) = read_start(reader, stop);
-    let own: Vec<OdometryRecord> = scans.iter().filter_map(|(_, _, o)| *o).collect();
+    judge_start(&start::read(reader, stop))
+}
+
+/// Judges the odometry of a log by its start.
+pub(crate) fn judge_start(start: &LogStart) -> Option<Verdict> {
+    let LogStart { scans, odom } = start;
+    let own: Vec<OdometryRecord> = scans.iter().filter_map(|scan| scan.own).collect();
     if own.is_empty() && odom.is_empty() {
         return None;
     }
-    let turns = scan_turns(&scans);
-    let stamps: Vec<u64> = scans.iter().map(|(stamp, _, _)| *stamp).collect();
+    let turns = scan_turns(scans);
+    let stamps: Vec<u64> = scans.iter().map(|scan| scan.stamp_ns).collect();
     let total: f64 = turns.iter().flatten().map(|t| t.abs()).sum();
     let interval = median_interval_ns(&stamps);
     let judge =
         |readings: Vec<OdometryRecord>| best_lead(&by_stamp(readings), &stamps, &turns, interval);
     let odom_bursts = bursts(&by_stamp(odom.clone()));
-    let odom_lines = (!odom.is_empty()).then(|| judge(odom));
+    let odom_lines = (!odom.is_empty()).then(|| judge(odom.clone()));
     let scan_lines = (own.len() == scans.len()).then(|| judge(own));
     let choice = if total < MIN_TOTAL_TURN {
         OdometryChoice::default()
@@ -138,40 +138,8 @@ pub fn judge<R: BufRead>(reader: R, stop: StopFlag) -> Option<Verdict> {
     })
 }
 
-type ScanEntry = (u64, [f64; BINS], Option<OdometryRecord>);
-
-/// The first [`MAX_SCANS`] scans in file order (stamp, wall directions, own reading) and
-/// the `ODOM` readings up to the last of them.
-fn read_start<R: BufRead>(reader: R, stop: StopFlag) -> (Vec<ScanEntry>, Vec<OdometryRecord>) {
-    let mut lines = NumberedLines::new(reader.take(MAX_BYTES));
-    lines.set_stop(stop);
-    let mut skipped = BTreeMap::new();
-    let mut mount = FrontLaser::default();
-    let mut scans = Vec::new();
-    let mut odom = Vec::new();
-    while scans.len() < MAX_SCANS {
-        let parsed = match lines.next_line() {
-            Ok(Some((line, Ok(text)))) => {
-                let text = text.trim();
-                if text.is_empty() || text.starts_with('#') {
-                    continue;
-                }
-                parse_record(line, text, &mut skipped, &mut mount)
-            }
-            Ok(Some((_, Err(_)))) => continue,
-            // The end, a read error or a stop: judge what was read.
-            Ok(None) | Err(_) => break,
-        };
-        match parsed {
-            Ok(Some(Parsed::Scan(scan, own))) => {
-                scans.push((scan.stamp_ns, directions(&scan), own));
-            }
-            Ok(Some(Parsed::Odom(reading))) => odom.push(reading),
-            _ => {}
-        }
-    }
-    (scans, odom)
-}
+/// A scan's histogram of wall directions.
+pub(crate) type Directions = [f64; BINS];
 
 fn by_stamp(mut readings: Vec<OdometryRecord>) -> Vec<OdometryRecord> {
     readings.sort_by_key(|r| r.stamp_ns);
@@ -196,7 +164,7 @@ fn bursts(readings: &[OdometryRecord]) -> f64 {
 
 /// The histogram of wall directions of a scan: each pair of neighbouring points on one
 /// wall adds its length at its direction (modulo half a turn), split between two bins.
-fn directions(scan: &ScanRecord) -> [f64; BINS] {
+pub(crate) fn directions(scan: &ScanRecord) -> Directions {
     let g = &scan.geometry;
     let mut histogram = [0.0; BINS];
     let mut previous: Option<(f64, f64)> = None;
@@ -227,10 +195,10 @@ fn directions(scan: &ScanRecord) -> [f64; BINS] {
 /// The turn between each scan and the one before it (file order), radians: the shift that
 /// best lines up their wall directions, refined between bins; `None` for the first scan or
 /// a scan with no walls.
-fn scan_turns(scans: &[ScanEntry]) -> Vec<Option<f64>> {
+fn scan_turns(scans: &[start::StartScan]) -> Vec<Option<f64>> {
     let mut turns = vec![None];
     for pair in scans.windows(2) {
-        turns.push(turn_between(&pair[0].1, &pair[1].1));
+        turns.push(turn_between(&pair[0].directions, &pair[1].directions));
     }
     turns
 }
@@ -338,57 +306,7 @@ fn yaw_at(readings: &[OdometryRecord], stamp: u64) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Ranges of a 181-beam scan over 180 degrees from `(x, y, yaw)` inside a 10 x 6 m room
-    /// with a 2 x 1 m pillar, so the walls' directions turn with the robot.
-    fn ranges(x: f64, y: f64, yaw: f64) -> Vec<String> {
-        let boxes = [(-5.0, -3.0, 5.0, 3.0, true), (1.0, 0.5, 3.0, 1.5, false)];
-        (0..181)
-            .map(|i| {
-                let bearing = yaw - PI / 2.0 + f64::from(i).to_radians();
-                let (dx, dy) = (bearing.cos(), bearing.sin());
-                let mut nearest = 50.0_f64;
-                for &(x0, y0, x1, y1, inside) in &boxes {
-                    for (t0, t1) in [
-                        ((x0 - x) / dx, (x1 - x) / dx),
-                        ((y0 - y) / dy, (y1 - y) / dy),
-                    ] {
-                        for t in [t0, t1] {
-                            let (px, py) = (x + t * dx, y + t * dy);
-                            let on = px >= x0 - 1e-9
-                                && px <= x1 + 1e-9
-                                && py >= y0 - 1e-9
-                                && py <= y1 + 1e-9;
-                            if t > 1e-6 && t.is_finite() && on && (inside || t < nearest) {
-                                nearest = nearest.min(t);
-                            }
-                        }
-                    }
-                }
-                format!("{nearest:.3}")
-            })
-            .collect()
-    }
-
-    /// The robot's pose at `t` seconds: a slow circle, turning faster and slower.
-    fn pose(t: f64) -> (f64, f64, f64) {
-        let yaw = 0.5 * t + 0.6 * (0.7 * t).sin();
-        (
-            1.5 * (0.2 * t).cos() - 1.0,
-            1.0 * (0.2 * t).sin() - 0.5,
-            yaw,
-        )
-    }
-
-    fn flaser(stamp: f64, odometry: (f64, f64, f64), truth: (f64, f64, f64)) -> String {
-        let (x, y, yaw) = odometry;
-        let r = ranges(truth.0, truth.1, truth.2).join(" ");
-        format!("FLASER 181 {r} {x} {y} {yaw} {x} {y} {yaw} {stamp:.6} host {stamp:.6}\n")
-    }
-
-    fn odom(stamp: f64, (x, y, yaw): (f64, f64, f64)) -> String {
-        format!("ODOM {x} {y} {yaw} 0 0 0 {stamp:.6} host {stamp:.6}\n")
-    }
+    use crate::test_log::{flaser, odom, pose};
 
     #[test]
     fn a_clock_lead_of_half_a_second_either_way_is_found() {

@@ -8,8 +8,11 @@ pub use slam_geom::ScanGeometry;
 pub struct ScanRecord {
     /// 1-based line of the log it was read from.
     pub line: u64,
-    /// Acquisition time in the log's clock, nanoseconds.
+    /// Acquisition time in the log's clock, nanoseconds: the stamp it is published with.
     pub stamp_ns: u64,
+    /// The log's own stamp of the scan: `stamp_ns` unless the replay re-stamped a scan the
+    /// log stamped late (see [`crate::reorder`]). What a run writes carries this one.
+    pub log_stamp_ns: u64,
     pub geometry: ScanGeometry,
     /// Ranges in metres, beam by beam from `angle_min`.
     pub ranges: Vec<f32>,

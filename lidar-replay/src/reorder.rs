@@ -7,8 +7,15 @@
 //! let out once the newest stamp read is more than the window past them. What is still out of
 //! order after that (a line later than the window allows) or repeats a stamp already let out
 //! cannot be placed and is dropped; everything is counted for the replay's summary.
+//!
+//! Scans may also keep the log's order among themselves ([`ScanOrder::File`], when the
+//! scans show that the log wrote them in the order they were taken and stamped some late:
+//! [`crate::scan_order`]). A scan read before scans stamped earlier than it was taken no
+//! later than they were: it is re-stamped, evenly between the scan before it and the first
+//! of them, and keeps its own stamp beside the new one ([`ScanRecord::log_stamp_ns`]) for
+//! what the run writes. Odometry is still put in stamp order around the scans.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use crate::record::{OdometryRecord, ScanRecord};
 
@@ -19,6 +26,16 @@ pub const DEFAULT_REORDER_WINDOW_NS: u64 = 2_000_000_000;
 /// lines; a full window of the largest scans (8192 beams with intensities, 64 KiB) stays
 /// under 64 MiB.
 pub const DEFAULT_REORDER_CAP: usize = 1024;
+
+/// How scans are ordered among themselves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ScanOrder {
+    /// By stamp, as every other record.
+    #[default]
+    Stamps,
+    /// In the log's order; a scan stamped after scans that follow it is re-stamped.
+    File,
+}
 
 /// How far back records are put in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,6 +80,36 @@ impl Entry {
         match self {
             Self::Odometry(_) | Self::OdometryAndScan(..) => 0,
             Self::Scan(_) => 1,
+        }
+    }
+
+    /// The log's own stamp of the entry's scan, if it has one.
+    fn scan_log_stamp(&self) -> Option<u64> {
+        match self {
+            Self::Odometry(_) => None,
+            Self::Scan(scan) | Self::OdometryAndScan(_, scan) => Some(scan.log_stamp_ns),
+        }
+    }
+
+    /// Whether the entry's scan goes out under another stamp than the log's.
+    fn restamped(&self) -> bool {
+        match self {
+            Self::Odometry(_) => false,
+            Self::Scan(scan) | Self::OdometryAndScan(_, scan) => scan.stamp_ns != scan.log_stamp_ns,
+        }
+    }
+
+    /// Moves the entry to `stamp_ns`; a scan line's odometry keeps its place against the
+    /// scan (a clock corrected by a lead).
+    fn restamp(&mut self, stamp_ns: u64) {
+        let shift = stamp_ns.wrapping_sub(self.stamp_ns());
+        match self {
+            Self::Odometry(odometry) => odometry.stamp_ns = odometry.stamp_ns.wrapping_add(shift),
+            Self::Scan(scan) => scan.stamp_ns = scan.stamp_ns.wrapping_add(shift),
+            Self::OdometryAndScan(odometry, scan) => {
+                odometry.stamp_ns = odometry.stamp_ns.wrapping_add(shift);
+                scan.stamp_ns = scan.stamp_ns.wrapping_add(shift);
+            }
         }
     }
 
@@ -116,6 +163,9 @@ pub struct ReorderCounts {
     /// Let out before their window had passed because [`ReorderConfig::max_held`] lines were
     /// held (they may come out of order with a record read later).
     pub forced_out: Records,
+    /// Scans kept in the log's order ([`ScanOrder::File`]) and published under a new stamp,
+    /// being stamped after scans that follow them.
+    pub restamped: u64,
 }
 
 /// A record held in the window.
@@ -130,6 +180,10 @@ struct Held {
 #[derive(Debug)]
 pub struct ReorderWindow {
     config: ReorderConfig,
+    scan_order: ScanOrder,
+    /// With [`ScanOrder::File`]: the log's stamps of the scans read, from the last stamp let
+    /// out on (an older scan is dropped anyway), to find a repeated one.
+    scan_stamps: BTreeSet<u64>,
     /// By (stamp, rank, order read): equal stamps keep the log's order.
     held: BTreeMap<(u64, u8, u64), Held>,
     read: u64,
@@ -144,6 +198,8 @@ impl ReorderWindow {
     pub fn new(config: ReorderConfig) -> Self {
         Self {
             config,
+            scan_order: ScanOrder::Stamps,
+            scan_stamps: BTreeSet::new(),
             held: BTreeMap::new(),
             read: 0,
             newest: None,
@@ -158,6 +214,15 @@ impl ReorderWindow {
         self.config
     }
 
+    /// Orders scans among themselves by `order` from now on.
+    pub fn set_scan_order(&mut self, order: ScanOrder) {
+        self.scan_order = order;
+    }
+
+    pub fn scan_order(&self) -> ScanOrder {
+        self.scan_order
+    }
+
     pub fn counts(&self) -> &ReorderCounts {
         &self.counts
     }
@@ -169,11 +234,73 @@ impl ReorderWindow {
             self.counts.late.add(entry.records());
             return;
         }
-        let went_back = self.newest.is_some_and(|newest| stamp < newest);
+        let went_back = match (self.scan_order, entry.scan_log_stamp()) {
+            (ScanOrder::File, Some(log_stamp)) => {
+                if self.scan_stamps.contains(&log_stamp) {
+                    self.counts.duplicate.add(entry.records());
+                    return;
+                }
+                if !self.put_late_scans_before(stamp) {
+                    self.counts.late.add(entry.records());
+                    return;
+                }
+                self.scan_stamps.insert(log_stamp);
+                // Among scans it keeps the log's place; around odometry it goes by stamp.
+                false
+            }
+            _ => self.newest.is_some_and(|newest| stamp < newest),
+        };
         self.newest = Some(self.newest.map_or(stamp, |newest| newest.max(stamp)));
         self.held
             .insert((stamp, entry.rank(), self.read), Held { entry, went_back });
         self.read += 1;
+    }
+
+    /// With [`ScanOrder::File`], before a scan stamped `stamp` is taken: the scans held
+    /// (read before it) stamped at or after it were taken before it, so they are re-stamped
+    /// evenly between the scan before them (or the last record let out) and `stamp`, in the
+    /// order read. `false` when there is no room between (nanoseconds run out): the new scan
+    /// cannot be placed.
+    fn put_late_scans_before(&mut self, stamp: u64) -> bool {
+        let is_scan = |held: &Held| held.entry.scan_log_stamp().is_some();
+        let late: Vec<(u64, u8, u64)> = self
+            .held
+            .range((stamp, 0, 0)..)
+            .filter(|(_, held)| is_scan(held))
+            .map(|(key, _)| *key)
+            .collect();
+        if late.is_empty() {
+            return true;
+        }
+        let before = self
+            .held
+            .range(..(stamp, 0, 0))
+            .rev()
+            .find(|(_, held)| is_scan(held))
+            .map(|((key, _, _), _)| *key);
+        let count = late.len() as u64;
+        // Without a scan before them (the log's first scans), as late as they can be.
+        let low = before
+            .max(self.last_out)
+            .unwrap_or_else(|| stamp.saturating_sub(count + 1));
+        if stamp.saturating_sub(low) <= count {
+            return false;
+        }
+        let mut moved: Vec<((u64, u8, u64), Held)> = late
+            .iter()
+            .filter_map(|key| self.held.remove_entry(key))
+            .collect();
+        // In the order read.
+        moved.sort_by_key(|((_, _, read), _)| *read);
+        let span = u128::from(stamp - low);
+        for (k, ((_, rank, read), mut held)) in moved.into_iter().enumerate() {
+            let offset = span * (k as u128 + 1) / (u128::from(count) + 1);
+            // Below `span`, so within u64.
+            let new_stamp = low + offset as u64;
+            held.entry.restamp(new_stamp);
+            self.held.insert((new_stamp, rank, read), held);
+        }
+        true
     }
 
     /// The oldest entry whose window has passed (or that the cap pushes out), if any.
@@ -227,7 +354,15 @@ impl ReorderWindow {
         if held.went_back {
             self.counts.reordered.add(records);
         }
+        if entry.restamped() {
+            self.counts.restamped += 1;
+        }
         self.last_out = Some(stamp);
+        // A scan stamped before what is let out is dropped as late before its stamp is
+        // looked up.
+        while self.scan_stamps.first().is_some_and(|&first| first < stamp) {
+            self.scan_stamps.pop_first();
+        }
         if records.scans > 0 {
             self.last_scan_out = Some(stamp);
         }
@@ -261,6 +396,7 @@ mod tests {
         ScanRecord {
             line,
             stamp_ns,
+            log_stamp_ns: stamp_ns,
             geometry: GEOMETRY,
             ranges: vec![1.0],
             intensities: Vec::new(),
@@ -318,6 +454,65 @@ mod tests {
         // move back, it only waited.
         assert_eq!(
             window.counts().reordered,
+            Records {
+                scans: 0,
+                odometry: 1
+            }
+        );
+    }
+
+    #[test]
+    fn in_the_logs_order_late_scans_are_restamped_between_their_neighbours() {
+        let mut window = ReorderWindow::new(ReorderConfig {
+            window_ns: 500 * MS,
+            max_held: 100,
+        });
+        window.set_scan_order(ScanOrder::File);
+        // Scans 2 and 3 stamped after scan 4; odometry in time order; scan 6 repeats scan
+        // 3's stamp; scan 8 is older than what has gone out by then.
+        for (line, stamp) in [(1, 100), (2, 390), (3, 420), (4, 300), (5, 400)] {
+            window.push(Entry::Scan(scan(line, stamp * MS)));
+        }
+        window.push(Entry::Odometry(odometry(10, 250 * MS)));
+        window.push(Entry::Scan(scan(6, 420 * MS)));
+        window.push(Entry::Scan(scan(7, 1000 * MS)));
+        let mut out = drain_ready(&mut window);
+        window.push(Entry::Scan(scan(8, 350 * MS)));
+        out.extend(std::iter::from_fn(|| window.pop_any()));
+        let scans: Vec<(u64, u64, u64)> = out
+            .iter()
+            .filter_map(|entry| match entry {
+                Entry::Scan(s) => Some((s.line, s.stamp_ns / MS, s.log_stamp_ns / MS)),
+                _ => None,
+            })
+            .collect();
+        // 2 and 3 evenly between 1 and 4, in the log's order.
+        assert_eq!(
+            scans,
+            [
+                (1, 100, 100),
+                (2, 166, 390),
+                (3, 233, 420),
+                (4, 300, 300),
+                (5, 400, 400),
+                (7, 1000, 1000)
+            ]
+        );
+        assert_eq!(
+            lines(&out)
+                .iter()
+                .map(|(line, _)| *line)
+                .collect::<Vec<_>>(),
+            [1, 2, 3, 10, 4, 5, 7],
+            "the odometry by its stamp"
+        );
+        let counts = window.counts();
+        assert_eq!(counts.restamped, 2);
+        assert_eq!(counts.duplicate.scans, 1);
+        assert_eq!(counts.late.scans, 1);
+        // Scans keep the log's order; the odometry read after newer scans went back.
+        assert_eq!(
+            counts.reordered,
             Records {
                 scans: 0,
                 odometry: 1

@@ -133,6 +133,7 @@ fn parse_line(line: u64, text: &str) -> Result<ScanRecord, LineError> {
     Ok(ScanRecord {
         line,
         stamp_ns: (line - 1) * NOMINAL_PERIOD_NS,
+        log_stamp_ns: (line - 1) * NOMINAL_PERIOD_NS,
         geometry: GEOMETRY,
         ranges,
         intensities: Vec::new(),

@@ -126,6 +126,14 @@ impl fmt::Display for ReplaySummary {
                 "\n  dropped repeats: {} (stamp already published)",
                 Counted(counts.duplicate)
             )?;
+            if counts.restamped > 0 {
+                write!(
+                    f,
+                    "\n  restamped:       {} scans (stamped after scans the log has after them: \
+                     replayed in the log's order, their own stamps kept for the results)",
+                    counts.restamped
+                )?;
+            }
             if counts.forced_out.total() > 0 {
                 write!(
                     f,
@@ -205,6 +213,7 @@ mod tests {
                         scans: 0,
                         odometry: 55,
                     },
+                    restamped: 12,
                     ..ReorderCounts::default()
                 },
             )),
@@ -223,6 +232,8 @@ mod tests {
              in time order; window 2 s)\n\
              \x20 dropped late:    none (older than records already published)\n\
              \x20 dropped repeats: 55 odometry poses (stamp already published)\n\
+             \x20 restamped:       12 scans (stamped after scans the log has after them: \
+             replayed in the log's order, their own stamps kept for the results)\n\
              \x20 malformed lines: 3 skipped, by reason:\n\
              \x20   FLASER: fields missing: 2\n\
              \x20   not a record of the format: 1\n\

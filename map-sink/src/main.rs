@@ -257,10 +257,6 @@ fn run(args: Args) -> Result<()> {
                 drain_path(&path, &mut assembly, &mut recorder, &mut final_path, false)?;
                 break;
             }
-            if !recorder.knows_mount() {
-                // The pose's scan was published before it: take the scans, and the mount.
-                drain_scans(&scans, &mut recorder, &mut published)?;
-            }
             let latency = sample.header.sent_ns.checked_sub(sample.scan_sent_ns);
             recorder.record_pose(
                 sample.header.seq,
@@ -568,6 +564,7 @@ fn drain_scans(
             continue;
         }
         recorder.set_mount(scan.robot_from_sensor.into());
+        recorder.record_source_stamp(scan.header.stamp_ns, scan.source_stamp_ns());
         recorder.record_scan(
             scan.header.seq,
             f64::from(scan.angle_min),

@@ -1,6 +1,6 @@
 //! The recorder: takes a run's messages as they arrive and writes the run's files.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::fs;
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
@@ -102,6 +102,16 @@ pub struct FinishedRun {
     pub grid: Option<OccupancyGrid>,
 }
 
+/// A pose whose trajectory lines wait for its scan (or a later one, if this stage lost it):
+/// the scan says where the sensor sits and under which stamp the source knows it.
+#[derive(Debug, Clone, Copy)]
+struct Unwritten {
+    seq: u64,
+    stamp_ns: u64,
+    online: Pose2,
+    dead_reckoning: Option<Pose2>,
+}
+
 #[derive(Debug, Clone, Copy)]
 struct Estimate {
     stamp_ns: u64,
@@ -112,8 +122,8 @@ struct Estimate {
 /// Records one run into a directory.
 ///
 /// The online estimate (`trajectory_online.tum`) and the other per-scan trajectories are
-/// appended and flushed line by line as poses arrive, so a killed run keeps every pose it
-/// had ([`crate::TumWriter`] explains why they are not written atomically); the map, the
+/// appended and flushed line by line as poses arrive (once their scan has), so a killed run
+/// keeps every pose it had but those still waiting for their scan ([`crate::TumWriter`] explains why they are not written atomically); the map, the
 /// picture and the metrics are whole-file results written atomically by
 /// [`finish`](Self::finish), so a crash never leaves one half-written.
 ///
@@ -160,6 +170,13 @@ pub struct Recorder {
     localizing: bool,
     /// On a saved map: how well it explained the scans, as slam-proc last counted.
     map_fit: Option<MapFit>,
+    /// The source's own stamps of the scans it re-stamped (a log's scans stamped late), by
+    /// the stamp the pipeline knows them by: what the run writes carries the source's.
+    source_stamps: HashMap<u64, u64>,
+    /// Poses whose lines wait for their scan, in the order they came.
+    unwritten: VecDeque<Unwritten>,
+    /// The highest sequence number of the scans recorded.
+    scans_through: Option<u64>,
 }
 
 impl Recorder {
@@ -216,6 +233,9 @@ impl Recorder {
             converged_at: None,
             localizing: false,
             map_fit: None,
+            source_stamps: HashMap::new(),
+            unwritten: VecDeque::new(),
+            scans_through: None,
         })
     }
 
@@ -229,7 +249,9 @@ impl Recorder {
     }
 
     /// Records the estimate for scan `seq`, stamped with the scan's `stamp_ns`, with the
-    /// dead-reckoning pose and the scan-to-pose latency when known.
+    /// dead-reckoning pose and the scan-to-pose latency when known. Its trajectory lines are
+    /// appended once the scan (or a later one) has been recorded, which says where the
+    /// sensor sits and the source's own stamp of the scan.
     pub fn record_pose(
         &mut self,
         seq: u64,
@@ -243,13 +265,13 @@ impl Recorder {
             Some((first, last)) => (first.min(stamp_ns), last.max(stamp_ns)),
             None => (stamp_ns, stamp_ns),
         });
-        let online = self.robot_pose(&est);
-        self.incomplete.extend(self.online.append(stamp_ns, online));
-        if let Some(dr) = dead_reckoning {
-            let dr = self.robot_pose(&dr);
-            self.incomplete
-                .extend(self.dead_reckoning.append(stamp_ns, dr));
-        }
+        self.unwritten.push_back(Unwritten {
+            seq,
+            stamp_ns,
+            online: est,
+            dead_reckoning,
+        });
+        self.write_lines(false);
         self.estimates.insert(
             seq,
             Estimate {
@@ -263,14 +285,46 @@ impl Recorder {
         Ok(())
     }
 
+    /// Appends the trajectory lines of the poses whose scan (or a later one) has come, or
+    /// of every pose held (`all`, at the end).
+    fn write_lines(&mut self, all: bool) {
+        while let Some(next) = self.unwritten.front().copied() {
+            if !all && self.scans_through.is_none_or(|through| next.seq > through) {
+                return;
+            }
+            self.unwritten.pop_front();
+            let written_ns = self.source_stamp(next.stamp_ns);
+            let online = self.robot_pose(&next.online);
+            self.incomplete
+                .extend(self.online.append(written_ns, online));
+            if let Some(dr) = next.dead_reckoning {
+                let dr = self.robot_pose(&dr);
+                self.incomplete
+                    .extend(self.dead_reckoning.append(written_ns, dr));
+            }
+        }
+    }
+
+    /// The scan the pipeline knows by `stamp_ns` has `source_stamp_ns` as the source's own
+    /// stamp: the files written say that one. Record it before [`Self::record_scan`] of
+    /// that scan.
+    pub fn record_source_stamp(&mut self, stamp_ns: u64, source_stamp_ns: u64) {
+        if source_stamp_ns != stamp_ns {
+            self.source_stamps.insert(stamp_ns, source_stamp_ns);
+        }
+    }
+
+    /// The source's own stamp of the scan the pipeline stamped `stamp_ns`.
+    fn source_stamp(&self, stamp_ns: u64) -> u64 {
+        self.source_stamps
+            .get(&stamp_ns)
+            .copied()
+            .unwrap_or(stamp_ns)
+    }
+
     /// The sensor's mount on the robot, as the scans give it; the first one holds for the run.
     pub fn set_mount(&mut self, robot_from_sensor: Pose2) {
         self.robot_from_sensor.get_or_insert(robot_from_sensor);
-    }
-
-    /// Whether a scan has said where the sensor sits.
-    pub fn knows_mount(&self) -> bool {
-        self.robot_from_sensor.is_some()
     }
 
     /// The robot's pose where the sensor's is `world_from_sensor`.
@@ -286,8 +340,8 @@ impl Recorder {
         let robot: Vec<StampedPose> = path
             .iter()
             .map(|p| StampedPose {
+                stamp_ns: self.source_stamp(p.stamp_ns),
                 pose: self.robot_pose(&p.pose),
-                ..*p
             })
             .collect();
         tum_text(&robot)
@@ -316,6 +370,7 @@ impl Recorder {
     ) {
         self.touch();
         self.scans_seen += 1;
+        self.scans_through = Some(self.scans_through.map_or(seq, |through| through.max(seq)));
         let grid = &self.options.grid;
         let scan = CompactScan::new(
             angle_min,
@@ -328,6 +383,7 @@ impl Recorder {
         );
         let estimate = self.estimates.get(&seq).map(|e| (e.stamp_ns, e.pose));
         self.scans.add_scan(seq, scan, estimate);
+        self.write_lines(false);
     }
 
     /// Mapping on a saved map: the run's grid starts from `saved` (its scans add to it, and
@@ -429,6 +485,7 @@ impl Recorder {
     ///
     /// Without a stop the clock never runs out, and the files are the same on every run.
     pub fn finish_run_within(mut self, clock: &EndClock) -> Result<FinishedRun, SinkError> {
+        self.write_lines(true);
         for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
             self.incomplete.extend(stream.sync());
         }
@@ -990,7 +1047,7 @@ impl Recorder {
             converged_at_scan: self.converged_at.map(|(seq, _)| seq),
             converged_at_stamp: self
                 .converged_at
-                .map(|(_, stamp_ns)| slam_geom::format_stamp(stamp_ns)),
+                .map(|(_, stamp_ns)| slam_geom::format_stamp(self.source_stamp(stamp_ns))),
             search_phase: None,
             map_fit: self.map_fit.map(|fit| fit.summary()),
             incomplete_outputs: Vec::new(),
@@ -1294,6 +1351,69 @@ mod tests {
             .filter(|name| name.ends_with(".tmp"))
             .collect();
         assert!(left.is_empty(), "{left:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+        Ok(())
+    }
+
+    #[test]
+    fn a_restamped_scans_pose_is_written_under_the_sources_stamp() -> Result<(), SinkError> {
+        let dir =
+            std::env::temp_dir().join(format!("map-sink-unit-restamped-{}", std::process::id()));
+        let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+        // The source stamped the second scan late (at 40, after the third at 30) and
+        // re-stamped it 20 for the pipeline.
+        let mut path = Vec::new();
+        for (seq, stamp, own) in [(0, 10, 10), (1, 20, 40), (2, 30, 30)] {
+            recorder.record_source_stamp(stamp, own);
+            let pose = Pose2::new(seq as f64, 0.0, 0.0);
+            recorder.record_pose(seq, stamp, pose, Some(pose), None)?;
+            path.push(StampedPose {
+                stamp_ns: stamp,
+                pose,
+            });
+        }
+        recorder.set_final_path(&path);
+        recorder.finish()?;
+        for file in [TRAJECTORY_ONLINE_FILE, DEAD_RECKONING_FILE, TRAJECTORY_FILE] {
+            let text = std::fs::read_to_string(dir.join(file)).unwrap_or_default();
+            let written: Vec<u64> = slam_geom::parse_tum(&text)
+                .unwrap_or_default()
+                .iter()
+                .map(|(_, p)| p.stamp_ns)
+                .collect();
+            assert_eq!(written, [10, 40, 30], "{file}");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+        Ok(())
+    }
+
+    #[test]
+    fn a_pose_waits_for_its_scan_to_be_written_under_the_sources_stamp() -> Result<(), SinkError> {
+        let dir = std::env::temp_dir().join(format!("map-sink-unit-waits-{}", std::process::id()));
+        let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
+        let read = |dir: &Path| -> Vec<u64> {
+            let text = std::fs::read_to_string(dir.join(DEAD_RECKONING_FILE)).unwrap_or_default();
+            slam_geom::parse_tum(&text)
+                .unwrap_or_default()
+                .iter()
+                .map(|(_, p)| p.stamp_ns)
+                .collect()
+        };
+        let ranges = [1.0_f32, 2.0, 3.0];
+        recorder.record_source_stamp(10, 10);
+        recorder.record_scan(0, 0.0, 0.5, 0.1, 10.0, &ranges);
+        recorder.record_pose(0, 10, Pose2::default(), Some(Pose2::default()), None)?;
+        // The pose of a scan re-stamped 20 (its own stamp 40) comes before the scan.
+        recorder.record_pose(1, 20, Pose2::default(), Some(Pose2::default()), None)?;
+        assert_eq!(read(&dir), [10]);
+        recorder.record_source_stamp(20, 40);
+        recorder.record_scan(1, 0.0, 0.5, 0.1, 10.0, &ranges);
+        assert_eq!(read(&dir), [10, 40]);
+        // A scan this stage lost: the next one lets its pose out, under the pipeline's stamp.
+        recorder.record_pose(2, 30, Pose2::default(), Some(Pose2::default()), None)?;
+        recorder.record_source_stamp(45, 45);
+        recorder.record_scan(3, 0.0, 0.5, 0.1, 10.0, &ranges);
+        assert_eq!(read(&dir), [10, 40, 30]);
         let _ = std::fs::remove_dir_all(&dir);
         Ok(())
     }

@@ -380,6 +380,8 @@ fn killed_run_keeps_its_trajectory_and_no_stale_results() -> TestResult {
     let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
     assert!(!dir.join(METRICS_FILE).exists() && !dir.join(GROUND_TRUTH_FILE).exists());
     for seq in 0..25_u64 {
+        // Each pose's scan first, as a source publishes it before the pose is made.
+        recorder.record_scan(seq, -1.0, 0.5, 0.1, 30.0, &[2.0, 2.1, 2.2, 2.3, 2.2]);
         recorder.record_pose(
             seq,
             seq * 1_000_000,

@@ -48,6 +48,10 @@ pub struct ScanMessage<'a> {
     /// robot's origin).
     #[serde(default)]
     pub robot_from_sensor: [f64; 3],
+    /// The source's own stamp of the scan minus `timestamp`, nanoseconds: 0 (and absent in
+    /// older recordings) unless the source re-stamped the scan to keep stamps increasing.
+    #[serde(default)]
+    pub source_stamp_offset_ns: i64,
 }
 
 impl ChannelMessage for ScanMessage<'_> {
@@ -137,6 +141,7 @@ impl<'a> ScanMessage<'a> {
                 let m = scan.robot_from_sensor;
                 [m.x, m.y, m.yaw]
             },
+            source_stamp_offset_ns: scan.source_stamp_offset_ns,
         }
     }
 
@@ -168,6 +173,7 @@ impl<'a> ScanMessage<'a> {
         scan.set_geometry(&self.geometry);
         let [x, y, yaw] = self.robot_from_sensor;
         scan.robot_from_sensor = ipc_types::Pose2::new(x, y, yaw);
+        scan.source_stamp_offset_ns = self.source_stamp_offset_ns;
         scan.set_beams(&ranges, &self.intensities)?;
         Ok(scan)
     }

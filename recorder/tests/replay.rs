@@ -60,6 +60,10 @@ fn scan(bits: &mut Bits, seq: u64, beams: usize, intensities: bool) -> Box<Laser
     scan.scan_time = bits.finite_f32();
     scan.range_min = bits.finite_f32();
     scan.range_max = bits.finite_f32();
+    // Now and then a scan its source re-stamped, its own stamp later.
+    if seq % 5 == 3 {
+        scan.source_stamp_offset_ns = 400_000_000 + seq as i64;
+    }
     let mut ranges: Vec<f32> = (0..beams).map(|_| bits.finite_f32()).collect();
     for (i, invalid) in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.0]
         .into_iter()

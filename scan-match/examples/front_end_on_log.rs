@@ -9,8 +9,11 @@
 //! `--debug` writes one line per scan: stamp, the front end's increment (x y yaw), the
 //! odometry's, points, inliers, iterations, keyframe, microseconds, status, odometry status.
 //! `--every N` keeps one scan in N and `--max-range M` cuts the ranges at M metres, as
-//! lidar-replay's `--every` and `--max-range` do. Odometry is interpolated to each scan's
-//! stamp, as feature-proc does. Without `--relations`
+//! lidar-replay's `--every` and `--max-range` do. The scans come in the replay's order
+//! with its stamps, their geometry as the message carries it; odometry is interpolated to
+//! each scan's stamp and carried to the sensor's mount, as feature-proc does; the robot's
+//! pose is written under the log's own stamp of each scan, as map-sink writes
+//! `dead_reckoning.tum`, which the output matches. Without `--relations`
 //! the log's own `.relations` beside it is used if there is one.
 
 #[path = "../tests/support/logs.rs"]
@@ -110,7 +113,7 @@ fn main() -> Result<()> {
     }
     let mut front_end = FrontEnd::new(config)?;
     let mut tum = String::new();
-    let mut last_stamp = None;
+    let mut written = std::collections::HashSet::new();
     let mut debug = String::new();
     let mut previous_odometry = None;
     let mut times_us: Vec<f64> = Vec::with_capacity(scans.len());
@@ -153,17 +156,20 @@ fn main() -> Result<()> {
                 slam_geom::format_stamp(out.stamp_ns)
             );
         }
-        // A log whose lines go back in time can repeat a stamp; a trajectory cannot.
-        if last_stamp.is_some_and(|s| out.stamp_ns <= s) {
+        // The replay drops a scan that repeats a stamp; a trajectory cannot repeat one.
+        if !written.insert(scan.log_stamp_ns) {
             continue;
         }
-        last_stamp = Some(out.stamp_ns);
-        let p = out.odom_from_robot;
+        // The robot's pose (the front end tracks the sensor's), as map-sink writes it.
+        let p = out
+            .odom_from_robot
+            .compose(&scan.robot_from_sensor.inverse());
         let (s, c) = (0.5 * p.yaw).sin_cos();
+        // Under the log's own stamp, which the relations name.
         writeln!(
             tum,
             "{} {:.6} {:.6} 0 0 0 {:.9} {:.9}",
-            slam_geom::format_stamp(out.stamp_ns),
+            slam_geom::format_stamp(scan.log_stamp_ns),
             p.x,
             p.y,
             s,

@@ -23,6 +23,7 @@ use crate::recovery::{RecoveryWindow, rank, recover};
 use crate::registration::{Registration, RegistrationParams, register};
 use crate::scan_clock::ScanClock;
 use crate::search::{Window, score_sample, search_sample, subsample};
+use crate::velocity::Velocity;
 use crate::wheel_pace::{STALE_WINDOW_NS, WheelPace};
 use stage_kit::SettingError;
 
@@ -79,8 +80,8 @@ pub struct FrontEnd {
     clock: ScanClock,
     /// Stamp of the newest keyframe.
     keyframe_stamp_ns: u64,
-    /// `(vx, vy, yaw rate)` in the robot frame, from the last step.
-    velocity: Vector3<f64>,
+    /// What constant velocity extrapolates.
+    velocity: Velocity,
     last_odometry: Option<OdometryInput>,
     /// The last odometry reading a step was believed from.
     odometry_anchor: Option<OdometryAnchor>,
@@ -91,7 +92,28 @@ pub struct FrontEnd {
     wheel_pace: WheelPace,
     /// The wheels' distance scale, learnt from the fits.
     odometry_scale: OdometryScale,
+    /// The scans since the last one registered, when the last did not register.
+    unregistered: Option<Unregistered>,
     stats: FrontEndStats,
+}
+
+/// A stretch of scans that did not register: where the front end has only its prior to go
+/// by, its uncertainty adds up, and so does the window the next scan is searched over.
+#[derive(Debug, Clone, Copy)]
+struct Unregistered {
+    /// Stamp of the last scan that registered (or of the first scan).
+    since_ns: u64,
+    /// Scans since that did not.
+    scans: u64,
+    /// The covariances of their steps, added up.
+    covariance: Matrix3<f64>,
+}
+
+/// Wide searches run while registering one scan, and those whose fit was taken.
+#[derive(Debug, Clone, Copy, Default)]
+struct WideSearches {
+    run: u64,
+    taken: u64,
 }
 
 impl FrontEnd {
@@ -114,12 +136,13 @@ impl FrontEnd {
             last_stamp_ns: None,
             clock: ScanClock::default(),
             keyframe_stamp_ns: 0,
-            velocity: Vector3::zeros(),
+            velocity: Velocity::default(),
             last_odometry: None,
             odometry_anchor: None,
             lag: Lag::OnTime,
             wheel_pace: WheelPace::default(),
             odometry_scale,
+            unregistered: None,
             stats: FrontEndStats::default(),
         })
     }
@@ -193,9 +216,21 @@ impl FrontEnd {
         let elapsed_s = scan.stamp_ns.saturating_sub(last_stamp_ns) as f64 * 1e-9;
         let dt = self.clock.interval(elapsed_s);
 
-        let cv = constant_velocity_step(&self.velocity, dt, &self.config);
-        // Across a gap the velocity says nothing and a weak fit may be in the wrong basin.
-        let gap = elapsed_s > MAX_EXTRAPOLATION_S;
+        // Constant velocity carries the robot on over a stretch of scans that do not register
+        // for as long as it carries it over a gap, then holds it: the output stays bounded,
+        // its covariance growing as it would.
+        let adrift = self.unregistered.is_some_and(|u| {
+            scan.stamp_ns.saturating_sub(u.since_ns) as f64 * 1e-9 > MAX_EXTRAPOLATION_S
+        });
+        let velocity = if adrift {
+            Vector3::zeros()
+        } else {
+            self.velocity.get()
+        };
+        let cv = constant_velocity_step(&velocity, dt, &self.config);
+        // Across a gap (or a stretch as long of scans that did not register) the velocity
+        // says nothing and a weak fit may be in the wrong basin.
+        let gap = elapsed_s > MAX_EXTRAPOLATION_S || adrift;
         let mut wheels_moved = None;
         let mut caught_up = false;
         let mut odometry = match (scan.odometry, self.last_odometry) {
@@ -219,13 +254,23 @@ impl FrontEnd {
             Some(_) => {}
         }
 
+        // After scans that did not register, the prior is as uncertain as their steps added
+        // up: the search looks that much wider (a recovery, once wider than its window).
+        let stretch = self.stretch_covariance();
+        let widened = |step: Step| Step {
+            covariance: step.covariance + stretch,
+            ..step
+        };
+        let cv = widened(cv);
+        odometry = odometry.map(widened);
+        let mut wide = WideSearches::default();
         let mut prior = odometry.unwrap_or(cv);
         let seeded_by = if odometry.is_ok() {
             Seed::Odometry
         } else {
             Seed::ConstantVelocity
         };
-        let mut registration = self.register(points, &prior, gap, seeded_by);
+        let mut registration = self.register(points, &prior, gap, seeded_by, &mut wide);
         // The wheels' step as judged against the scan, even if the scan overrules it.
         let judged = odometry.ok();
         if let Ok(step) = odometry {
@@ -237,7 +282,7 @@ impl FrontEnd {
             if asked {
                 // The odometry may have put the scan where it finds no map: try the
                 // other prior before believing it.
-                if let Ok(other) = self.register(points, &cv, gap, second_opinion) {
+                if let Ok(other) = self.register(points, &cv, gap, second_opinion, &mut wide) {
                     registration = Ok(other);
                 }
             }
@@ -248,7 +293,8 @@ impl FrontEnd {
                     // second chance from constant velocity, and the better of the two fits
                     // is compared with the odometry.
                     if !asked
-                        && let Ok(other) = self.register(points, &cv, gap, second_opinion)
+                        && let Ok(other) =
+                            self.register(points, &cv, gap, second_opinion, &mut wide)
                         && rank(&other, &self.params) > rank(found, &self.params)
                     {
                         registration = Ok(other);
@@ -307,7 +353,14 @@ impl FrontEnd {
             }
             Err(failure) => {
                 output.status = MatchStatus::Failed(*failure);
-                (prediction.pose, prediction.covariance)
+                // The step's own uncertainty: what the scans before it that did not
+                // register added is in their own steps already.
+                let own = Step {
+                    covariance: prior.covariance - self.stretch_covariance(),
+                    ..prior
+                };
+                let own = predict(&self.pose, &own);
+                (own.pose, own.covariance)
             }
         };
         output.odometry = match odometry {
@@ -370,10 +423,33 @@ impl FrontEnd {
             &(to_map.transpose() * covariance * to_map),
             &floor.diagonal(),
         );
-        self.velocity = Vector3::new(increment.x, increment.y, increment.yaw) / dt;
+        // With wheels, a step they did not measure (stale, contradicted) lies between steps
+        // they did; without any, constant velocity is the prior of every step.
+        self.velocity
+            .update(&increment, dt, scan.odometry.is_some());
         self.pose = pose;
         self.last_stamp_ns = Some(scan.stamp_ns);
         output.odom_from_robot = pose;
+
+        self.stats.wide_searches += wide.run;
+        self.stats.recovered += wide.taken;
+        if let MatchStatus::Failed(_) = output.status {
+            let stretch = self.unregistered.get_or_insert(Unregistered {
+                since_ns: last_stamp_ns,
+                scans: 0,
+                covariance: Matrix3::zeros(),
+            });
+            stretch.scans += 1;
+            // A step constant velocity guessed adds its uncertainty: its prior, widened by the
+            // stretch so far, is the stretch's now. One the wheels measured bridges the scan
+            // as any other wheel step does.
+            if !matches!(output.odometry, OdometryStatus::Used) {
+                stretch.covariance = prior.covariance;
+            }
+            self.stats.longest_unregistered = self.stats.longest_unregistered.max(stretch.scans);
+        } else {
+            self.unregistered = None;
+        }
 
         let lost = matches!(
             output.status,
@@ -402,6 +478,7 @@ impl FrontEnd {
         step: &Step,
         gap: bool,
         seeded_by: Seed,
+        wide_searches: &mut WideSearches,
     ) -> Result<Registration, MatchFailure> {
         let params = RegistrationParams {
             weak_steps: !matches!(seeded_by, Seed::Odometry),
@@ -505,11 +582,13 @@ impl FrontEnd {
                 }
                 Seed::Odometry | Seed::ConstantVelocity => true,
             };
+            wide_searches.run += 1;
             if let Some(other) = recover(&self.map, points, &sample, &how, &params)
                 && beyond(&other)
                 && plausible(&other)
                 && rank(&other, &params) > rank(&found, &params) * RECOVERY_MARGIN
             {
+                wide_searches.taken += 1;
                 found = other;
             }
         }
@@ -629,6 +708,12 @@ impl FrontEnd {
                     || (open && since >= self.config.degenerate_keyframe_interval)
             }
         }
+    }
+
+    /// What the scans since the last one registered added to the uncertainty.
+    fn stretch_covariance(&self) -> Matrix3<f64> {
+        self.unregistered
+            .map_or_else(Matrix3::zeros, |stretch| stretch.covariance)
     }
 
     fn floor_covariance(&self) -> Matrix3<f64> {

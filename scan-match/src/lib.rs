@@ -10,11 +10,13 @@
 //!    ([`points`], with the beams' directions kept between scans: [`bearings`]);
 //! 2. the prior step is the odometry increment with the growth of its covariance, its
 //!    distance scaled by what the fits have measured of the wheels ([`odometry_scale`]), or
-//!    constant velocity without odometry ([`prior`]);
+//!    constant velocity without odometry ([`prior`]; without any wheels the speed is the
+//!    median of the last steps', so that one fit's correction is not taken for a speed);
 //! 3. where the prior is too uncertain, a correlative search picks the basin ([`search`]);
-//!    after a gap in the data that outgrows its window, a wide search up to a full turn
-//!    proposes a few candidates, refined and ranked by their registered fits
-//!    ([`recovery`]);
+//!    after a gap in the data, or a stretch of scans that did not register, that outgrows
+//!    its window, a wide search up to a full turn proposes a few candidates, refined and
+//!    ranked by their registered fits ([`recovery`]); such a stretch is carried on at
+//!    constant velocity for a second at most, then held, its uncertainty adding up;
 //! 4. point-to-line Gauss-Newton with a Cauchy loss and a shrinking gate registers the scan
 //!    against the local map from the seed ([`registration`]); the fit's Hessian says which
 //!    directions the scan fixes and which it leaves open ([`constraint`]: a corridor's
@@ -51,6 +53,7 @@ pub mod recovery;
 pub mod registration;
 mod scan_clock;
 pub mod search;
+mod velocity;
 mod wheel_pace;
 
 pub use config::FrontEndConfig;

@@ -93,6 +93,12 @@ pub struct FrontEndStats {
     pub odometry_used: u64,
     pub odometry_rejected: OdometryRejections,
     pub keyframes: u64,
+    /// Wide searches run (a recovery: after a gap, a fast turn, or scans that did not
+    /// register), and those whose fit was taken.
+    pub wide_searches: u64,
+    pub recovered: u64,
+    /// The longest stretch of consecutive scans that did not register.
+    pub longest_unregistered: u64,
     /// Total time in `process`, nanoseconds.
     pub busy_ns: u64,
 }

@@ -313,6 +313,61 @@ fn without_odometry_or_points_the_motion_is_constant_velocity() {
     assert_eq!(front_end.stats().failed_matches, 1);
 }
 
+// Three seconds of scans that see nothing (a sensor blinded), without odometry, while the
+// robot drives on: the front end carries it on at its speed for a second and then holds it, each step's covariance its own; the stretch is counted,
+// and the first scan that sees again is found by a wide search against the map.
+#[test]
+fn a_stretch_of_scans_that_do_not_register_stays_bounded_and_is_recovered() {
+    let walls = room();
+    let mut front_end = FrontEnd::new(FrontEndConfig::default()).unwrap();
+    let step = Pose2::new(0.05, 0.0, 0.01);
+    let mut truth = Pose2::new(0.5, 0.2, 0.1);
+    let start = truth;
+    let mut k = 0;
+    for _ in 0..8 {
+        let ranges = raycast(&walls, &truth, &SICK, 361, 0.005);
+        front_end.process(&scan(k, &ranges, SICK, None)).unwrap();
+        truth = truth.compose(&step);
+        k += 1;
+    }
+    let blind = vec![f32::NAN; 361];
+    let before = front_end.pose();
+    let mut covariances = Vec::new();
+    for _ in 0..30 {
+        let out = front_end.process(&scan(k, &blind, SICK, None)).unwrap();
+        assert_eq!(out.status, MatchStatus::Failed(MatchFailure::TooFewPoints));
+        covariances.push(out.increment_covariance[(0, 0)]);
+        truth = truth.compose(&step);
+        k += 1;
+    }
+    // Carried on for a second (ten scans of 5 cm), then held.
+    let drifted = before.between(&front_end.pose());
+    assert!(
+        (drifted.x - 0.5).abs() < 0.03,
+        "{drifted:?} after three blind seconds"
+    );
+    // Each step's covariance is its own, not the stretch's so far.
+    assert!(
+        covariances
+            .iter()
+            .all(|&c| (c - covariances[0]).abs() < 1e-9),
+        "{covariances:?}"
+    );
+    let stats = front_end.stats();
+    assert_eq!(stats.failed_matches, 30);
+    assert_eq!(stats.longest_unregistered, 30);
+    let searched = stats.wide_searches;
+    // The robot is a metre beyond where it was held: further than a regular step's window
+    // reaches, within the stretch's.
+    let ranges = raycast(&walls, &truth, &SICK, 361, 0.005);
+    let out = front_end.process(&scan(k, &ranges, SICK, None)).unwrap();
+    assert!(!matches!(out.status, MatchStatus::Failed(_)), "{out:?}");
+    let stats = front_end.stats();
+    assert!(stats.wide_searches > searched, "{stats:?}");
+    assert!(stats.recovered >= 1, "{stats:?}");
+    assert_close(&front_end.pose(), &start.between(&truth), 0.03, 0.01);
+}
+
 #[test]
 fn a_turn_during_a_gap_in_the_data_is_recovered_without_odometry() {
     for (geometry, beams) in [(SICK, 361), (HOKUYO, 1081)] {

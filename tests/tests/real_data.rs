@@ -108,3 +108,62 @@ fn a_replay_made_harder_publishes_every_nth_scan_cut_to_the_shorter_range() {
     assert!(!stderr.contains("lidar-replay: malformed"), "{stderr}");
     assert!(shm_leftovers(&run.domain).is_empty());
 }
+
+// A log that stamps some scans late, after scans it has after them (a logger that stamps
+// a scan when it gets round to writing it): the replay keeps the log's order, so the front
+// end meets the scans in the order they were taken, and each pose is written under the
+// log's own stamp, where the log's ground truth looks for it.
+#[test]
+fn scans_stamped_late_are_processed_in_the_logs_order_under_their_own_stamps() {
+    let log = std::fs::read_to_string(test_data::carmen_log("aces")).expect("aces.clf");
+    let mut doctored = String::new();
+    let mut stamps = Vec::new();
+    let mut late = 0;
+    for line in log.lines() {
+        if !line.starts_with("FLASER ") {
+            doctored += line;
+            doctored.push('\n');
+            continue;
+        }
+        if stamps.len() == 700 {
+            break;
+        }
+        let mut fields: Vec<String> = line.split_whitespace().map(str::to_owned).collect();
+        let at = fields.len() - 3;
+        if stamps.len() % 7 == 3 {
+            let stamp: f64 = fields[at].parse().expect("a stamp");
+            // A few microseconds off the log's grid, so that no stamp is repeated.
+            let lateness = 0.300_003 + 0.1 * (stamps.len() % 3) as f64;
+            fields[at] = format!("{:.6}", stamp + lateness);
+            late += 1;
+        }
+        stamps.push(slam_geom::parse_stamp_ns(&fields[at]).expect("a stamp"));
+        doctored += &fields.join(" ");
+        doctored.push('\n');
+    }
+    let dir = scratch("late-stamps-log");
+    let file = dir.join("late.clf");
+    std::fs::write(&file, doctored).expect("write the log");
+    let run = replayed("late-stamps", &file, &["--particles", "20"]);
+
+    let poses = read_tum(&run.out.join("dead_reckoning.tum"));
+    let written: Vec<u64> = poses.iter().map(|pose| pose.stamp_ns).collect();
+    assert_eq!(written.len(), stamps.len());
+    let differs = written.iter().zip(&stamps).position(|(a, b)| a != b);
+    assert_eq!(differs, None, "the log's order, under its stamps");
+    // Each late scan's pose lies between its neighbours': the path makes no detour there.
+    let apart = |a: usize, b: usize| {
+        let (p, q) = (poses[a].position, poses[b].position);
+        (q[0] - p[0]).hypot(q[1] - p[1])
+    };
+    for k in (3..poses.len() - 1).step_by(7) {
+        let detour = apart(k - 1, k) + apart(k, k + 1) - apart(k - 1, k + 1);
+        assert!(detour < 0.05, "scan {k}: a detour of {detour} m");
+    }
+    let stderr = String::from_utf8_lossy(&run.output.stderr);
+    assert!(
+        summary_line(&stderr, "restamped:").starts_with(&format!("{late} scans")),
+        "{stderr}"
+    );
+    assert!(shm_leftovers(&run.domain).is_empty());
+}

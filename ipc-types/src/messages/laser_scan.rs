@@ -19,7 +19,7 @@ use crate::messages::pose::Pose2;
 /// `[range_min, range_max]`, as invalid.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, FromZeros)]
-#[type_name("slam::LaserScan::v2")]
+#[type_name("slam::LaserScan::v3")]
 pub struct LaserScan {
     pub header: Header,
     /// Bearing of the first beam, radians.
@@ -37,6 +37,12 @@ pub struct LaserScan {
     /// Where the sensor sits on the robot: the sensor frame in the robot frame (`base_link`).
     /// All zero for a sensor at the robot's origin, as the simulator's.
     pub robot_from_sensor: Pose2,
+    /// The source's own stamp of this scan minus `header.stamp_ns`, nanoseconds: 0 unless
+    /// the source re-stamped the scan so that stamps increase on the topic (a log's scan
+    /// stamped late, replayed in the log's order). The pipeline works by `header.stamp_ns`;
+    /// what a run writes for the user carries the source's stamp ([`Self::source_stamp_ns`]),
+    /// the one the log's ground truth names.
+    pub source_stamp_offset_ns: i64,
     /// Beams used in `ranges` and `intensities`.
     pub beam_count: u32,
     /// Keeps the layout free of implicit padding; always 0.
@@ -68,6 +74,14 @@ impl LaserScan {
         self.scan_time = geometry.scan_time as f32;
         self.range_min = geometry.range_min as f32;
         self.range_max = geometry.range_max as f32;
+    }
+
+    /// The stamp the source gave this scan: `header.stamp_ns` unless the source re-stamped
+    /// it (see [`Self::source_stamp_offset_ns`]).
+    pub fn source_stamp_ns(&self) -> u64 {
+        self.header
+            .stamp_ns
+            .saturating_add_signed(self.source_stamp_offset_ns)
     }
 
     /// The ranges of the beams in use.
@@ -107,6 +121,7 @@ impl LaserScan {
             range_min: self.range_min,
             range_max: self.range_max,
             robot_from_sensor: self.robot_from_sensor,
+            source_stamp_offset_ns: self.source_stamp_offset_ns,
             ranges: Cow::Borrowed(self.ranges()),
             intensities: Cow::Borrowed(self.intensities()),
         }
@@ -123,6 +138,7 @@ impl LaserScan {
         scan.range_min = record.range_min;
         scan.range_max = record.range_max;
         scan.robot_from_sensor = record.robot_from_sensor;
+        scan.source_stamp_offset_ns = record.source_stamp_offset_ns;
         scan.set_beams(&record.ranges, &record.intensities)?;
         Ok(scan)
     }
@@ -141,6 +157,9 @@ pub struct LaserScanRecord<'a> {
     /// Absent in records written before the mount was sent: the robot's origin.
     #[serde(default)]
     pub robot_from_sensor: Pose2,
+    /// Absent in records written before scans could be re-stamped: 0.
+    #[serde(default)]
+    pub source_stamp_offset_ns: i64,
     pub ranges: Cow<'a, [f32]>,
     pub intensities: Cow<'a, [f32]>,
 }

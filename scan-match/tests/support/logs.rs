@@ -20,9 +20,16 @@ use stage_kit::odometry_buffer::{OdometryBuffer, OdometryReading};
 /// the scan's stamp; a log with ODOM lines has its readings between the scans).
 #[derive(Debug, Clone)]
 pub struct LoggedScan {
+    /// The stamp the scan is processed under (stamps increase).
     pub stamp_ns: u64,
+    /// The log's own stamp, which its relations name: `stamp_ns` unless the replay
+    /// re-stamped a scan stamped late.
+    pub log_stamp_ns: u64,
     pub geometry: ScanGeometry,
     pub ranges: Vec<f32>,
+    /// Where the sensor sits on the robot.
+    pub robot_from_sensor: slam_geom::Pose2,
+    /// The sensor's odometry (the robot's, carried to the mount as feature-proc does).
     pub odometry: Option<OdometryInput>,
 }
 
@@ -34,6 +41,19 @@ impl LoggedScan {
             ranges: &self.ranges,
             odometry: if with_odometry { self.odometry } else { None },
         }
+    }
+}
+
+/// `geometry` as feature-proc gets it: the message carries it in `f32`s.
+fn as_sent(geometry: &ScanGeometry) -> ScanGeometry {
+    let sent = |value: f64| f64::from(value as f32);
+    ScanGeometry {
+        angle_min: sent(geometry.angle_min),
+        angle_increment: sent(geometry.angle_increment),
+        time_increment: sent(geometry.time_increment),
+        scan_time: sent(geometry.scan_time),
+        range_min: sent(geometry.range_min),
+        range_max: sent(geometry.range_max),
     }
 }
 
@@ -56,6 +76,12 @@ pub fn load_degraded(
         .with_context(|| format!("opening {}", path.display()))?;
     if let Some(verdict) = reader.odometry_verdict() {
         eprintln!("{}", verdict.describe());
+    }
+    if let Some(order) = reader
+        .order_verdict()
+        .and_then(|verdict| verdict.describe())
+    {
+        eprintln!("{order}");
     }
     let mut covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut track = OdometryBuffer::new();
@@ -91,8 +117,11 @@ pub fn load_degraded(
                 degradation.shorten(&mut s);
                 scans.push(LoggedScan {
                     stamp_ns: s.stamp_ns,
-                    geometry: s.geometry,
+                    log_stamp_ns: s.log_stamp_ns,
+                    geometry: as_sent(&s.geometry),
                     ranges: s.ranges,
+                    // The message carries the mount in f64: as it is.
+                    robot_from_sensor: s.robot_from_sensor,
                     odometry: None,
                 });
             }
@@ -100,13 +129,9 @@ pub fn load_degraded(
     }
     track.end();
     for scan in &mut scans {
-        scan.odometry = track
-            .at(scan.stamp_ns)
-            .reading()
-            .map(|reading| OdometryInput {
-                odom_from_robot: reading.pose,
-                covariance: reading.covariance,
-            });
+        scan.odometry = track.at(scan.stamp_ns).reading().map(|reading| {
+            OdometryInput::of_sensor(reading.pose, reading.covariance, &scan.robot_from_sensor)
+        });
     }
     Ok(scans)
 }
