@@ -111,6 +111,11 @@ impl MatchGrid {
         grid
     }
 
+    /// Memory held by the pyramid, bytes.
+    pub fn bytes(&self) -> usize {
+        self.levels.iter().map(Vec::len).sum()
+    }
+
     /// The pose within `window` of `seed` where the most of `scan` (robot frame) is
     /// explained, if its score reaches `min_score`. Yaw steps move the points' RMS radius by
     /// a cell; translations are whole cells.

@@ -16,8 +16,8 @@ use scan_match::registration::{RegistrationParams, register};
 use slam_geom::Pose2;
 
 use crate::branch_bound::{MatchGrid, SearchWindow};
-use crate::coverage::Seen;
-use crate::submap::Submap;
+use crate::coverage::{FreeSpace, Seen};
+use crate::submap::SearchMaps;
 
 /// Information along a direction the closure leaves open: a standard deviation of 10 m (or
 /// radians).
@@ -68,11 +68,11 @@ pub enum Refusal {
     Unconstrained,
 }
 
-/// Checks whether `scan` (robot frame) is seen in `submap` within `window` of `seed`
-/// (`submap_from_robot` as the graph predicts it).
+/// Checks whether `scan` (robot frame) is seen in a submap (its search maps and free space)
+/// within `window` of `seed` (`submap_from_robot` as the graph predicts it).
 pub fn verify(
-    submap: &Submap,
-    grid: &MatchGrid,
+    maps: &SearchMaps,
+    free: &FreeSpace,
     scan: &[SurfacePoint],
     seed: &Pose2,
     window: SearchWindow,
@@ -81,15 +81,16 @@ pub fn verify(
     let stride = scan.len().div_ceil(SEARCH_POINTS).max(1);
     let sample: Vec<SurfacePoint> = scan.iter().step_by(stride).copied().collect();
     let positions: Vec<Vector2<f64>> = sample.iter().map(|p| p.point).collect();
+    let grid = &maps.grid;
     let found = grid
         .search(&positions, seed, window, check.min_overlap)
         .ok_or(Refusal::NoMatch)?;
     let gate = 2.0 * check.radius;
-    let fit = register(submap.map(), scan, found.pose, gate, &check.registration);
+    let fit = register(&maps.map, scan, found.pose, gate, &check.registration);
     if fit.constraint.is_void() {
         return Err(Refusal::Unconstrained);
     }
-    let (explained, agreement) = judge(submap, &sample, &fit.pose, check.radius);
+    let (explained, agreement) = judge(maps, free, &sample, &fit.pose, check.radius);
     if explained < check.min_overlap {
         return Err(Refusal::Unexplained(explained));
     }
@@ -112,18 +113,24 @@ pub fn verify(
 
 /// The share of `sample` the submap explains at `pose` (a surface facing the same way within
 /// `radius`), and the share of the points it can speak for that it explains.
-fn judge(submap: &Submap, sample: &[SurfacePoint], pose: &Pose2, radius: f64) -> (f64, f64) {
+fn judge(
+    maps: &SearchMaps,
+    free: &FreeSpace,
+    sample: &[SurfacePoint],
+    pose: &Pose2,
+    radius: f64,
+) -> (f64, f64) {
     let rotation = pose.rotation();
     let (mut explained, mut contradicted) = (0usize, 0usize);
     for p in sample {
         let point = pose.transform(p.point);
-        if submap
-            .map()
+        if maps
+            .map
             .nearest(point, rotation * p.normal, radius)
             .is_some()
         {
             explained += 1;
-        } else if submap.coverage().seen(point) == Seen::Free {
+        } else if free.seen(point) == Seen::Free {
             contradicted += 1;
         }
     }

@@ -118,12 +118,66 @@ impl Coverage {
 
     /// What the submap says about `point`.
     pub fn seen(&self, point: Vector2<f64>) -> Seen {
-        let counts = self.counts(self.cell_of(point));
-        if counts.hits == 0 && counts.passes >= FREE_PASSES {
+        if is_free(self.counts(self.cell_of(point))) {
             Seen::Free
         } else {
             Seen::NotFree
         }
+    }
+
+    /// The free cells alone, a bit each: what a finished submap keeps.
+    pub fn free_space(&self) -> FreeSpace {
+        let mut free = FreeSpace {
+            cell: self.cell,
+            index: HashMap::new(),
+            tiles: Vec::new(),
+        };
+        for (&key, &tile) in &self.index {
+            let mut bits = [0u64; BIT_WORDS];
+            for (i, counts) in self.tiles[tile].iter().enumerate() {
+                if is_free(*counts) {
+                    bits[i / 64] |= 1 << (i % 64);
+                }
+            }
+            if bits.iter().any(|&w| w != 0) {
+                free.index.insert(key, free.tiles.len());
+                free.tiles.push(bits);
+            }
+        }
+        free
+    }
+}
+
+fn is_free(counts: Counts) -> bool {
+    counts.hits == 0 && counts.passes >= FREE_PASSES
+}
+
+/// Words of a tile's bitmap.
+const BIT_WORDS: usize = (TILE * TILE) as usize / 64;
+
+/// A finished submap's free space: one bit per cell, tiles where any cell is free.
+#[derive(Debug, Clone)]
+pub struct FreeSpace {
+    cell: f64,
+    index: HashMap<(i32, i32), usize>,
+    tiles: Vec<[u64; BIT_WORDS]>,
+}
+
+impl FreeSpace {
+    /// What the submap says about `point`, as [`Coverage::seen`] said it.
+    pub fn seen(&self, point: Vector2<f64>) -> Seen {
+        let (x, y) = (
+            (point.x / self.cell).floor() as i32,
+            (point.y / self.cell).floor() as i32,
+        );
+        let free = self
+            .index
+            .get(&(x >> TILE_BITS, y >> TILE_BITS))
+            .is_some_and(|&tile| {
+                let i = offset(x, y);
+                self.tiles[tile][i / 64] & (1 << (i % 64)) != 0
+            });
+        if free { Seen::Free } else { Seen::NotFree }
     }
 }
 
@@ -207,6 +261,27 @@ mod tests {
         // Never crossed: unknown, not free.
         assert_eq!(coverage.seen(Vector2::new(-2.0, 0.0)), Seen::NotFree);
         assert_eq!(coverage.seen(Vector2::new(7.0, 0.0)), Seen::NotFree);
+    }
+
+    #[test]
+    fn the_free_space_kept_says_what_the_counts_said() {
+        let mut coverage = Coverage::new(0.1);
+        for i in 0..40 {
+            let angle = f64::from(i) * 0.15;
+            let end = Vector2::new(angle.cos(), angle.sin()) * (3.0 + 0.05 * f64::from(i % 7));
+            coverage.add_beam(Vector2::new(0.3, -0.2), end);
+            coverage.add_beam(Vector2::new(-0.2, 0.3), end);
+        }
+        let free = coverage.free_space();
+        let mut free_cells = 0;
+        for x in -45..45 {
+            for y in -45..45 {
+                let p = Vector2::new(f64::from(x) * 0.1 + 0.05, f64::from(y) * 0.1 + 0.05);
+                assert_eq!(free.seen(p), coverage.seen(p), "{p:?}");
+                free_cells += usize::from(free.seen(p) == Seen::Free);
+            }
+        }
+        assert!(free_cells > 100, "{free_cells}");
     }
 
     #[test]

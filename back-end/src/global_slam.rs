@@ -18,14 +18,15 @@ use nalgebra::Matrix3;
 use scan_match::points::SurfacePoint;
 use slam_geom::Pose2;
 
-use crate::branch_bound::{MatchGrid, SearchWindow};
+use crate::branch_bound::SearchWindow;
 use crate::closure::{ClosureCheck, Refusal, verify};
 use crate::confirmation::{Confirmations, Tie};
 use crate::pose_graph::{PoseGraph, PoseGraphError};
-use crate::submap::{SubmapConfig, Submaps};
+use crate::submap::{SearchMaps, SubmapConfig, Submaps};
 
-/// Match grids kept at once: the submaps around the robot.
-const GRID_CACHE: usize = 12;
+/// Memory the search maps of the submaps searched last may hold, bytes: those around the
+/// robot are searched again and again, and a submap of a large hall costs megabytes.
+const SEARCH_MAPS_BYTES: usize = 48 << 20;
 
 /// Nodes between two searches in one submap: neighbouring nodes see the same, and a
 /// closure every few nodes holds the path as well as one at each.
@@ -135,7 +136,8 @@ pub struct GlobalSlam {
     config: GlobalConfig,
     graph: PoseGraph,
     submaps: Submaps,
-    grids: VecDeque<(usize, MatchGrid)>,
+    /// Search maps of the submaps searched last, the latest first.
+    search_maps: VecDeque<(usize, SearchMaps)>,
     /// The node each submap was last searched for.
     last_attempt: Vec<Option<usize>>,
     scans: Vec<ScanPlace>,
@@ -160,7 +162,7 @@ impl GlobalSlam {
             config,
             graph: PoseGraph::new(Pose2::IDENTITY)?,
             submaps: Submaps::new(config.submaps),
-            grids: VecDeque::new(),
+            search_maps: VecDeque::new(),
             last_attempt: Vec::new(),
             scans: Vec::new(),
             odom_from_node: Pose2::IDENTITY,
@@ -278,12 +280,16 @@ impl GlobalSlam {
                 self.last_attempt.resize(index + 1, None);
             }
             self.last_attempt[index] = Some(node);
-            self.cache_grid(index);
-            let (Some(submap), Some((_, grid))) = (self.submaps.get(index), self.grids.front())
+            self.cache_search_maps(index);
+            let (Some(submap), Some((_, maps))) =
+                (self.submaps.get(index), self.search_maps.front())
             else {
                 continue;
             };
-            let answer = verify(submap, grid, points, &seed, window, &self.config.closure);
+            let Some(free) = submap.free_space() else {
+                continue;
+            };
+            let answer = verify(maps, free, points, &seed, window, &self.config.closure);
             match answer {
                 Ok(closure) => {
                     let innovation = seed.between(&closure.submap_from_robot);
@@ -374,16 +380,29 @@ impl GlobalSlam {
 
     /// Puts the match grid of submap `index` first in the cache, built on first use and
     /// kept while it is recent.
-    fn cache_grid(&mut self, index: usize) {
-        if let Some(at) = self.grids.iter().position(|(i, _)| *i == index) {
-            if let Some(entry) = self.grids.remove(at) {
-                self.grids.push_front(entry);
+    fn cache_search_maps(&mut self, index: usize) {
+        if let Some(at) = self.search_maps.iter().position(|(i, _)| *i == index) {
+            if let Some(entry) = self.search_maps.remove(at) {
+                self.search_maps.push_front(entry);
             }
-        } else if let Some(submap) = self.submaps.get(index) {
-            let grid = submap.match_grid(self.config.resolution, self.config.max_window_m);
+        } else if let Some(maps) = self
+            .submaps
+            .get(index)
+            .and_then(|submap| submap.search_maps(self.config.resolution, self.config.max_window_m))
+        {
             self.stats.grids_built += 1;
-            self.grids.push_front((index, grid));
-            self.grids.truncate(GRID_CACHE);
+            self.search_maps.push_front((index, maps));
+            let mut kept = 0;
+            let within = self
+                .search_maps
+                .iter()
+                .take_while(|(_, maps)| {
+                    kept += maps.bytes();
+                    kept <= SEARCH_MAPS_BYTES
+                })
+                .count();
+            // The newest stays whatever it costs: the search needs it.
+            self.search_maps.truncate(within.max(1));
         }
     }
 

@@ -7,12 +7,14 @@
 //! after twice [`SubmapConfig::keyframes`] of them. A scan anywhere on the path then has a
 //! finished submap around it that it did not help build only from the middle of one.
 //!
-//! A submap keeps its keyframes' scans; the local map and the free space that judge a
-//! closure are built from them the first time a scan is found in the submap, which many
-//! submaps never see.
+//! An open submap keeps its keyframes' scans. Finished, it keeps only its points thinned to
+//! one per voxel and the free space its beams crossed, a bit per cell: a submap costs
+//! memory by the area it covers. The search structures over it (the match grid and the
+//! local map the aligner needs) are built when a scan is searched for in it, and the caller
+//! keeps the few in use.
 
 use std::collections::HashMap;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use nalgebra::Vector2;
 use scan_match::local_map::LocalMap;
@@ -20,7 +22,7 @@ use scan_match::points::SurfacePoint;
 use slam_geom::Pose2;
 
 use crate::branch_bound::MatchGrid;
-use crate::coverage::Coverage;
+use crate::coverage::{Coverage, FreeSpace};
 
 /// How submaps are cut.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,18 +43,36 @@ pub struct Submap {
     /// The submap frame's pose in the front end's frame, when it was started.
     odom_from_submap: Pose2,
     voxel: f64,
-    finished: bool,
-    /// Each keyframe's pose in the submap frame and its points (robot frame), shared with
-    /// the other submap it went into.
+    /// While open: each keyframe's pose in the submap frame and its points (robot frame),
+    /// shared with the other submap it went into.
     keyframes: Vec<(Pose2, Arc<[SurfacePoint]>)>,
-    /// Once finished: the points thinned to one per voxel (the newest), submap frame.
-    points: Vec<Vector2<f64>>,
-    /// Built on first use: only the submaps a scan is found in need them.
-    map: OnceLock<LocalMap>,
-    coverage: OnceLock<Coverage>,
+    /// What a finished submap keeps.
+    finished: Option<Finished>,
     /// Lowest and highest point, submap frame.
     lo: Vector2<f64>,
     hi: Vector2<f64>,
+}
+
+/// A finished submap's contents.
+#[derive(Debug)]
+struct Finished {
+    /// The points thinned to one per voxel (the newest), submap frame.
+    points: Vec<SurfacePoint>,
+    free: FreeSpace,
+}
+
+/// What a scan is searched for and registered against in one submap.
+#[derive(Debug)]
+pub struct SearchMaps {
+    pub grid: MatchGrid,
+    pub map: LocalMap,
+}
+
+impl SearchMaps {
+    /// Memory held, bytes (the local map's about).
+    pub fn bytes(&self) -> usize {
+        self.grid.bytes() + self.map.bytes()
+    }
 }
 
 impl Submap {
@@ -62,11 +82,8 @@ impl Submap {
             last_node: anchor,
             odom_from_submap,
             voxel,
-            finished: false,
             keyframes: Vec::new(),
-            points: Vec::new(),
-            map: OnceLock::new(),
-            coverage: OnceLock::new(),
+            finished: None,
             lo: Vector2::repeat(f64::INFINITY),
             hi: Vector2::repeat(f64::NEG_INFINITY),
         }
@@ -85,49 +102,49 @@ impl Submap {
     }
 
     /// Ends the submap: its points are thinned as the local map thins them, the newest
-    /// point of each voxel kept.
+    /// point of each voxel kept, and its beams' free space is kept; the scans go.
     fn finish(&mut self) {
         let mut voxels = HashMap::new();
+        let mut coverage = Coverage::new(2.0 * self.voxel);
         for (pose, scan) in &self.keyframes {
+            let rotation = pose.rotation();
             for p in scan.iter() {
                 let q = pose.transform(p.point);
+                coverage.add_beam(pose.position(), q);
                 let voxel = (
                     (q.x / self.voxel).floor() as i32,
                     (q.y / self.voxel).floor() as i32,
                 );
-                voxels.insert(voxel, q);
+                let normal = rotation * p.normal;
+                voxels.insert(voxel, SurfacePoint { point: q, normal });
             }
         }
-        self.points = voxels.into_values().collect();
-        self.finished = true;
+        self.keyframes = Vec::new();
+        self.finished = Some(Finished {
+            points: voxels.into_values().collect(),
+            free: coverage.free_space(),
+        });
     }
 
     /// Whether no more keyframes go in.
     pub fn is_finished(&self) -> bool {
-        self.finished
+        self.finished.is_some()
     }
 
-    /// The points, for registration (a finished submap's; built on first use).
-    pub fn map(&self) -> &LocalMap {
-        self.map.get_or_init(|| {
-            let mut map = LocalMap::new(self.voxel, usize::MAX);
-            for (pose, scan) in &self.keyframes {
-                map.insert(*pose, scan);
-            }
-            map
-        })
+    /// Where a finished submap's beams passed freely.
+    pub fn free_space(&self) -> Option<&FreeSpace> {
+        self.finished.as_ref().map(|f| &f.free)
     }
 
-    /// Where the submap's beams went (built on first use).
-    pub fn coverage(&self) -> &Coverage {
-        self.coverage.get_or_init(|| {
-            let mut coverage = Coverage::new(2.0 * self.voxel);
-            for (pose, scan) in &self.keyframes {
-                for p in scan.iter() {
-                    coverage.add_beam(pose.position(), pose.transform(p.point));
-                }
-            }
-            coverage
+    /// The match grid and the local map over a finished submap's points.
+    pub fn search_maps(&self, resolution: f64, max_window: f64) -> Option<SearchMaps> {
+        let finished = self.finished.as_ref()?;
+        let positions: Vec<Vector2<f64>> = finished.points.iter().map(|p| p.point).collect();
+        let mut map = LocalMap::new(self.voxel, usize::MAX);
+        map.insert(Pose2::IDENTITY, &finished.points);
+        Some(SearchMaps {
+            grid: MatchGrid::new(&positions, resolution, max_window),
+            map,
         })
     }
 
@@ -142,11 +159,6 @@ impl Submap {
     /// The centre of the submap's points' box, submap frame.
     pub fn centre(&self) -> Vector2<f64> {
         (self.lo + self.hi) / 2.0
-    }
-
-    /// The match grid over the submap's points (a finished submap's).
-    pub fn match_grid(&self, resolution: f64, max_window: f64) -> MatchGrid {
-        MatchGrid::new(&self.points, resolution, max_window)
     }
 }
 

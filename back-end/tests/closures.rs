@@ -117,7 +117,8 @@ fn a_closure_after_two_metres_of_drift_is_found_where_it_is() {
         Pose2::new(0.25, 0.0, 0.05),
     );
     let submap = submaps.get(0).unwrap();
-    let grid = submap.match_grid(VOXEL, 2.5);
+    let maps = submap.search_maps(VOXEL, 2.5).unwrap();
+    let free = submap.free_space().unwrap();
     // The robot is back, at `truth` in the submap's frame; the drifted path puts it 2 m off.
     let world_from_submap = Pose2::new(1.0, 1.5, 0.2);
     let world_from_robot = Pose2::new(3.0, 2.5, 1.2);
@@ -128,8 +129,8 @@ fn a_closure_after_two_metres_of_drift_is_found_where_it_is() {
         yaw: 0.3,
     };
     let closure = verify(
-        submap,
-        &grid,
+        &maps,
+        free,
         &scan(&caster, &world_from_robot),
         &seed,
         window,
@@ -155,7 +156,8 @@ fn a_room_that_only_looks_like_the_old_one_is_refused() {
         Pose2::new(0.25, 0.0, 0.05),
     );
     let submap = submaps.get(0).unwrap();
-    let grid = submap.match_grid(VOXEL, 1.0);
+    let maps = submap.search_maps(VOXEL, 1.0).unwrap();
+    let free = submap.free_space().unwrap();
     // The robot is in the second room; its corners say it is at the same place of the first.
     let world_from_submap = Pose2::new(1.0, 1.5, 0.2);
     let in_second_room = Pose2::new(13.0, 2.5, 1.2);
@@ -166,8 +168,8 @@ fn a_room_that_only_looks_like_the_old_one_is_refused() {
         yaw: 0.2,
     };
     let answer = verify(
-        submap,
-        &grid,
+        &maps,
+        free,
         &scan(&caster, &in_second_room),
         &seed,
         window,
@@ -185,8 +187,8 @@ fn a_room_that_only_looks_like_the_old_one_is_refused() {
     );
     // The same scan from the first room is a closure.
     let answer = verify(
-        submap,
-        &grid,
+        &maps,
+        free,
         &scan(&caster, &proposed),
         &seed,
         window,

@@ -270,6 +270,13 @@ impl LocalMap {
             .flat_map(|entries| entries.iter().map(|e| &e.point))
     }
 
+    /// Memory held, bytes, about: the raster, the points and their cell entries.
+    pub fn bytes(&self) -> usize {
+        self.field.bytes()
+            + self.slab.len() * std::mem::size_of::<SlabPoint>()
+            + self.len * std::mem::size_of::<Entry>()
+    }
+
     /// Raster tiles allocated (for tests of its upkeep).
     pub fn field_tiles(&self) -> usize {
         self.field.tiles()

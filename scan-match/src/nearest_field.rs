@@ -173,6 +173,11 @@ impl NearestField {
         }
     }
 
+    /// Memory held by the raster's tiles, bytes.
+    pub fn bytes(&self) -> usize {
+        self.tiles() * (TILE * TILE) as usize * std::mem::size_of::<Cell>()
+    }
+
     /// Tiles allocated.
     pub fn tiles(&self) -> usize {
         self.tiles.len()
