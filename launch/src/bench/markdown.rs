@@ -31,17 +31,18 @@ pub const LOG_COLUMNS: [&str; 12] = [
 
 /// The processes whose memory is shown, in pipeline order; `source` is whichever of the
 /// sources ran.
-const PROCESSES: [&str; 5] = [
+const PROCESSES: [&str; 6] = [
     "source",
     "feature-proc",
     "slam-proc",
+    "graph-proc",
     "map-sink",
     "slam-launch",
 ];
 const SOURCES: [&str; 3] = ["lidar-replay", "lidar-sim", "lidar-hokuyo"];
 
 /// The columns of the speed table.
-pub const SPEED_COLUMNS: [&str; 10] = [
+pub const SPEED_COLUMNS: [&str; 11] = [
     "run",
     "duration (s)",
     "wall (s)",
@@ -50,6 +51,7 @@ pub const SPEED_COLUMNS: [&str; 10] = [
     "source (MiB)",
     "feature-proc (MiB)",
     "slam-proc (MiB)",
+    "graph-proc (MiB)",
     "map-sink (MiB)",
     "slam-launch (MiB)",
 ];

@@ -54,6 +54,7 @@ fn run(seed: u64, wall_s: f64, duration_s: f64, ate: Option<f64>, slam_kib: u64)
         peak_memory_kib: [
             ("lidar-replay".to_owned(), 7 * 1024),
             ("slam-proc".to_owned(), slam_kib),
+            ("graph-proc".to_owned(), 64 * 1024),
             ("map-sink".to_owned(), 128 * 1024),
         ]
         .into(),
@@ -155,7 +156,7 @@ fn speed_memory_and_worlds_parse_back() {
     // Memory: the largest of the seeds, in MiB; a process that reported none is n/a.
     assert_eq!(
         rows[0][5..],
-        ["7.0", "n/a", "100.0", "128.0", "n/a"].map(String::from)
+        ["7.0", "n/a", "100.0", "64.0", "128.0", "n/a"].map(String::from)
     );
     assert_eq!(rows[4][0], "world office");
     assert_eq!(rows[4][4], "n/a");
