@@ -1,7 +1,8 @@
 //! `graph-proc`: global SLAM (the `back-end` library) as a stage. It reads the front end's
 //! motion from the features topic and, where the robot moved enough for a new node, the
 //! scan's beams; it builds submaps, closes the loops the scans confirm and solves the pose
-//! graph, and publishes the graph's path at the end of the stream (or when stopped).
+//! graph, and publishes the graph's path as it stands every [`INTERIM_PERIOD`] and, solved
+//! once more, at the end of the stream (or when stopped).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -16,8 +17,12 @@ use scan_match::FrontEndConfig;
 use stage_kit::held_scans::HeldScans;
 use stage_kit::{say, say_err};
 
+/// How often the path is published while the run goes on: a viewer, a recording and a run
+/// stopped without a last word all have one at most this old.
+const INTERIM_PERIOD: Duration = Duration::from_secs(2);
+
 /// Subscribes to the features (the front end's motion) and the scans, and publishes the
-/// pose graph's path on `graph/path` at the end.
+/// pose graph's path on `graph/path` as it goes and at the end.
 #[derive(Debug, Parser)]
 #[command(name = "graph-proc", version)]
 struct Args {
@@ -45,8 +50,8 @@ fn run(args: Args) -> Result<()> {
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("graph-proc")?;
-    // The path goes out once, at the end, in many chunks: lossless whatever the run's
-    // delivery. Made first: map-sink waits for it.
+    // The path goes out in many chunks: lossless whatever the run's delivery. Made first:
+    // map-sink waits for it.
     let path = Outlet::create(&domain, &node, topic::GRAPH_PATH, Delivery::Lossless, 0)?;
     let features = Inlet::open(&node, topic::FEATURES)?;
     let scans = Inlet::open(&node, topic::SCAN)?;
@@ -59,6 +64,7 @@ fn run(args: Args) -> Result<()> {
     let mut held = HeldScans::default();
     let mut counts = Counts::default();
     let mut last_stamp = 0;
+    let mut interim_at = Instant::now();
     loop {
         if wait_any(&[&features, &scans], Duration::from_millis(100))? == Wake::Shutdown {
             break;
@@ -66,7 +72,7 @@ fn run(args: Args) -> Result<()> {
         held.hold(&scans)?;
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
-                publish(&path, &mut global, sample.header.stamp_ns)?;
+                publish_final(&path, &mut global, sample.header.stamp_ns)?;
                 say_err(&summary(&global.stats(), &counts));
                 ipc_types::losses::report(&counts.losses());
                 return Ok(());
@@ -104,28 +110,37 @@ fn run(args: Args) -> Result<()> {
                 .context("the pose graph")?;
             last_stamp = sample.header.stamp_ns;
         }
+        if interim_at.elapsed() >= INTERIM_PERIOD && last_stamp > 0 {
+            path.publish_path(&stamped(&global), last_stamp, PathForm::Interim)?;
+            interim_at = Instant::now();
+        }
     }
     // Stopped by a signal: the path as far as it got, solved once more.
-    publish(&path, &mut global, last_stamp)?;
+    publish_final(&path, &mut global, last_stamp)?;
     say_err("graph-proc: stopped");
     say_err(&summary(&global.stats(), &counts));
     ipc_types::losses::report(&counts.losses());
     Ok(())
 }
 
-/// Solves the graph with everything in it and publishes its path.
-fn publish(outlet: &Outlet<PathChunk>, global: &mut GlobalSlam, stamp_ns: u64) -> Result<()> {
-    let started = Instant::now();
-    global.finish().context("the pose graph's last solve")?;
-    let path: Vec<StampedPose> = global
+/// Every scan's pose on the graph as it stands.
+fn stamped(global: &GlobalSlam) -> Vec<StampedPose> {
+    global
         .path()
         .into_iter()
         .map(|(stamp_ns, pose)| StampedPose {
             stamp_ns,
             pose: pose.into(),
         })
-        .collect();
-    outlet.publish_path(&path, stamp_ns)?;
+        .collect()
+}
+
+/// Solves the graph with everything in it and publishes its path as final.
+fn publish_final(outlet: &Outlet<PathChunk>, global: &mut GlobalSlam, stamp_ns: u64) -> Result<()> {
+    let started = Instant::now();
+    global.finish().context("the pose graph's last solve")?;
+    let path = stamped(global);
+    outlet.publish_path(&path, stamp_ns, PathForm::Final)?;
     say_err(&format!(
         "graph-proc: path of {} poses solved and published in {:.2} s",
         path.len(),

@@ -12,6 +12,10 @@ pub const FRAME_ID_LEN: usize = 32;
 /// It travels on the data service itself, so it arrives after every message sent before it.
 pub const FLAG_END_OF_STREAM: u32 = 1;
 
+/// Bit in [`Header::flags`]: a result sent again and again as it improves (a path) is in its
+/// last form: sent at the end of the stream, or as the publisher stops.
+pub const FLAG_FINAL: u32 = 2;
+
 /// Sequence, time and frame of a message, after ROS `std_msgs/Header`.
 ///
 /// Its serde form names the frame as text, as every message's serde form leaves out the
@@ -67,6 +71,11 @@ impl Header {
     /// True when this message only marks the end of the stream.
     pub fn is_end_of_stream(&self) -> bool {
         self.flags & FLAG_END_OF_STREAM != 0
+    }
+
+    /// True when the message belongs to a result's last form ([`FLAG_FINAL`]).
+    pub fn is_final(&self) -> bool {
+        self.flags & FLAG_FINAL != 0
     }
 }
 

@@ -60,7 +60,7 @@ pub use domain::{
     Claim, ClaimError, Domain, DomainError, FILE_PREFIX, ForeignFile, NodeError, Sweep,
     user_prefix, user_root,
 };
-pub use header::{FLAG_END_OF_STREAM, FRAME_ID_LEN, Header, now_ns};
+pub use header::{FLAG_END_OF_STREAM, FLAG_FINAL, FRAME_ID_LEN, Header, now_ns};
 pub use message::Message;
 pub use messages::*;
 pub use topic::Topic;

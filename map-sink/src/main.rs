@@ -439,7 +439,7 @@ fn publish_final(
     let stamp_ns = path.last().map_or(0, |p| p.stamp_ns);
     if !path.is_empty() {
         let poses: Vec<ipc_types::StampedPose> = path.iter().map(|&p| p.into()).collect();
-        path_outlet.publish_path(&poses, stamp_ns)?;
+        path_outlet.publish_path(&poses, stamp_ns, ipc_types::PathForm::Final)?;
     }
     if let Some(grid) = &finished.grid {
         publish_grid(grid_outlet, grid, stamp_ns)?;
@@ -498,8 +498,8 @@ impl FinalPath {
     }
 }
 
-/// Takes a path's chunks; a complete path goes to the recorder when it is the final one
-/// (`from_graph` says whose it is). A chunk that does not fit is reported and the path left
+/// Takes a path's chunks; a complete path goes to the recorder when it is the one the run
+/// keeps (`from_graph` says whose it is), and the path is done once the final form came. A chunk that does not fit is reported and the path left
 /// incomplete (the online estimate stands in).
 fn drain_path(
     inlet: &Inlet<PathChunk>,
@@ -521,8 +521,10 @@ fn drain_path(
         if let Some(path) = assembly.complete()
             && from_graph == final_path.from_graph
         {
+            // A path as it stands is kept too: a run stopped before the last one came
+            // still has it.
             recorder.set_final_path(path);
-            final_path.complete = true;
+            final_path.complete = chunk.header.is_final();
         }
     }
     Ok(())

@@ -127,7 +127,8 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(count("/slam/pose"), processed);
     assert_eq!(count("/sim/world_corners"), 1);
     assert_eq!(count("/slam/path"), 1);
-    assert_eq!(count("/graph/path"), 1);
+    // The back end's path as it stands every few seconds of the run, then its final one.
+    assert!(count("/graph/path") >= 1);
     assert_eq!(count("/map/path"), 1);
     assert_eq!(count("/map/grid"), 1);
     assert_eq!(count("/slam/particles"), processed / CLOUD_EVERY);

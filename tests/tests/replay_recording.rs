@@ -204,7 +204,8 @@ fn check_recording_of(out: &Path, odometry: bool) {
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(topics["/tf"].messages, processed + 1);
     assert_eq!(topics["/slam/path"].messages, 1);
-    assert_eq!(topics["/graph/path"].messages, 1);
+    // The back end's path as it stands every few seconds of the run, then its final one.
+    assert!(topics["/graph/path"].messages >= 1);
     assert_eq!(topics["/map/path"].messages, 1);
     let count = |topic: &str| topics.get(topic).map_or(0, |t| t.messages);
     assert_eq!(count("/map/grid"), u64::from(grid));

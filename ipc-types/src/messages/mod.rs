@@ -31,7 +31,7 @@ pub use line::Line;
 pub use map_snapshot::{MapSnapshot, MapSnapshotRecord};
 pub use odometry::Odometry;
 pub use particle_cloud::{Particle, ParticleCloud, ParticleCloudRecord};
-pub use path_chunk::{PathChunk, PathChunkRecord, StampedPose};
+pub use path_chunk::{PathChunk, PathChunkRecord, PathForm, StampedPose};
 pub use pose::Pose2;
 pub use pose_estimate::{PoseEstimate, StageTiming};
 pub use scan_motion::ScanMotion;

@@ -1,4 +1,5 @@
-//! The filter's whole trajectory, sent in pieces at the end of a run.
+//! A whole trajectory, sent in pieces: the filter's at the end of a run, the back end's as
+//! it improves and at the end.
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
@@ -8,7 +9,7 @@ use super::bounded_array::BoundedArray;
 use super::chunked::chunked_message;
 use super::pose::Pose2;
 use crate::capacity::{CapacityError, MAX_PATH_CHUNK_POSES};
-use crate::header::Header;
+use crate::header::{FLAG_FINAL, Header};
 use crate::transport::{Outlet, PublishError};
 
 /// One pose of a path: a scan's stamp and the pose (`map_from_robot`) at it.
@@ -44,19 +45,36 @@ chunked_message! {
     /// A piece of a path: poses `first .. first + pose_count` of `total`, in stamp order. A
     /// path of any length travels as consecutive chunks; the receiver has it all once it
     /// holds `total` poses. The header's `seq` numbers the chunks of one path from 0, its
-    /// `stamp_ns` is the last scan's.
+    /// `stamp_ns` is the last scan's; [`crate::FLAG_FINAL`] marks a path in its last form.
     PathChunk, PathChunkRecord, StampedPose, MAX_PATH_CHUNK_POSES, "slam::PathChunk::v1",
     "path poses", poses {}
 }
 
+/// Whether a path is in its last form.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PathForm {
+    /// As it stands; a better one may follow.
+    Interim,
+    /// The last: sent at the end of the stream or as the publisher stops.
+    Final,
+}
+
 impl Outlet<PathChunk> {
     /// Publishes a whole path as consecutive chunks numbered from 0 (their `seq`), each
-    /// stamped `stamp_ns` (the last scan's) in frame `map`.
-    pub fn publish_path(&self, path: &[StampedPose], stamp_ns: u64) -> Result<(), PublishError> {
+    /// stamped `stamp_ns` (the last scan's) in frame `map`, flagged when `form` is final.
+    pub fn publish_path(
+        &self,
+        path: &[StampedPose],
+        stamp_ns: u64,
+        form: PathForm,
+    ) -> Result<(), PublishError> {
         let total = path.len() as u64;
         for (index, chunk) in path.chunks(MAX_PATH_CHUNK_POSES).enumerate() {
             self.publish(|message| {
                 message.header = Header::new(index as u64, stamp_ns, "map");
+                if form == PathForm::Final {
+                    message.header.flags |= FLAG_FINAL;
+                }
                 message.first = (index * MAX_PATH_CHUNK_POSES) as u64;
                 message.total = total;
                 // Chunks are cut to the capacity, so this cannot fail.
