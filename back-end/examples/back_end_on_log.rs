@@ -50,21 +50,13 @@ fn main() -> Result<()> {
         // The CPU clock costs a system call: read around nodes only, where the work is.
         let wanted = back_end.wants_node(&output.odom_from_robot);
         let cpu = wanted.then(thread_cpu_ns);
-        let points = wanted.then(|| {
-            scan_match::points::extract(
-                &input.geometry,
-                input.ranges,
-                config.range_sigma,
-                config.voxel_size,
-            )
-            .points
-        });
+        let points = wanted.then(|| back_end.node_scan(&input.geometry, input.ranges));
         back_end.add_scan(
             output.stamp_ns,
             &output.odom_from_robot,
             &output.increment,
             &output.increment_covariance,
-            points.as_deref(),
+            points,
         )?;
         let elapsed = started.elapsed().as_nanos();
         back_ns += elapsed;
@@ -86,6 +78,18 @@ fn main() -> Result<()> {
     let front_file = out.with_extension("front.tum");
     write_tum(&front_file, &front_path)?;
     write_tum(&out, &back_end.path())?;
+    let started = Instant::now();
+    if let Some(grid) = back_end.grid()? {
+        let grid_file = out.with_extension("pgm");
+        write_pgm(&grid_file, &grid)?;
+        println!(
+            "grid {} x {} cells in {:.2} s: {}",
+            grid.width(),
+            grid.height(),
+            started.elapsed().as_secs_f64(),
+            grid_file.display()
+        );
+    }
     let relations = log.with_extension("relations");
     if relations.exists() {
         let relations = read_relations(&relations)?;
@@ -112,6 +116,21 @@ fn thread_cpu_ns() -> u64 {
         .ok()
         .and_then(|s| s.split_whitespace().next()?.parse().ok())
         .unwrap_or(0)
+}
+
+/// The grid as a trinary PGM (map_server's pixels), top row the highest y.
+fn write_pgm(path: &Path, grid: &back_end::occupancy_grid::OccupancyGrid) -> Result<()> {
+    use back_end::occupancy_grid::CellState;
+    let mut bytes = format!("P5\n{} {}\n255\n", grid.width(), grid.height()).into_bytes();
+    for row in (0..grid.height()).rev() {
+        bytes.extend((0..grid.width()).map(|col| match grid.state(col, row) {
+            CellState::Occupied => 0u8,
+            CellState::Free => 254,
+            CellState::Unknown => 205,
+        }));
+    }
+    std::fs::write(path, bytes)?;
+    Ok(())
 }
 
 fn write_tum(path: &Path, poses: &[(u64, Pose2)]) -> Result<()> {

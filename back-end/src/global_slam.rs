@@ -13,16 +13,21 @@
 //! narrow windows, cheaply, and one back from a long loop searches wide.
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use nalgebra::Matrix3;
 use scan_match::points::SurfacePoint;
-use slam_geom::Pose2;
+use slam_geom::{Pose2, ScanGeometry};
 
 use crate::branch_bound::SearchWindow;
 use crate::closure::{ClosureCheck, Refusal, verify};
+use crate::compact_scan::CompactScan;
 use crate::confirmation::{Confirmations, Tie};
+use crate::global_grid;
+use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 use crate::pose_graph::{PoseGraph, PoseGraphError};
-use crate::submap::{SearchMaps, SubmapConfig, Submaps};
+use crate::submap::{NodeScan, SearchMaps, SubmapConfig, Submaps};
+use crate::submap_grid::SubmapGrid;
 
 /// Memory the search maps of the submaps searched last may hold, bytes: those around the
 /// robot are searched again and again, and a submap of a large hall costs megabytes.
@@ -34,6 +39,15 @@ const ATTEMPT_GAP: usize = 3;
 
 /// Submaps a node is checked against at most: those whose middle it is nearest.
 const MAX_CANDIDATES: usize = 2;
+
+/// Why the back end could not go on.
+#[derive(Debug, thiserror::Error)]
+pub enum GlobalError {
+    #[error(transparent)]
+    PoseGraph(#[from] PoseGraphError),
+    #[error(transparent)]
+    Grid(#[from] GridError),
+}
 
 /// The back end's settings.
 #[derive(Debug, Clone, Copy)]
@@ -66,6 +80,7 @@ impl GlobalConfig {
             submaps: SubmapConfig {
                 keyframes: 20,
                 voxel: front_end.voxel_size,
+                grid: GridConfig::default(),
             },
             closure: ClosureCheck {
                 min_agreement: 0.8,
@@ -188,22 +203,46 @@ impl GlobalSlam {
             || moved.yaw.abs() >= self.config.node_angle_rad
     }
 
+    /// A node's scan from its ranges: the points closures are judged on (the front end's,
+    /// sensor frame) and the beams its submaps' grids are traced from.
+    pub fn node_scan(&self, geometry: &ScanGeometry, ranges: &[f32]) -> NodeScan {
+        let grid = &self.config.submaps.grid;
+        NodeScan {
+            points: scan_match::points::extract(
+                geometry,
+                ranges,
+                self.config.closure.registration.range_sigma,
+                self.config.submaps.voxel,
+            )
+            .points,
+            beams: CompactScan::new(
+                geometry.angle_min,
+                geometry.angle_increment,
+                geometry.range_min,
+                geometry.range_max,
+                ranges,
+                grid.resolution_m,
+                grid.no_return_reach_m,
+            ),
+        }
+    }
+
     /// Adds one scan: its front-end pose, the increment since the last scan and its
-    /// covariance, and, for a node ([`Self::wants_node`]), its points (robot frame).
+    /// covariance, and, for a node ([`Self::wants_node`]), its scan.
     pub fn add_scan(
         &mut self,
         stamp_ns: u64,
         odom_from_robot: &Pose2,
         increment: &Pose2,
         increment_covariance: &Matrix3<f64>,
-        keyframe: Option<&[SurfacePoint]>,
-    ) -> Result<(), PoseGraphError> {
+        keyframe: Option<NodeScan>,
+    ) -> Result<(), GlobalError> {
         if self.scans.is_empty() {
             // The first scan is node 0, the graph's origin.
             self.odom_from_node = *odom_from_robot;
             self.record(stamp_ns, 0, Pose2::IDENTITY);
-            if let Some(points) = keyframe {
-                self.insert(0, odom_from_robot, points);
+            if let Some(scan) = keyframe {
+                self.insert(0, odom_from_robot, scan.points.into(), scan.beams)?;
             }
             return Ok(());
         }
@@ -215,7 +254,7 @@ impl GlobalSlam {
             a * self.pending_covariance * a.transpose() + b * increment_covariance * b.transpose();
         self.pending = self.pending.compose(increment);
         self.travelled_m += increment.translation_norm();
-        let Some(points) = keyframe else {
+        let Some(scan) = keyframe else {
             let node = self.graph.node_count() - 1;
             self.record(stamp_ns, node, self.pending);
             return Ok(());
@@ -226,8 +265,9 @@ impl GlobalSlam {
         self.pending_covariance = Matrix3::zeros();
         self.odom_from_node = *odom_from_robot;
         self.record(stamp_ns, node, Pose2::IDENTITY);
-        self.insert(node, odom_from_robot, points);
-        self.close_loops(node, points)
+        let points: Arc<[SurfacePoint]> = scan.points.into();
+        self.insert(node, odom_from_robot, Arc::clone(&points), scan.beams)?;
+        Ok(self.close_loops(node, &points)?)
     }
 
     fn record(&mut self, stamp_ns: u64, node: usize, node_from_robot: Pose2) {
@@ -238,11 +278,18 @@ impl GlobalSlam {
         });
     }
 
-    fn insert(&mut self, node: usize, odom_from_robot: &Pose2, points: &[SurfacePoint]) {
+    fn insert(
+        &mut self,
+        node: usize,
+        odom_from_robot: &Pose2,
+        points: Arc<[SurfacePoint]>,
+        beams: CompactScan,
+    ) -> Result<(), GridError> {
         self.stats.nodes += 1;
         self.node_travelled_m.resize(node + 1, self.travelled_m);
-        self.submaps.insert(node, odom_from_robot, points);
+        self.submaps.insert(node, odom_from_robot, points, beams)?;
         self.stats.submaps = self.submaps.len();
+        Ok(())
     }
 
     /// Searches the finished submaps the node may be in; adds what the scans confirm.
@@ -409,6 +456,19 @@ impl GlobalSlam {
     /// Solves the graph once more with everything in it.
     pub fn finish(&mut self) -> Result<(), PoseGraphError> {
         self.solve()
+    }
+
+    /// The occupancy grid of every submap at its pose on the graph as it stands; `None`
+    /// before any beam.
+    pub fn grid(&self) -> Result<Option<OccupancyGrid>, GridError> {
+        let mut grids = Vec::with_capacity(self.submaps.len());
+        for (_, submap) in self.submaps.iter() {
+            if let Some(grid) = submap.occupancy()? {
+                grids.push((self.graph.pose(submap.anchor), grid));
+            }
+        }
+        let laid: Vec<(Pose2, &SubmapGrid)> = grids.iter().map(|(p, g)| (*p, g.as_ref())).collect();
+        global_grid::render(&laid, self.config.submaps.grid.resolution_m)
     }
 
     /// Every scan's pose on the solved graph, with its stamp.

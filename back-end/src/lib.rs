@@ -17,13 +17,18 @@
 
 pub mod branch_bound;
 pub mod closure;
+pub mod compact_scan;
 pub mod confirmation;
 pub mod coverage;
+pub mod global_grid;
 pub mod global_slam;
+pub mod occupancy_grid;
 pub mod pose_graph;
 pub mod submap;
+pub mod submap_grid;
 
-pub use global_slam::{GlobalConfig, GlobalSlam, GlobalStats};
+pub use global_slam::{GlobalConfig, GlobalError, GlobalSlam, GlobalStats};
 pub use pose_graph::{
     ACCEPTED_SCALE, ClosureId, PoseGraph, PoseGraphError, PoseGraphSettings, SolveReport,
 };
+pub use submap::NodeScan;

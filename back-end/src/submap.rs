@@ -22,7 +22,10 @@ use scan_match::points::SurfacePoint;
 use slam_geom::Pose2;
 
 use crate::branch_bound::MatchGrid;
+use crate::compact_scan::CompactScan;
 use crate::coverage::{Coverage, FreeSpace};
+use crate::occupancy_grid::{GridConfig, GridError};
+use crate::submap_grid::SubmapGrid;
 
 /// How submaps are cut.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -31,6 +34,24 @@ pub struct SubmapConfig {
     pub keyframes: usize,
     /// Voxel the points are thinned to, metres (the front end's).
     pub voxel: f64,
+    /// How each submap's occupancy is traced.
+    pub grid: GridConfig,
+}
+
+/// A node's scan: its surface points (robot frame) for closures, its beams for the grid.
+#[derive(Debug, Clone)]
+pub struct NodeScan {
+    pub points: Vec<SurfacePoint>,
+    pub beams: CompactScan,
+}
+
+/// A keyframe as an open submap holds it, shared with the other submap it went into.
+#[derive(Debug, Clone)]
+struct Keyframe {
+    /// The keyframe's pose in the submap frame.
+    pose: Pose2,
+    points: Arc<[SurfacePoint]>,
+    beams: Arc<CompactScan>,
 }
 
 /// One submap.
@@ -43,9 +64,9 @@ pub struct Submap {
     /// The submap frame's pose in the front end's frame, when it was started.
     odom_from_submap: Pose2,
     voxel: f64,
-    /// While open: each keyframe's pose in the submap frame and its points (robot frame),
-    /// shared with the other submap it went into.
-    keyframes: Vec<(Pose2, Arc<[SurfacePoint]>)>,
+    grid: GridConfig,
+    /// While open: its keyframes.
+    keyframes: Vec<Keyframe>,
     /// What a finished submap keeps.
     finished: Option<Finished>,
     /// Lowest and highest point, submap frame.
@@ -59,6 +80,8 @@ struct Finished {
     /// The points thinned to one per voxel (the newest), submap frame.
     points: Vec<SurfacePoint>,
     free: FreeSpace,
+    /// Its occupancy; `None` when no beam was left to trace.
+    grid: Option<SubmapGrid>,
 }
 
 /// What a scan is searched for and registered against in one submap.
@@ -76,12 +99,13 @@ impl SearchMaps {
 }
 
 impl Submap {
-    fn new(anchor: usize, odom_from_submap: Pose2, voxel: f64) -> Self {
+    fn new(anchor: usize, odom_from_submap: Pose2, config: &SubmapConfig) -> Self {
         Self {
             anchor,
             last_node: anchor,
             odom_from_submap,
-            voxel,
+            voxel: config.voxel,
+            grid: config.grid,
             keyframes: Vec::new(),
             finished: None,
             lo: Vector2::repeat(f64::INFINITY),
@@ -89,26 +113,29 @@ impl Submap {
         }
     }
 
-    /// Adds a keyframe's points (robot frame) at its front-end pose.
-    fn insert(&mut self, node: usize, odom_from_robot: &Pose2, scan: &Arc<[SurfacePoint]>) {
+    /// Adds a keyframe at its front-end pose.
+    fn insert(&mut self, node: usize, odom_from_robot: &Pose2, keyframe: &Keyframe) {
         let submap_from_robot = self.odom_from_submap.between(odom_from_robot);
-        for p in scan.iter() {
+        for p in keyframe.points.iter() {
             let q = submap_from_robot.transform(p.point);
             self.lo = self.lo.inf(&q);
             self.hi = self.hi.sup(&q);
         }
-        self.keyframes.push((submap_from_robot, Arc::clone(scan)));
+        self.keyframes.push(Keyframe {
+            pose: submap_from_robot,
+            ..keyframe.clone()
+        });
         self.last_node = node;
     }
 
     /// Ends the submap: its points are thinned as the local map thins them, the newest
     /// point of each voxel kept, and its beams' free space is kept; the scans go.
-    fn finish(&mut self) {
+    fn finish(&mut self) -> Result<(), GridError> {
         let mut voxels = HashMap::new();
         let mut coverage = Coverage::new(2.0 * self.voxel);
-        for (pose, scan) in &self.keyframes {
+        for Keyframe { pose, points, .. } in &self.keyframes {
             let rotation = pose.rotation();
-            for p in scan.iter() {
+            for p in points.iter() {
                 let q = pose.transform(p.point);
                 coverage.add_beam(pose.position(), q);
                 let voxel = (
@@ -119,11 +146,33 @@ impl Submap {
                 voxels.insert(voxel, SurfacePoint { point: q, normal });
             }
         }
+        let grid = self.trace()?;
         self.keyframes = Vec::new();
         self.finished = Some(Finished {
             points: voxels.into_values().collect(),
             free: coverage.free_space(),
+            grid,
         });
+        Ok(())
+    }
+
+    /// The occupancy of an open submap's keyframes, traced.
+    fn trace(&self) -> Result<Option<SubmapGrid>, GridError> {
+        let scans: Vec<(Pose2, &CompactScan)> = self
+            .keyframes
+            .iter()
+            .map(|k| (k.pose, k.beams.as_ref()))
+            .collect();
+        SubmapGrid::trace(&self.grid, &scans)
+    }
+
+    /// The submap's occupancy, submap frame: a finished one's as kept, an open one's traced
+    /// now.
+    pub fn occupancy(&self) -> Result<Option<std::borrow::Cow<'_, SubmapGrid>>, GridError> {
+        Ok(match &self.finished {
+            Some(finished) => finished.grid.as_ref().map(std::borrow::Cow::Borrowed),
+            None => self.trace()?.map(std::borrow::Cow::Owned),
+        })
     }
 
     /// Whether no more keyframes go in.
@@ -179,33 +228,38 @@ impl Submaps {
         }
     }
 
-    /// Inserts keyframe `node` (front-end pose, robot-frame points); returns the index of
+    /// Inserts keyframe `node` (front-end pose, its points and beams); returns the index of
     /// a submap it finished, if any.
     pub fn insert(
         &mut self,
         node: usize,
         odom_from_robot: &Pose2,
-        scan: &[SurfacePoint],
-    ) -> Option<usize> {
+        points: Arc<[SurfacePoint]>,
+        beams: CompactScan,
+    ) -> Result<Option<usize>, GridError> {
         let per = self.config.keyframes.max(1);
         if self.keyframes.is_multiple_of(per) {
             self.all
-                .push(Submap::new(node, *odom_from_robot, self.config.voxel));
+                .push(Submap::new(node, *odom_from_robot, &self.config));
         }
         self.keyframes += 1;
-        let scan: Arc<[SurfacePoint]> = scan.into();
+        let keyframe = Keyframe {
+            pose: Pose2::IDENTITY,
+            points,
+            beams: Arc::new(beams),
+        };
         let mut finished = None;
         for (index, submap) in self.all.iter_mut().enumerate().rev().take(2) {
             if submap.is_finished() {
                 continue;
             }
-            submap.insert(node, odom_from_robot, &scan);
+            submap.insert(node, odom_from_robot, &keyframe);
             if submap.keyframes.len() >= 2 * per {
-                submap.finish();
+                submap.finish()?;
                 finished = Some(index);
             }
         }
-        finished
+        Ok(finished)
     }
 
     pub fn get(&self, index: usize) -> Option<&Submap> {

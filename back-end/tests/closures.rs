@@ -4,6 +4,8 @@
 use back_end::GlobalConfig;
 use back_end::branch_bound::SearchWindow;
 use back_end::closure::{ClosureCheck, Refusal, verify};
+use back_end::compact_scan::CompactScan;
+use back_end::occupancy_grid::GridConfig;
 use back_end::submap::{SubmapConfig, Submaps};
 use lidar_sim::RayCaster;
 use lidar_sim::geometry::Segment;
@@ -63,28 +65,46 @@ fn geometry() -> ScanGeometry {
     }
 }
 
-fn scan(caster: &RayCaster, pose: &Pose2) -> Vec<SurfacePoint> {
+fn ranges(caster: &RayCaster, pose: &Pose2) -> Vec<f32> {
     let geometry = geometry();
-    let ranges: Vec<f32> = (0..541)
+    (0..541)
         .map(|i| {
             let bearing = pose.yaw + geometry.bearing(i);
             caster
                 .cast([pose.x, pose.y], bearing, geometry.range_max)
                 .map_or(f32::NAN, |r| r as f32)
         })
-        .collect();
-    extract(&geometry, &ranges, 0.01, VOXEL).points
+        .collect()
+}
+
+fn scan(caster: &RayCaster, pose: &Pose2) -> Vec<SurfacePoint> {
+    extract(&geometry(), &ranges(caster, pose), 0.01, VOXEL).points
 }
 
 /// A finished submap of `caster`'s world from poses along a line.
 fn submap_along(caster: &RayCaster, from: Pose2, step: Pose2) -> Submaps {
+    let grid = GridConfig::default();
     let mut submaps = Submaps::new(SubmapConfig {
         keyframes: 4,
         voxel: VOXEL,
+        grid,
     });
+    let g = geometry();
     let mut pose = from;
     for node in 0..8 {
-        submaps.insert(node, &pose, &scan(caster, &pose));
+        let ranges = ranges(caster, &pose);
+        let beams = CompactScan::new(
+            g.angle_min,
+            g.angle_increment,
+            g.range_min,
+            g.range_max,
+            &ranges,
+            grid.resolution_m,
+            grid.no_return_reach_m,
+        );
+        submaps
+            .insert(node, &pose, scan(caster, &pose).into(), beams)
+            .unwrap();
         pose = pose.compose(&step);
     }
     assert!(submaps.get(0).unwrap().is_finished());

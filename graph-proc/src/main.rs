@@ -87,15 +87,7 @@ fn run(args: Args) -> Result<()> {
                 if scan.is_none() {
                     counts.nodes_without_scan += 1;
                 }
-                scan.map(|s| {
-                    scan_match::points::extract(
-                        &s.geometry,
-                        &s.ranges,
-                        front_end.range_sigma,
-                        front_end.voxel_size,
-                    )
-                    .points
-                })
+                scan.map(|s| global.node_scan(&s.geometry, &s.ranges))
             } else {
                 None
             };
@@ -105,7 +97,7 @@ fn run(args: Args) -> Result<()> {
                     &odom_from_robot,
                     &motion.increment.into(),
                     &Matrix3::from_row_slice(&motion.increment_covariance),
-                    points.as_deref(),
+                    points,
                 )
                 .context("the pose graph")?;
             last_stamp = sample.header.stamp_ns;

@@ -24,7 +24,7 @@ pub enum SinkError {
     Score(#[from] slam_eval::EvalError),
     /// The occupancy grid could not be built.
     #[error(transparent)]
-    Grid(#[from] crate::occupancy_grid::GridError),
+    Grid(#[from] back_end::occupancy_grid::GridError),
     /// The saved map's grid cannot be the start of this run's.
     #[error("cannot map on the saved map: {0}")]
     PriorGrid(#[from] crate::prior_grid::PriorGridError),

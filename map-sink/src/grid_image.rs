@@ -3,7 +3,7 @@
 
 use crate::error::SinkError;
 use crate::map_yaml::trinary_pixel;
-use crate::occupancy_grid::OccupancyGrid;
+use back_end::occupancy_grid::OccupancyGrid;
 
 /// The grid's trinary pixels, row by row from the top of the image.
 pub fn grid_pixels(grid: &OccupancyGrid) -> Vec<u8> {

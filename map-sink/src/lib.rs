@@ -53,7 +53,6 @@
 //! ```
 
 mod atomic;
-mod compact_scan;
 mod corner_shift;
 mod corners_csv;
 mod end_clock;
@@ -64,7 +63,6 @@ mod line_file;
 mod map_load_error;
 mod map_writer;
 mod map_yaml;
-mod occupancy_grid;
 mod path_assembly;
 mod path_refinement;
 mod pgm;
@@ -82,7 +80,11 @@ mod tum_stream;
 mod wall_field;
 
 pub use atomic::{StagedFile, tmp_path, write_atomic};
-pub use compact_scan::{Beam, CompactScan};
+pub use back_end::compact_scan::{Beam, CompactScan};
+pub use back_end::occupancy_grid::{
+    CellState, FREE_PROBABILITY, GridCell, GridConfig, GridError, OCCUPIED_PROBABILITY,
+    OccupancyGrid, RESOLUTION_RANGE_M,
+};
 pub use corners_csv::{corners_csv, corners_csv_header};
 pub use end_clock::EndClock;
 pub use error::SinkError;
@@ -99,10 +101,6 @@ pub use map_writer::{
 pub use map_yaml::{
     FREE_PIXEL, FREE_THRESH, MapMode, MapYaml, OCCUPIED_PIXEL, OCCUPIED_THRESH, UNKNOWN_PIXEL,
     YamlError, trinary_pixel,
-};
-pub use occupancy_grid::{
-    CellState, FREE_PROBABILITY, GridCell, GridConfig, GridError, OCCUPIED_PROBABILITY,
-    OccupancyGrid, RESOLUTION_RANGE_M,
 };
 pub use path_assembly::{ChunkError, PathAssembly};
 pub use path_refinement::{

@@ -8,8 +8,8 @@ use crate::error::SinkError;
 use crate::grid_image::{encode_png, grid_pixels};
 use crate::landmarks::{GridReference, Landmarks};
 use crate::map_yaml::MapYaml;
-use crate::occupancy_grid::OccupancyGrid;
 use crate::pgm::encode_pgm;
+use back_end::occupancy_grid::OccupancyGrid;
 use slam_geom::MapCorner;
 
 /// The map_server description of the grid.

@@ -10,7 +10,7 @@
 //! The thresholds that decided which cell became which pixel are the grid's
 //! ([`crate::OCCUPIED_PROBABILITY`], [`crate::FREE_PROBABILITY`]).
 
-use crate::occupancy_grid::CellState;
+use back_end::occupancy_grid::CellState;
 
 /// The pixel of an occupied cell.
 pub const OCCUPIED_PIXEL: u8 = 0;

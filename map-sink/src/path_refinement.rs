@@ -33,14 +33,14 @@ use nalgebra::Matrix3;
 use rayon::prelude::*;
 use slam_geom::{Pose2, StampedPose};
 
-use crate::compact_scan::{Beam, CompactScan};
-use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 use crate::pose_chain::{PoseLink, PosePrior, solve_pose_chain};
 use crate::prior_grid::saved_walls;
 use crate::scan_alignment::{
     ScanAlignment, ScanAlignmentConfig, WeakDirections, align_scan, information_by_tag,
 };
 use crate::wall_field::{CellWindow, SeenReturn, WallField};
+use back_end::compact_scan::{Beam, CompactScan};
+use back_end::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 
 /// How the final path is refined.
 #[derive(Debug, Clone, Copy, PartialEq)]

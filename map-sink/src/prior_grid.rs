@@ -6,7 +6,7 @@
 //! new run does not see keeps the state it was saved with, and one it sees is decided by
 //! what it sees there a few times. A saved wall that the new run's beams pass through three
 //! times becomes unknown and twelve times free (a door that was closed and is open now: a
-//! pass lowers a wall cell less than a free one, see [`crate::occupancy_grid`]); a saved
+//! pass lowers a wall cell less than a free one, see [`back_end::occupancy_grid`]); a saved
 //! free cell that its returns hit three times becomes occupied (a new wall).
 //!
 //! The saved grid is laid onto this run's cells, which line up with multiples of the run's
@@ -21,11 +21,11 @@
 //! aligned to them as to another pass's walls, which ties the run to the saved map, so that
 //! a wall both saw is drawn once.
 
-use crate::occupancy_grid::{
-    CellState, GridError, HIT_LOG_ODDS, MAX_CELLS, MISS_LOG_ODDS, OccupancyGrid, RESOLUTION_RANGE_M,
-};
 use crate::saved_map::GridMap;
 use crate::wall_field::SeenReturn;
+use back_end::occupancy_grid::{
+    CellState, GridError, HIT_LOG_ODDS, MAX_CELLS, MISS_LOG_ODDS, OccupancyGrid, RESOLUTION_RANGE_M,
+};
 
 /// The evidence of a saved occupied cell: one return's, just above the occupied threshold.
 pub const PRIOR_OCCUPIED_LOG_ODDS: f32 = HIT_LOG_ODDS;
@@ -192,9 +192,9 @@ pub(crate) fn saved_walls(prior: &OccupancyGrid) -> Vec<SeenReturn> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::compact_scan::CompactScan;
     use crate::map_yaml::MapYaml;
-    use crate::occupancy_grid::GridConfig;
+    use back_end::compact_scan::CompactScan;
+    use back_end::occupancy_grid::GridConfig;
     use slam_geom::Pose2;
 
     /// A saved grid of cells of `resolution` whose lower-left corner is at `origin`, from

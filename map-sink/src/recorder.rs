@@ -7,19 +7,19 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::atomic::{StagedFile, write_atomic};
-use crate::compact_scan::CompactScan;
 use crate::corner_shift::follow_refined_path;
 use crate::corners_csv::corners_csv;
 use crate::end_clock::EndClock;
 use crate::error::SinkError;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, map_files};
-use crate::occupancy_grid::{GridConfig, OccupancyGrid};
 use crate::path_refinement::{PathRefinementConfig, RefinementReport, refine_path_within};
 use crate::prior_grid::prior_grid;
 use crate::saved_map::GridMap;
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
+use back_end::compact_scan::CompactScan;
+use back_end::occupancy_grid::{GridConfig, OccupancyGrid};
 use slam_eval::{
     AteStats, DEAD_RECKONING_FILE, FitVerdict, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput,
     METRICS_FILE, MapFit, Metrics, PathRefinement, RefinementState, RelationsFile,

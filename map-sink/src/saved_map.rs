@@ -10,8 +10,8 @@ use crate::landmarks::{Landmarks, LandmarksError};
 use crate::map_load_error::MapLoadError;
 use crate::map_writer::LANDMARKS_FILE;
 use crate::map_yaml::{MapMode, MapYaml, YamlError};
-use crate::occupancy_grid::CellState;
 use crate::pgm::{Pgm, PgmError};
+use back_end::occupancy_grid::CellState;
 
 /// An occupancy grid read by the map_server rules.
 #[derive(Debug, Clone, PartialEq)]

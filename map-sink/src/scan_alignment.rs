@@ -304,10 +304,10 @@ impl FixedDirections {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::compact_scan::CompactScan;
-    use crate::occupancy_grid::{GridConfig, OccupancyGrid};
     use crate::test_room::{room_returns, scan_of};
     use crate::wall_field::SeenReturn;
+    use back_end::compact_scan::CompactScan;
+    use back_end::occupancy_grid::{GridConfig, OccupancyGrid};
 
     fn room_walls() -> WallField {
         room_walls_drawn_by(|_| 0)

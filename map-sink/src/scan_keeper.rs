@@ -2,7 +2,7 @@
 
 use std::collections::{BTreeMap, HashSet};
 
-use crate::compact_scan::CompactScan;
+use back_end::compact_scan::CompactScan;
 use slam_geom::Pose2;
 
 /// Scans kept while they wait for their pose. A scan whose pose never comes (the SLAM

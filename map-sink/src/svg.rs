@@ -7,7 +7,7 @@
 
 use std::fmt::Write;
 
-use crate::occupancy_grid::GridCell;
+use back_end::occupancy_grid::GridCell;
 use slam_geom::MapCorner;
 use slam_geom::Se2Alignment;
 

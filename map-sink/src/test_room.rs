@@ -3,7 +3,7 @@
 
 use slam_geom::Pose2;
 
-use crate::compact_scan::CompactScan;
+use back_end::compact_scan::CompactScan;
 
 /// The returns of a robot at `robot` in a 6 x 4 m room (x from -2 to 4, y from -2 to 2)
 /// with a pillar to break its symmetry, one a degree, in the sensor frame.

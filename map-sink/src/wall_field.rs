@@ -5,7 +5,7 @@
 //! than rounded to a cell: aligning scans to cell centres would bend a path that is already
 //! right to within a cell.
 
-use crate::occupancy_grid::{CellState, OccupancyGrid};
+use back_end::occupancy_grid::{CellState, OccupancyGrid};
 
 /// A return in the world frame and where the sensor was that saw it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -442,8 +442,8 @@ fn line_normal(points: &[[f64; 2]]) -> Option<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::compact_scan::CompactScan;
-    use crate::occupancy_grid::GridConfig;
+    use back_end::compact_scan::CompactScan;
+    use back_end::occupancy_grid::GridConfig;
     use slam_geom::Pose2;
 
     /// A wall along x = 2.013 (off the cells' centres), seen from the origin, and the

@@ -22,20 +22,20 @@ use crate::compact_scan::{Beam, CompactScan};
 use slam_geom::Pose2;
 
 /// Log-odds added by a return: `ln(0.7 / 0.3)`, a hit makes a cell 70 % likely occupied.
-pub(crate) const HIT_LOG_ODDS: f32 = 0.847;
+pub const HIT_LOG_ODDS: f32 = 0.847;
 /// Log-odds added by a pass through a cell that returns have not made likelier occupied
 /// than not: `ln(0.4 / 0.6)`, so that free space is free after three passes.
-pub(crate) const MISS_LOG_ODDS: f32 = -0.405;
+pub const MISS_LOG_ODDS: f32 = -0.405;
 /// Log-odds added by a pass through a cell that returns have made likelier occupied than
 /// not: `ln(0.475 / 0.525)`. A surface the beams graze, a thin wall, a chair's leg, a
 /// glass pane is missed by most of the beams that reach it; it stays occupied while about
 /// one in ten ends there, and an object that is gone (a door opened) is cleared by a few
 /// dozen passes.
-pub(crate) const SURFACE_MISS_LOG_ODDS: f32 = -0.1;
+pub const SURFACE_MISS_LOG_ODDS: f32 = -0.1;
 /// Clamps: a cell never becomes so certain that a changed world (a door opened, a person who
 /// stood still) could not be corrected by a few dozen later scans.
-const MIN_LOG_ODDS: f32 = -2.0;
-const MAX_LOG_ODDS: f32 = 3.5;
+pub const MIN_LOG_ODDS: f32 = -2.0;
+pub const MAX_LOG_ODDS: f32 = 3.5;
 /// A cell is occupied above this probability and free below [`FREE_PROBABILITY`]; in
 /// between, or never seen, unknown. These are the thresholds of the map_server
 /// convention the grid is written in (see `map_yaml`).
@@ -43,7 +43,7 @@ pub const OCCUPIED_PROBABILITY: f64 = 0.65;
 pub const FREE_PROBABILITY: f64 = 0.25;
 /// More cells than this are refused: at 8 bytes a cell (log-odds and a per-scan mark) this
 /// is 800 MB; such an area wants a coarser resolution.
-pub(crate) const MAX_CELLS: usize = 100_000_000;
+pub const MAX_CELLS: usize = 100_000_000;
 
 /// How the grid is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -143,7 +143,7 @@ impl OccupancyGrid {
     /// this): the grid covers both, starts from the prior's log-odds and adds the scans'
     /// hits and passes to them. `None` when there is neither a prior nor a scan with a beam
     /// to trace.
-    pub(crate) fn build_on(
+    pub fn build_on(
         config: &GridConfig,
         prior: Option<&OccupancyGrid>,
         scans: &[(Pose2, &CompactScan)],
@@ -237,7 +237,7 @@ impl OccupancyGrid {
 
     /// A grid of the given log-odds, row by row from the lowest y, whose cell `(0, 0)` is
     /// the global cell `min_index`. Refused past the size [`build`](Self::build) refuses.
-    pub(crate) fn from_log_odds(
+    pub fn from_log_odds(
         resolution_m: f64,
         min_index: [i64; 2],
         width: usize,
