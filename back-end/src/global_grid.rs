@@ -7,7 +7,9 @@
 use nalgebra::Vector2;
 use slam_geom::Pose2;
 
-use crate::occupancy_grid::{GridError, MAX_CELLS, MAX_LOG_ODDS, MIN_LOG_ODDS, OccupancyGrid};
+use crate::occupancy_grid::{
+    CellState, GridError, MAX_CELLS, MAX_LOG_ODDS, MIN_LOG_ODDS, OccupancyGrid,
+};
 use crate::submap_grid::SubmapGrid;
 
 /// Lays `submaps` (each with its `world_from_submap`) out on a grid of `resolution`;
@@ -47,29 +49,33 @@ pub fn render(
     let mut voted = vec![0u32; width * height];
     for (number, (pose, grid)) in submaps.iter().enumerate() {
         let id = number as u32 + 1;
-        // Four samples a cell, half a cell apart: every world cell the submap's known cells
-        // cover holds one, however the submap is turned.
+        let submap_from_world = pose.inverse();
+        // Four samples a known cell, half a cell apart, find every world cell the submap
+        // knows something of, however it is turned; each of those takes the state of the
+        // submap's cell under its centre, so walls keep their place and width.
         let quarter = grid.resolution() / 4.0;
         let offsets = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
             .map(|(x, y)| pose.rotation() * Vector2::new(x, y) * quarter);
-        for (centre, occupied) in grid.known_cells() {
+        for (centre, _) in grid.known_cells() {
             let at = pose.transform(centre);
             for offset in &offsets {
                 let p = at + offset;
-                let x = (p.x / resolution).floor() as i64 - lo[0];
-                let y = (p.y / resolution).floor() as i64 - lo[1];
-                if x < 0 || y < 0 || x >= width as i64 || y >= height as i64 {
+                let x = (p.x / resolution).floor() as i64;
+                let y = (p.y / resolution).floor() as i64;
+                let (col, row) = (x - lo[0], y - lo[1]);
+                if col < 0 || row < 0 || col >= width as i64 || row >= height as i64 {
                     continue;
                 }
-                let i = y as usize * width + x as usize;
+                let i = row as usize * width + col as usize;
                 if voted[i] == id {
                     continue;
                 }
                 voted[i] = id;
-                if occupied {
-                    votes[i].0 = votes[i].0.saturating_add(1);
-                } else {
-                    votes[i].1 = votes[i].1.saturating_add(1);
+                let world_centre = Vector2::new(x as f64 + 0.5, y as f64 + 0.5) * resolution;
+                match grid.state_at(submap_from_world.transform(world_centre)) {
+                    CellState::Occupied => votes[i].0 = votes[i].0.saturating_add(1),
+                    CellState::Free => votes[i].1 = votes[i].1.saturating_add(1),
+                    CellState::Unknown => {}
                 }
             }
         }
@@ -105,7 +111,7 @@ pub fn render(
 mod tests {
     use super::*;
     use crate::compact_scan::CompactScan;
-    use crate::occupancy_grid::{CellState, GridConfig};
+    use crate::occupancy_grid::GridConfig;
 
     /// A submap of a wall 2 m ahead, seen from its origin three times (free space is free
     /// after three passes).

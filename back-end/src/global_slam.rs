@@ -464,7 +464,7 @@ impl GlobalSlam {
         let mut grids = Vec::with_capacity(self.submaps.len());
         for (_, submap) in self.submaps.iter() {
             if let Some(grid) = submap.occupancy()? {
-                grids.push((self.graph.pose(submap.anchor), grid));
+                grids.push((submap.placed(|node| self.graph.pose(node)), grid));
             }
         }
         let laid: Vec<(Pose2, &SubmapGrid)> = grids.iter().map(|(p, g)| (*p, g.as_ref())).collect();

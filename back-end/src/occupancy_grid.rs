@@ -98,6 +98,22 @@ pub enum CellState {
     Unknown,
 }
 
+/// The map image's pixel of an occupied cell (map_server's trinary convention, `map.pgm`).
+pub const OCCUPIED_PIXEL: u8 = 0;
+/// The pixel of a free cell.
+pub const FREE_PIXEL: u8 = 254;
+/// The pixel of a cell never seen, or seen too little to say.
+pub const UNKNOWN_PIXEL: u8 = 205;
+
+/// The trinary pixel of a cell.
+pub fn trinary_pixel(state: CellState) -> u8 {
+    match state {
+        CellState::Occupied => OCCUPIED_PIXEL,
+        CellState::Free => FREE_PIXEL,
+        CellState::Unknown => UNKNOWN_PIXEL,
+    }
+}
+
 /// A cell known to be free or occupied, by its global index: it covers
 /// `[index * resolution, (index + 1) * resolution)` in x and y.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -323,6 +339,32 @@ impl OccupancyGrid {
         cells
     }
 
+    /// Every cell's trinary pixel, row by row from the lowest y.
+    pub fn pixels(&self) -> Vec<u8> {
+        (0..self.height)
+            .flat_map(|row| (0..self.width).map(move |col| trinary_pixel(self.state(col, row))))
+            .collect()
+    }
+
+    /// A grid of trinary pixels (row by row from the lowest y) as log-odds the pixels
+    /// threshold back to: how a grid that travelled as pixels is read.
+    pub fn from_pixels(
+        resolution_m: f64,
+        min_index: [i64; 2],
+        width: usize,
+        pixels: &[u8],
+    ) -> Result<Self, GridError> {
+        let log_odds = pixels
+            .iter()
+            .map(|&p| match p {
+                OCCUPIED_PIXEL => MAX_LOG_ODDS,
+                FREE_PIXEL => MIN_LOG_ODDS,
+                _ => 0.0,
+            })
+            .collect();
+        Self::from_log_odds(resolution_m, min_index, width, log_odds)
+    }
+
     /// Bytes the grid holds; building it took twice as many (the per-scan marks).
     pub fn bytes(&self) -> usize {
         self.log_odds.capacity() * std::mem::size_of::<f32>()
@@ -426,6 +468,30 @@ mod tests {
         let mut cells = Vec::new();
         trace(a, b, include_end, |c, r| cells.push((c, r)));
         cells
+    }
+
+    #[test]
+    fn a_grid_sent_as_pixels_reads_back_the_same() {
+        let ranges: Vec<f32> = (0..91).map(|i| 1.0 + 0.02 * i as f32).collect();
+        let scan = CompactScan::new(-1.2, 2.4 / 90.0, 0.1, 30.0, &ranges, 0.0, 5.0);
+        let pose = Pose2::new(0.4, 0.1, 0.3);
+        let grid = OccupancyGrid::build(&GridConfig::default(), &[(pose, &scan); 3])
+            .unwrap()
+            .unwrap();
+        let pixels = grid.pixels();
+        assert!(pixels.contains(&OCCUPIED_PIXEL) && pixels.contains(&FREE_PIXEL));
+        let back = OccupancyGrid::from_pixels(
+            grid.resolution_m(),
+            grid.min_index(),
+            grid.width(),
+            &pixels,
+        )
+        .unwrap();
+        assert_eq!(back.pixels(), pixels);
+        assert_eq!(
+            (back.origin(), back.height()),
+            (grid.origin(), grid.height())
+        );
     }
 
     #[test]

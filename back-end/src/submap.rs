@@ -67,6 +67,9 @@ pub struct Submap {
     grid: GridConfig,
     /// While open: its keyframes.
     keyframes: Vec<Keyframe>,
+    /// Every keyframe's pose in the submap frame, nodes `anchor..=last_node` in order: where
+    /// the submap lies follows from where the graph puts them.
+    poses: Vec<Pose2>,
     /// What a finished submap keeps.
     finished: Option<Finished>,
     /// Lowest and highest point, submap frame.
@@ -107,6 +110,7 @@ impl Submap {
             voxel: config.voxel,
             grid: config.grid,
             keyframes: Vec::new(),
+            poses: Vec::new(),
             finished: None,
             lo: Vector2::repeat(f64::INFINITY),
             hi: Vector2::repeat(f64::NEG_INFINITY),
@@ -125,6 +129,7 @@ impl Submap {
             pose: submap_from_robot,
             ..keyframe.clone()
         });
+        self.poses.push(submap_from_robot);
         self.last_node = node;
     }
 
@@ -173,6 +178,35 @@ impl Submap {
             Some(finished) => finished.grid.as_ref().map(std::borrow::Cow::Borrowed),
             None => self.trace()?.map(std::borrow::Cow::Owned),
         })
+    }
+
+    /// The submap's pose in the world that best fits where the graph puts its keyframes
+    /// (`world_from_node`, by node): the mean of their turns, then the translation that
+    /// lays their positions on the graph's in the least-squares sense. A submap's keyframes
+    /// are rigid in it; placed by its first one alone, the front end's drift along the
+    /// submap would pile up at its far end.
+    pub fn placed(&self, world_from_node: impl Fn(usize) -> Pose2) -> Pose2 {
+        let placed: Vec<(Pose2, Pose2)> = self
+            .poses
+            .iter()
+            .enumerate()
+            .map(|(k, pose)| (*pose, world_from_node(self.anchor + k)))
+            .collect();
+        if placed.is_empty() {
+            return world_from_node(self.anchor);
+        }
+        let (sin, cos) = placed.iter().fold((0.0, 0.0), |(s, c), (p, q)| {
+            let (ds, dc) = (q.yaw - p.yaw).sin_cos();
+            (s + ds, c + dc)
+        });
+        let rotation = nalgebra::Rotation2::new(sin.atan2(cos));
+        let n = placed.len() as f64;
+        let offset = placed
+            .iter()
+            .map(|(p, q)| q.position() - rotation * p.position())
+            .sum::<Vector2<f64>>()
+            / n;
+        Pose2::new(offset.x, offset.y, rotation.angle())
     }
 
     /// Whether no more keyframes go in.
@@ -276,5 +310,56 @@ impl Submaps {
 
     pub fn iter(&self) -> impl Iterator<Item = (usize, &Submap)> + '_ {
         self.all.iter().enumerate()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_submap_is_placed_where_the_graph_puts_its_keyframes() {
+        let mut submaps = Submaps::new(SubmapConfig {
+            keyframes: 4,
+            voxel: 0.05,
+            grid: GridConfig::default(),
+        });
+        let beams = CompactScan::new(0.0, 0.1, 0.1, 10.0, &[], 0.05, 5.0);
+        // The front end's keyframes along a curve, starting at (2, 1).
+        let front_end: Vec<Pose2> = (0..8)
+            .map(|k| {
+                Pose2::new(
+                    2.0 + 0.5 * k as f64,
+                    1.0 + 0.05 * (k * k) as f64,
+                    0.1 * k as f64,
+                )
+            })
+            .collect();
+        for (node, pose) in front_end.iter().enumerate() {
+            submaps
+                .insert(node, pose, Vec::new().into(), beams.clone())
+                .unwrap();
+        }
+        let submap = submaps.get(0).unwrap();
+        // The graph moved the whole stretch rigidly: the submap moves with it.
+        let moved = Pose2::new(-3.0, 4.0, 0.7);
+        let world_from_node = |node: usize| moved.compose(&front_end[node]);
+        let world_from_odom = moved;
+        let expected = world_from_odom.compose(&front_end[0]);
+        let placed = submap.placed(world_from_node);
+        let error = expected.between(&placed);
+        assert!(
+            error.translation_norm() < 1e-9 && error.yaw.abs() < 1e-12,
+            "{error:?}"
+        );
+        // The graph bent the stretch: the submap lies between its first and last keyframe's
+        // corrections, not on the first's.
+        let bent = |node: usize| Pose2::new(0.0, 0.02 * node as f64, 0.0).compose(&front_end[node]);
+        let placed = submap.placed(bent);
+        let shift = front_end[0].between(&placed);
+        assert!(
+            placed.y - front_end[0].y > 0.02 && placed.y - front_end[0].y < 0.12,
+            "{shift:?}"
+        );
     }
 }

@@ -1,8 +1,8 @@
 //! `graph-proc`: global SLAM (the `back-end` library) as a stage. It reads the front end's
 //! motion from the features topic and, where the robot moved enough for a new node, the
 //! scan's beams; it builds submaps, closes the loops the scans confirm and solves the pose
-//! graph, and publishes the graph's path as it stands every [`INTERIM_PERIOD`] and, solved
-//! once more, at the end of the stream (or when stopped).
+//! graph, and publishes the graph's path and occupancy grid as they stand every few
+//! seconds and, solved once more, at the end of the stream (or when stopped).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -19,10 +19,13 @@ use stage_kit::{say, say_err};
 
 /// How often the path is published while the run goes on: a viewer, a recording and a run
 /// stopped without a last word all have one at most this old.
-const INTERIM_PERIOD: Duration = Duration::from_secs(2);
+const PATH_PERIOD: Duration = Duration::from_secs(2);
+/// How often the grid is: laying out every submap costs a few tenths of a second on a
+/// large building.
+const GRID_PERIOD: Duration = Duration::from_secs(5);
 
 /// Subscribes to the features (the front end's motion) and the scans, and publishes the
-/// pose graph's path on `graph/path` as it goes and at the end.
+/// pose graph's path on `graph/path` and its grid on `graph/grid` as they go and at the end.
 #[derive(Debug, Parser)]
 #[command(name = "graph-proc", version)]
 struct Args {
@@ -36,6 +39,9 @@ struct Args {
     /// Path subscribers to wait for before the first lockstep publish.
     #[arg(long, default_value_t = 1)]
     subscribers: usize,
+    /// Publish the grid too (for a recording; its reader subscribes before the path's).
+    #[arg(long)]
+    grid: bool,
 }
 
 fn main() -> ExitCode {
@@ -50,21 +56,35 @@ fn run(args: Args) -> Result<()> {
 
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("graph-proc")?;
-    // The path goes out in many chunks: lossless whatever the run's delivery. Made first:
-    // map-sink waits for it.
-    let path = Outlet::create(&domain, &node, topic::GRAPH_PATH, Delivery::Lossless, 0)?;
+    // The path and grid go out in many pieces: lossless whatever the run's delivery. Made
+    // first: map-sink waits for them.
+    let mut results = Results {
+        path: Outlet::create(&domain, &node, topic::GRAPH_PATH, Delivery::Lossless, 0)?,
+        grid: if args.grid {
+            Some(Outlet::create(
+                &domain,
+                &node,
+                topic::GRAPH_GRID,
+                Delivery::Lossless,
+                0,
+            )?)
+        } else {
+            None
+        },
+        path_at: Instant::now(),
+        grid_at: Instant::now(),
+    };
     let features = Inlet::open(&node, topic::FEATURES)?;
     let scans = Inlet::open(&node, topic::SCAN)?;
     let delivery = features.delivery();
     say("ready");
     if delivery == Delivery::Lossless {
-        path.wait_for_subscribers(args.subscribers, None)?;
+        results.path.wait_for_subscribers(args.subscribers, None)?;
     }
 
     let mut held = HeldScans::default();
     let mut counts = Counts::default();
     let mut last_stamp = 0;
-    let mut interim_at = Instant::now();
     loop {
         if wait_any(&[&features, &scans], Duration::from_millis(100))? == Wake::Shutdown {
             break;
@@ -72,7 +92,7 @@ fn run(args: Args) -> Result<()> {
         held.hold(&scans)?;
         while let Some(sample) = features.receive()? {
             if sample.header.is_end_of_stream() {
-                publish_final(&path, &mut global, sample.header.stamp_ns)?;
+                results.publish_final(&mut global, sample.header.stamp_ns)?;
                 say_err(&summary(&global.stats(), &counts));
                 ipc_types::losses::report(&counts.losses());
                 return Ok(());
@@ -102,13 +122,12 @@ fn run(args: Args) -> Result<()> {
                 .context("the pose graph")?;
             last_stamp = sample.header.stamp_ns;
         }
-        if interim_at.elapsed() >= INTERIM_PERIOD && last_stamp > 0 {
-            path.publish_path(&stamped(&global), last_stamp, PathForm::Interim)?;
-            interim_at = Instant::now();
+        if last_stamp > 0 {
+            results.publish_interim(&global, last_stamp)?;
         }
     }
-    // Stopped by a signal: the path as far as it got, solved once more.
-    publish_final(&path, &mut global, last_stamp)?;
+    // Stopped by a signal: the path and grid as far as they got, solved once more.
+    results.publish_final(&mut global, last_stamp)?;
     say_err("graph-proc: stopped");
     say_err(&summary(&global.stats(), &counts));
     ipc_types::losses::report(&counts.losses());
@@ -127,17 +146,78 @@ fn stamped(global: &GlobalSlam) -> Vec<StampedPose> {
         .collect()
 }
 
-/// Solves the graph with everything in it and publishes its path as final.
-fn publish_final(outlet: &Outlet<PathChunk>, global: &mut GlobalSlam, stamp_ns: u64) -> Result<()> {
-    let started = Instant::now();
-    global.finish().context("the pose graph's last solve")?;
-    let path = stamped(global);
-    outlet.publish_path(&path, stamp_ns, PathForm::Final)?;
-    say_err(&format!(
-        "graph-proc: path of {} poses solved and published in {:.2} s",
-        path.len(),
-        started.elapsed().as_secs_f64()
-    ));
+/// The back end's results on their topics.
+struct Results {
+    path: Outlet<PathChunk>,
+    /// Only when the run is recorded.
+    grid: Option<Outlet<GridCells>>,
+    /// When each was last published.
+    path_at: Instant,
+    grid_at: Instant,
+}
+
+impl Results {
+    /// The path and the grid as they stand, each when its period has passed.
+    fn publish_interim(&mut self, global: &GlobalSlam, stamp_ns: u64) -> Result<()> {
+        if self.path_at.elapsed() >= PATH_PERIOD {
+            self.path
+                .publish_path(&stamped(global), stamp_ns, Form::Interim)?;
+            self.path_at = Instant::now();
+        }
+        if let Some(grid) = &self.grid
+            && self.grid_at.elapsed() >= GRID_PERIOD
+        {
+            publish_grid(grid, global, stamp_ns, Form::Interim)?;
+            self.grid_at = Instant::now();
+        }
+        Ok(())
+    }
+
+    /// Solves the graph with everything in it and publishes its grid and path as final:
+    /// the grid first, so that a reader holding the final path has the grid too.
+    fn publish_final(&self, global: &mut GlobalSlam, stamp_ns: u64) -> Result<()> {
+        let started = Instant::now();
+        global.finish().context("the pose graph's last solve")?;
+        if let Some(grid) = &self.grid {
+            publish_grid(grid, global, stamp_ns, Form::Final)?;
+        }
+        let path = stamped(global);
+        self.path.publish_path(&path, stamp_ns, Form::Final)?;
+        say_err(&format!(
+            "graph-proc: path of {} poses solved and published in {:.2} s",
+            path.len(),
+            started.elapsed().as_secs_f64()
+        ));
+        Ok(())
+    }
+}
+
+/// Lays the submaps out at their poses on the graph and publishes the grid (none before
+/// any beam).
+fn publish_grid(
+    outlet: &Outlet<GridCells>,
+    global: &GlobalSlam,
+    stamp_ns: u64,
+    form: Form,
+) -> Result<()> {
+    let Some(grid) = global.grid().context("the grid")? else {
+        return Ok(());
+    };
+    let (Ok(width), Ok(height)) = (u32::try_from(grid.width()), u32::try_from(grid.height()))
+    else {
+        anyhow::bail!(
+            "the grid of {} x {} cells is too large to publish",
+            grid.width(),
+            grid.height()
+        );
+    };
+    let geometry = GridGeometry {
+        resolution: grid.resolution_m(),
+        origin: grid.origin(),
+        width,
+        height,
+    };
+    outlet.publish_grid(geometry, &grid.pixels(), stamp_ns, form)?;
     Ok(())
 }
 

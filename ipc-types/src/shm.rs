@@ -97,6 +97,7 @@ pub fn service_size(
         t if t == topic::MAP.name() => service(topic::MAP, d, 1, n),
         t if t == topic::PATH.name() => service(topic::PATH, Delivery::Lossless, 0, n),
         t if t == topic::GRAPH_PATH.name() => service(topic::GRAPH_PATH, Delivery::Lossless, 0, n),
+        t if t == topic::GRAPH_GRID.name() => service(topic::GRAPH_GRID, Delivery::Lossless, 0, n),
         t if t == topic::PARTICLES.name() => service(topic::PARTICLES, d, 0, n),
         t if t == topic::MAP_PATH.name() => service(topic::MAP_PATH, Delivery::Lossless, 0, n),
         t if t == topic::MAP_GRID.name() => service(topic::MAP_GRID, Delivery::Lossless, 0, n),

@@ -57,8 +57,11 @@ pub const POSE: Topic<PoseEstimate> = Topic::new("slam/pose");
 /// the stream, in chunks.
 pub const PATH: Topic<PathChunk> = Topic::new("slam/path");
 /// The back end's path (the pose graph over the front end's steps and the verified loop
-/// closures, solved), at the end of the stream, in chunks.
+/// closures, solved), as it stands every few seconds and final at the end, in chunks.
 pub const GRAPH_PATH: Topic<PathChunk> = Topic::new("graph/path");
+/// The back end's occupancy grid (its submaps at their solved poses), as it stands every
+/// few seconds and final at the end, in pieces.
+pub const GRAPH_GRID: Topic<GridCells> = Topic::new("graph/grid");
 /// The best particle's map, every few scans and at the end.
 pub const MAP: Topic<MapSnapshot> = Topic::new("slam/map");
 /// Every particle's pose and weight every few scans, in pieces, for a recording (slam-proc

@@ -401,14 +401,14 @@ fn settings_args(
     let run = RunKind::of(config);
     let particles = topology::published(&run, ipc_types::topic::PARTICLES.name());
     let final_map = topology::published(&run, ipc_types::topic::MAP_GRID.name());
-    let graph_path = topology::published(&run, ipc_types::topic::GRAPH_PATH.name());
+    let back_end = topology::published(&run, ipc_types::topic::GRAPH_PATH.name());
     let switch = |on: bool, flag: &str| on.then(|| flag.to_owned());
     Ok(match role {
         Role::Recorder => {
             let mut args = flag_values([("--out", Some(out))]);
             args.extend(switch(particles, "--particles"));
             args.extend(switch(final_map, "--final-map"));
-            args.extend(switch(graph_path, "--graph-path"));
+            args.extend(switch(back_end, "--back-end"));
             args
         }
         Role::Sink => {
@@ -430,7 +430,7 @@ fn settings_args(
             args.push(format!("--refine-passes={}", config.grid.refine_passes));
             args.push(format!("--stop-budget={}", config.grid.stop_budget));
             args.extend(switch(final_map, "--publish-final"));
-            args.extend(switch(graph_path, "--graph-path"));
+            args.extend(switch(back_end, "--back-end"));
             args
         }
         Role::Filter => {
@@ -460,7 +460,10 @@ fn settings_args(
         }
         Role::Graph => {
             let front_end = text("front_end", RunConfig::section_text(&config.front_end))?;
-            section_file("front_end", front_end, "--front-end-config")?
+            let mut args = section_file("front_end", front_end, "--front-end-config")?;
+            let grid = topology::published(&run, ipc_types::topic::GRAPH_GRID.name());
+            args.extend(switch(grid, "--grid"));
+            args
         }
         Role::Perception => {
             let features = text("features", RunConfig::section_text(&config.features))?;

@@ -185,6 +185,7 @@ const POSE: &str = topic::POSE.name();
 const PATH: &str = topic::PATH.name();
 const MAP: &str = topic::MAP.name();
 const GRAPH_PATH: &str = topic::GRAPH_PATH.name();
+const GRAPH_GRID: &str = topic::GRAPH_GRID.name();
 const PARTICLES: &str = topic::PARTICLES.name();
 const MAP_PATH: &str = topic::MAP_PATH.name();
 const MAP_GRID: &str = topic::MAP_GRID.name();
@@ -221,6 +222,7 @@ pub const STAGES: &[Stage] = &[
             reads(MAP),
             reads(PATH),
             reads_if_published(GRAPH_PATH),
+            reads_if_published(GRAPH_GRID),
             reads(PARTICLES),
             reads(MAP_PATH),
             reads(MAP_GRID),
@@ -252,7 +254,8 @@ pub const STAGES: &[Stage] = &[
         role: Role::Graph,
         // Its graph starts at the first scan: a saved map's frame is the filter's to find.
         runs: When::NewMap,
-        publishes: &[publishes(GRAPH_PATH)],
+        // Its grid as it grows, for a recording (map-sink traces the run's own).
+        publishes: &[publishes(GRAPH_PATH), for_the_recording(GRAPH_GRID)],
         reads: &[reads(FEATURES), reads(SCAN)],
         waits_for: &[waits(GRAPH_PATH)],
         saved_map: None,
@@ -333,6 +336,7 @@ pub const TOPICS: &[&str] = &[
     MAP,
     PATH,
     GRAPH_PATH,
+    GRAPH_GRID,
     PARTICLES,
     MAP_PATH,
     MAP_GRID,

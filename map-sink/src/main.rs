@@ -10,7 +10,7 @@ use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use map_sink::{
     EndClock, FinishedRun, GridConfig, OccupancyGrid, PathAssembly, PathRefinementConfig, Recorder,
-    RecorderOptions, StampedPose, trinary_pixel,
+    RecorderOptions, StampedPose,
 };
 use slam_eval::{FrameCounts, METRICS_FILE, MapFit, RefinementState, RelationsFile};
 use stage_kit::{say, say_err, shutdown};
@@ -61,10 +61,11 @@ struct Args {
     /// slam-launch gives what is left of its grace period after a margin.
     #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
     stop_budget: Option<Duration>,
-    /// The final path is graph-proc's (`graph/path`), not the filter's: the run waits for it
-    /// at its end, and does not refine it (--refine-passes is for the filter's path).
+    /// The back end (graph-proc) runs: the final path is its `graph/path`, not the filter's.
+    /// The run waits for it at its end and does not refine it (--refine-passes is for the
+    /// filter's).
     #[arg(long)]
-    graph_path: bool,
+    back_end: bool,
 }
 
 /// A budget in seconds, finite and not negative.
@@ -142,11 +143,7 @@ fn run(args: Args) -> Result<()> {
             refinement: PathRefinementConfig {
                 // The back end's path is solved against its own verified closures; the
                 // refinement is for the filter's.
-                passes: if args.graph_path {
-                    0
-                } else {
-                    args.refine_passes
-                },
+                passes: if args.back_end { 0 } else { args.refine_passes },
                 ..PathRefinementConfig::default()
             },
             ..RecorderOptions::default()
@@ -179,7 +176,7 @@ fn run(args: Args) -> Result<()> {
     let maps = Inlet::open(&node, topic::MAP)?;
     let poses = Inlet::open(&node, topic::POSE)?;
     let path = Inlet::open(&node, topic::PATH)?;
-    let graph_path = if args.graph_path {
+    let graph_path = if args.back_end {
         Some(Inlet::open(&node, topic::GRAPH_PATH)?)
     } else {
         None
@@ -439,7 +436,7 @@ fn publish_final(
     let stamp_ns = path.last().map_or(0, |p| p.stamp_ns);
     if !path.is_empty() {
         let poses: Vec<ipc_types::StampedPose> = path.iter().map(|&p| p.into()).collect();
-        path_outlet.publish_path(&poses, stamp_ns, ipc_types::PathForm::Final)?;
+        path_outlet.publish_path(&poses, stamp_ns, Form::Final)?;
     }
     if let Some(grid) = &finished.grid {
         publish_grid(grid_outlet, grid, stamp_ns)?;
@@ -451,27 +448,16 @@ fn publish_final(
 /// The grid's cells as map.pgm's trinary pixels, row by row from the lowest y, in pieces.
 fn publish_grid(outlet: &Outlet<GridCells>, grid: &OccupancyGrid, stamp_ns: u64) -> Result<()> {
     let (width, height) = (grid.width(), grid.height());
-    let cells: Vec<u8> = (0..height)
-        .flat_map(|row| (0..width).map(move |col| trinary_pixel(grid.state(col, row))))
-        .collect();
     let (Ok(width), Ok(height)) = (u32::try_from(width), u32::try_from(height)) else {
         anyhow::bail!("the grid of {width} x {height} cells is too large to publish");
     };
-    for (index, piece) in cells.chunks(ipc_types::MAX_GRID_CHUNK_CELLS).enumerate() {
-        outlet.publish(|message| {
-            message.header = Header::new(index as u64, stamp_ns, "map");
-            message.grid = GridGeometry {
-                resolution: grid.resolution_m(),
-                origin: grid.origin(),
-                width,
-                height,
-            };
-            message.first = (index * ipc_types::MAX_GRID_CHUNK_CELLS) as u64;
-            message.total = cells.len() as u64;
-            // Pieces are cut to the capacity, so this cannot fail.
-            let _ = message.set(piece);
-        })?;
-    }
+    let geometry = GridGeometry {
+        resolution: grid.resolution_m(),
+        origin: grid.origin(),
+        width,
+        height,
+    };
+    outlet.publish_grid(geometry, &grid.pixels(), stamp_ns, Form::Final)?;
     Ok(())
 }
 

@@ -10,14 +10,9 @@
 //! The thresholds that decided which cell became which pixel are the grid's
 //! ([`crate::OCCUPIED_PROBABILITY`], [`crate::FREE_PROBABILITY`]).
 
-use back_end::occupancy_grid::CellState;
-
-/// The pixel of an occupied cell.
-pub const OCCUPIED_PIXEL: u8 = 0;
-/// The pixel of a free cell.
-pub const FREE_PIXEL: u8 = 254;
-/// The pixel of a cell never seen, or seen too little to say.
-pub const UNKNOWN_PIXEL: u8 = 205;
+pub use back_end::occupancy_grid::{
+    CellState, FREE_PIXEL, OCCUPIED_PIXEL, UNKNOWN_PIXEL, trinary_pixel,
+};
 /// `occupied_thresh` as written.
 pub const OCCUPIED_THRESH: f64 = 0.65;
 /// `free_thresh` as written: just below the unknown pixel's occupancy, 50 / 255.
@@ -190,15 +185,6 @@ impl MapYaml {
         } else {
             CellState::Unknown
         }
-    }
-}
-
-/// The trinary pixel of a cell.
-pub fn trinary_pixel(state: CellState) -> u8 {
-    match state {
-        CellState::Occupied => OCCUPIED_PIXEL,
-        CellState::Free => FREE_PIXEL,
-        CellState::Unknown => UNKNOWN_PIXEL,
     }
 }
 

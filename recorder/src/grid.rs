@@ -3,7 +3,7 @@
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use ipc_types::{GridCells, GridGeometry};
+use ipc_types::GridGeometry;
 
 use crate::geometry::{Pose, Vector3};
 use crate::pose::MAP_FRAME;
@@ -65,6 +65,17 @@ impl ChannelMessage for GridMessage {
     const SCHEMA: &'static str = "foxglove.Grid";
 }
 
+/// The back end's grid (its submaps at their solved poses) as it stands every few seconds
+/// and at the end, in the form of [`GridMessage`].
+#[derive(Debug, Serialize, JsonSchema)]
+#[serde(transparent)]
+pub struct GraphGridMessage(pub GridMessage);
+
+impl ChannelMessage for GraphGridMessage {
+    const TOPIC: &'static str = "/graph/grid";
+    const SCHEMA: &'static str = "foxglove.Grid";
+}
+
 /// The trinary pixel of an unknown cell (map.pgm's 205).
 const UNKNOWN_PIXEL: u8 = 205;
 
@@ -111,45 +122,6 @@ impl GridMessage {
             resolution: geometry.resolution,
             origin: geometry.origin,
         }
-    }
-}
-
-/// Collects a grid's pieces; they arrive in order on one lossless topic.
-#[derive(Debug, Default)]
-pub struct GridPieces {
-    /// The grid's stamp and geometry, from its first piece.
-    geometry: Option<(u64, GridGeometry)>,
-    cells: Vec<u8>,
-    /// Pieces that did not continue the grid where it stood (counted, not recorded).
-    pub out_of_place: u64,
-}
-
-impl GridPieces {
-    /// Takes a piece; returns the whole grid (its stamp, geometry and cells) when this
-    /// piece completes it.
-    pub fn add(&mut self, piece: &GridCells) -> Option<(u64, GridGeometry, Vec<u8>)> {
-        let geometry = (piece.header.stamp_ns, piece.grid);
-        if piece.first == 0 {
-            self.cells.clear();
-            self.geometry = Some(geometry);
-        }
-        if piece.first != self.cells.len() as u64 || self.geometry != Some(geometry) {
-            self.out_of_place += 1;
-            return None;
-        }
-        self.cells.extend_from_slice(piece.cells());
-        if !piece.is_last_piece() {
-            return None;
-        }
-        let (stamp_ns, geometry) = self.geometry.take()?;
-        let cells = std::mem::take(&mut self.cells);
-        let size = u64::from(geometry.width) * u64::from(geometry.height);
-        if cells.len() as u64 != size || piece.total != size {
-            // Pieces that do not make the grid they describe.
-            self.out_of_place += 1;
-            return None;
-        }
-        Some((stamp_ns, geometry, cells))
     }
 }
 

@@ -53,7 +53,7 @@ pub use features_scene::{
     LINES_ENTITY, features_scene,
 };
 pub use geometry::{Pose, Quaternion, Vector3};
-pub use grid::{GridMessage, GridPieces, PackedElementField, Vector2, base64};
+pub use grid::{GraphGridMessage, GridMessage, PackedElementField, Vector2, base64};
 pub use ground_truth::{GroundTruthMessage, WORLD_FRAME};
 pub use map_scene::{MapScene, MapSceneTopic, MapScenes, corner_entity_id};
 pub use mcap_file::{CHUNK_BYTES, ChannelCount, FLUSH_PERIOD, McapFile};

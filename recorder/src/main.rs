@@ -31,9 +31,10 @@ struct Args {
     /// dies).
     #[arg(long)]
     final_map: bool,
-    /// graph-proc publishes the back end's path at the end of the stream: record it.
+    /// graph-proc publishes the back end's path and grid as they stand every few seconds
+    /// and at the end of the stream: record them.
     #[arg(long)]
-    graph_path: bool,
+    back_end: bool,
     /// Output directory; the recording is DIR/run.mcap.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
@@ -60,6 +61,7 @@ struct Inlets {
     map_path: Option<Inlet<PathChunk>>,
     map_grid: Option<Inlet<GridCells>>,
     graph_path: Option<Inlet<PathChunk>>,
+    graph_grid: Option<Inlet<GridCells>>,
 }
 
 impl Inlets {
@@ -79,10 +81,14 @@ impl Inlets {
         let particles = open_if(args.particles, node, topic::PARTICLES)?;
         let map_path = open_if(args.final_map, node, topic::MAP_PATH)?;
         let map_grid = open_if(args.final_map, node, topic::MAP_GRID)?;
-        let graph_path = open_if(args.graph_path, node, topic::GRAPH_PATH)?;
+        // The grid before the path: graph-proc publishes it once it counts its path's
+        // readers, and by then we read the grid too.
+        let graph_grid = open_if(args.back_end, node, topic::GRAPH_GRID)?;
+        let graph_path = open_if(args.back_end, node, topic::GRAPH_PATH)?;
         let scans = Inlet::open(node, topic::SCAN)?;
         Ok(Self {
             graph_path,
+            graph_grid,
             particles,
             map_path,
             map_grid,
@@ -118,6 +124,7 @@ impl Inlets {
         all.extend(self.map_path.as_ref().map(|i| i as &dyn Wakeable));
         all.extend(self.map_grid.as_ref().map(|i| i as &dyn Wakeable));
         all.extend(self.graph_path.as_ref().map(|i| i as &dyn Wakeable));
+        all.extend(self.graph_grid.as_ref().map(|i| i as &dyn Wakeable));
         all
     }
 
@@ -145,6 +152,9 @@ impl Inlets {
         }
         if let Some(graph_path) = &self.graph_path {
             taken += drain(graph_path, |m| recording.graph_path_chunk(m))?;
+        }
+        if let Some(graph_grid) = &self.graph_grid {
+            taken += drain(graph_grid, |m| recording.graph_grid_cells(m))?;
         }
         Ok(taken)
     }

@@ -3,13 +3,13 @@
 use std::path::{Path, PathBuf};
 
 use ipc_types::{
-    Features, GridCells, GroundTruthPose, Header, LaserScan, MapSnapshot, Odometry, ParticleCloud,
-    PathChunk, PoseEstimate, WorldCorners,
+    Features, GridCells, GridPieces, GroundTruthPose, Header, LaserScan, MapSnapshot, Odometry,
+    ParticleCloud, PathChunk, PoseEstimate, WorldCorners,
 };
 
 use crate::error::RecordError;
 use crate::features_scene::FeaturesScenes;
-use crate::grid::{GridMessage, GridPieces};
+use crate::grid::{GraphGridMessage, GridMessage};
 use crate::ground_truth::GroundTruthMessage;
 use crate::map_scene::MapScenes;
 use crate::mcap_file::{ChannelCount, McapFile};
@@ -62,6 +62,7 @@ pub struct Recording {
     maps_left_out: u64,
     map_path: PathChunks,
     graph_path: PathChunks,
+    graph_grid: GridPieces,
     grid: GridPieces,
     particles: ParticlePieces,
     /// The recorded map snapshots drawn as scenes.
@@ -84,6 +85,7 @@ impl Recording {
             maps_left_out: 0,
             map_path: PathChunks::default(),
             graph_path: PathChunks::default(),
+            graph_grid: GridPieces::default(),
             grid: GridPieces::default(),
             particles: ParticlePieces::default(),
             map_scenes: MapScenes::default(),
@@ -236,14 +238,26 @@ impl Recording {
         Ok(())
     }
 
+    /// A piece of the back end's grid; recorded once all of it is in.
+    pub fn graph_grid_cells(&mut self, piece: &GridCells) -> Result<(), RecordError> {
+        let h = piece.header;
+        if let Some(grid) = self.graph_grid.add(piece) {
+            let stamp_ns = grid.header.stamp_ns;
+            let message = GraphGridMessage(GridMessage::new(stamp_ns, &grid.geometry, &grid.cells));
+            self.file.write(&message, stamp_ns, h.sent_ns)?;
+        }
+        Ok(())
+    }
+
     /// A piece of the grid map-sink wrote; recorded once all of it is in.
     pub fn grid_cells(&mut self, piece: &GridCells) -> Result<(), RecordError> {
         let h = piece.header;
         if h.is_end_of_stream() {
             return Ok(());
         }
-        if let Some((stamp_ns, geometry, cells)) = self.grid.add(piece) {
-            let message = GridMessage::new(stamp_ns, &geometry, &cells);
+        if let Some(grid) = self.grid.add(piece) {
+            let stamp_ns = grid.header.stamp_ns;
+            let message = GridMessage::new(stamp_ns, &grid.geometry, &grid.cells);
             self.file.write(&message, stamp_ns, h.sent_ns)?;
         }
         Ok(())

@@ -5,12 +5,12 @@
 mod foxglove_schemas;
 
 use ipc_types::{
-    Corner, Features, GridCells, GridCellsRecord, GridGeometry, GroundTruthPose, Header, LaserScan,
-    Line, MapCorner, MapSnapshot, Odometry, Particle, ParticleCloud, PathChunk, Pose2,
-    PoseEstimate, ScanMotion, StampedPose, TrueCorner, WorldCorners, Zeroable,
+    Corner, Features, GridCells, GridCellsRecord, GridGeometry, GridPieces, GroundTruthPose,
+    Header, LaserScan, Line, MapCorner, MapSnapshot, Odometry, Particle, ParticleCloud, PathChunk,
+    Pose2, PoseEstimate, ScanMotion, StampedPose, TrueCorner, WorldCorners, Zeroable,
 };
 use recorder::{
-    ARM_LENGTH, ChannelMessage, FEATURES_SCENE_PERIOD_NS, FeaturesScenes, GridMessage, GridPieces,
+    ARM_LENGTH, ChannelMessage, FEATURES_SCENE_PERIOD_NS, FeaturesScenes, GridMessage,
     GroundTruthMessage, MapMessage, MapPathMessage, MapScenes, ParticlePieces, ParticlesMessage,
     PathChunks, PathMessage, PoseMessage, ScanMessage, TransformMessage, features_scene,
 };
@@ -313,7 +313,8 @@ fn the_grid_is_a_foxglove_grid_of_rgba_cells_from_its_pieces() {
         assert!(whole.is_none());
         whole = pieces.add(&piece);
     }
-    let (stamp_ns, geometry, got) = whole.expect("the second piece completes the grid");
+    let whole = whole.expect("the second piece completes the grid");
+    let (stamp_ns, geometry, got) = (whole.header.stamp_ns, whole.geometry, whole.cells);
     assert_eq!(got, cells);
     let json = check(&GridMessage::new(stamp_ns, &geometry, &got));
     assert_eq!(json["frame_id"], "map");

@@ -316,7 +316,7 @@ fn publish_path(outlet: &Outlet<PathChunk>, slam: &FastSlam, last: Header) -> Re
         .iter()
         .map(|&p| StampedPose::from(p))
         .collect();
-    outlet.publish_path(&path, last.stamp_ns, PathForm::Final)?;
+    outlet.publish_path(&path, last.stamp_ns, Form::Final)?;
     Ok(())
 }
 

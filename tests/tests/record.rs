@@ -77,6 +77,7 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         ("/slam/pose", "foxglove.PoseInFrame"),
         ("/slam/path", "foxglove.PosesInFrame"),
         ("/graph/path", "foxglove.PosesInFrame"),
+        ("/graph/grid", "foxglove.Grid"),
         ("/sim/ground_truth", "foxglove.PoseInFrame"),
         ("/perception/features", "slam.Features"),
         ("/slam/map", "slam.MapSnapshot"),
@@ -127,8 +128,10 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     assert_eq!(count("/slam/pose"), processed);
     assert_eq!(count("/sim/world_corners"), 1);
     assert_eq!(count("/slam/path"), 1);
-    // The back end's path as it stands every few seconds of the run, then its final one.
+    // The back end's path and grid as they stand every few seconds of the run, then their
+    // final ones.
     assert!(count("/graph/path") >= 1);
+    assert!(count("/graph/grid") >= 1);
     assert_eq!(count("/map/path"), 1);
     assert_eq!(count("/map/grid"), 1);
     assert_eq!(count("/slam/particles"), processed / CLOUD_EVERY);

@@ -165,8 +165,9 @@ fn check_recording_of(out: &Path, odometry: bool) {
         ("/tf", "foxglove.FrameTransform"),
         ("/slam/pose", "foxglove.PoseInFrame"),
         ("/slam/path", "foxglove.PosesInFrame"),
-        // The back end's path: these runs map from nothing.
+        // The back end's path and grid: these runs map from nothing.
         ("/graph/path", "foxglove.PosesInFrame"),
+        ("/graph/grid", "foxglove.Grid"),
         ("/perception/features", "slam.Features"),
         ("/slam/map", "slam.MapSnapshot"),
         ("/slam/map_scene", "foxglove.SceneUpdate"),
@@ -204,8 +205,10 @@ fn check_recording_of(out: &Path, odometry: bool) {
     // map → base_link at every pose, base_link → laser once.
     assert_eq!(topics["/tf"].messages, processed + 1);
     assert_eq!(topics["/slam/path"].messages, 1);
-    // The back end's path as it stands every few seconds of the run, then its final one.
+    // The back end's path and grid as they stand every few seconds of the run, then their
+    // final ones.
     assert!(topics["/graph/path"].messages >= 1);
+    assert!(topics["/graph/grid"].messages >= 1);
     assert_eq!(topics["/map/path"].messages, 1);
     let count = |topic: &str| topics.get(topic).map_or(0, |t| t.messages);
     assert_eq!(count("/map/grid"), u64::from(grid));

@@ -7,9 +7,10 @@ use zerocopy::FromZeros;
 
 use super::bounded_array::BoundedArray;
 use super::chunked::chunked_message;
+use super::form::Form;
 use super::pose::Pose2;
 use crate::capacity::{CapacityError, MAX_PATH_CHUNK_POSES};
-use crate::header::{FLAG_FINAL, Header};
+use crate::header::Header;
 use crate::transport::{Outlet, PublishError};
 
 /// One pose of a path: a scan's stamp and the pose (`map_from_robot`) at it.
@@ -50,15 +51,6 @@ chunked_message! {
     "path poses", poses {}
 }
 
-/// Whether a path is in its last form.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PathForm {
-    /// As it stands; a better one may follow.
-    Interim,
-    /// The last: sent at the end of the stream or as the publisher stops.
-    Final,
-}
-
 impl Outlet<PathChunk> {
     /// Publishes a whole path as consecutive chunks numbered from 0 (their `seq`), each
     /// stamped `stamp_ns` (the last scan's) in frame `map`, flagged when `form` is final.
@@ -66,15 +58,12 @@ impl Outlet<PathChunk> {
         &self,
         path: &[StampedPose],
         stamp_ns: u64,
-        form: PathForm,
+        form: Form,
     ) -> Result<(), PublishError> {
         let total = path.len() as u64;
         for (index, chunk) in path.chunks(MAX_PATH_CHUNK_POSES).enumerate() {
             self.publish(|message| {
-                message.header = Header::new(index as u64, stamp_ns, "map");
-                if form == PathForm::Final {
-                    message.header.flags |= FLAG_FINAL;
-                }
+                message.header = form.header(index as u64, stamp_ns);
                 message.first = (index * MAX_PATH_CHUNK_POSES) as u64;
                 message.total = total;
                 // Chunks are cut to the capacity, so this cannot fail.
