@@ -185,6 +185,19 @@ pub struct SlamConfig {
     /// of them the grid is left out of the scan. High: at the saved map's edge the grid
     /// holds walls seen from afar, and a climb on a few of them pulls the run off its own.
     pub saved_grid_min_known: f64,
+    /// Back on the saved grid after this much path off it, metres, the particles may have
+    /// drifted beyond the tracking climb's reach: they climb once from the localizer's
+    /// wider search steps, and take the fit if it lies within three standard deviations
+    /// of what the front end can have drifted over the path off the grid.
+    pub saved_grid_search_after: f64,
+    /// That drift: translation standard deviation per metre of path off the grid, m/m.
+    pub saved_grid_drift_xy_per_metre: f64,
+    /// Rotation standard deviation per metre of path off the grid, rad/m.
+    pub saved_grid_drift_yaw_per_metre: f64,
+    /// The largest translation standard deviation of that drift, metres.
+    pub saved_grid_max_drift_xy: f64,
+    /// The largest rotation standard deviation of that drift, radians.
+    pub saved_grid_max_drift_yaw: f64,
     /// Localization on a saved map (`slam-proc --map DIR --localize`).
     pub localize: LocalizeConfig,
 }
@@ -249,6 +262,11 @@ impl Default for SlamConfig {
             saved_grid_weight: 0.0,
             saved_grid_beams: 120,
             saved_grid_min_known: 0.8,
+            saved_grid_search_after: 10.0,
+            saved_grid_drift_xy_per_metre: 0.02,
+            saved_grid_drift_yaw_per_metre: 0.002,
+            saved_grid_max_drift_xy: 3.0,
+            saved_grid_max_drift_yaw: 0.2,
             localize: LocalizeConfig::default(),
         }
     }
@@ -284,7 +302,9 @@ impl SlamConfig {
             measured_yaw_variance_per_metre, measured_yaw_variance_per_radian, update_min_distance,
             update_min_rotation, revisit_search_radius, revisit_min_distance,
             revisit_sigma_xy_per_metre, revisit_sigma_yaw_per_metre, revisit_max_sigma_xy,
-            revisit_max_sigma_yaw, saved_grid_weight,
+            revisit_max_sigma_yaw, saved_grid_weight, saved_grid_search_after,
+            saved_grid_drift_xy_per_metre, saved_grid_drift_yaw_per_metre,
+            saved_grid_max_drift_xy, saved_grid_max_drift_yaw,
         ))?;
         check(
             "saved_grid_pull",
@@ -378,13 +398,14 @@ impl SlamConfig {
             &stage_kit::named_fields!(self;
                 noise_xy_base, noise_xy_per_metre, noise_xy_per_radian, noise_yaw_base,
                 noise_yaw_per_radian, noise_yaw_per_metre, revisit_sigma_xy_per_metre,
-                revisit_sigma_yaw_per_metre,
+                revisit_sigma_yaw_per_metre, saved_grid_drift_xy_per_metre,
+                saved_grid_drift_yaw_per_metre,
             ),
             0.0..=MAX_DRIFT,
             "(m or rad, per metre or radian)",
         )?;
         check_within(
-            &stage_kit::named_fields!(self; revisit_max_sigma_xy),
+            &stage_kit::named_fields!(self; revisit_max_sigma_xy, saved_grid_max_drift_xy),
             0.0..=SENSOR_REACH_M,
             "m",
         )

@@ -368,6 +368,36 @@ pub const SLAM: Section = Section {
             Range::FRACTION,
             "The grid is used only when at least this fraction of those beams end in its seen cells.",
         ),
+        set(
+            "saved_grid_search_after",
+            "m",
+            Range::NON_NEGATIVE,
+            "Back on the grid after this much path off it, the particles climb once from wider steps ...",
+        ),
+        set(
+            "saved_grid_drift_xy_per_metre",
+            "m/m",
+            Range::NON_NEGATIVE,
+            "... and take the fit within 3 sigma of the drift over that path: translation sigma per metre.",
+        ),
+        set(
+            "saved_grid_drift_yaw_per_metre",
+            "rad/m",
+            Range::NON_NEGATIVE,
+            "Rotation sigma of that drift per metre.",
+        ),
+        set(
+            "saved_grid_max_drift_xy",
+            "m",
+            Range::NON_NEGATIVE,
+            "Largest translation sigma of that drift.",
+        ),
+        set(
+            "saved_grid_max_drift_yaw",
+            "rad",
+            Range::NON_NEGATIVE,
+            "Largest rotation sigma of that drift.",
+        ),
     ],
 };
 

@@ -18,14 +18,13 @@ use crate::filter::resample::{
     effective_sample_size, heaviest, log_sum_exp, normalise, systematic,
 };
 use crate::filter::rng::Streams;
-use crate::filter::saved_grid::SavedGrid;
+use crate::filter::saved_grid::{SavedGrid, drift_off_grid};
 use crate::filter::wall_memory::WallMemory;
 use crate::localize::localizer::ScanRanges;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
 use crate::motion::predict::{self, MotionNoise};
 use crate::path::particle_path::ScanLog;
-use crate::update::drift::revisit_covariance;
 use crate::update::free_space::WallSegment;
 use slam_eval::{FitVerdict, MapFit};
 use slam_geom::Pose2;
@@ -470,15 +469,13 @@ impl FastSlam {
         let saved_grid = self.saved_grid.as_ref().filter(|_| judged);
         // With the saved grid, a revisit's wide gate pairs the saved corners (all seen
         // "long ago") wrongly, on the saved map and beside it; the grid closes the loops
-        // instead. Back on the grid after a stretch off it as long as
-        // `revisit_min_distance`, the particles may have drifted beyond the tracking climb's
-        // reach: they climb from the search's wider steps once, as far as the front end can
-        // have drifted over that stretch (the revisits' allowance).
+        // instead. Back on the grid after a stretch off it (`saved_grid_search_after`),
+        // the particles climb once from the search's wider steps.
         let now = self.path_length.last().copied().unwrap_or(0.0);
         let revisits = self.saved_grid.is_none() || !config.saved_grid_refine;
         let off_grid = now - self.on_grid_at;
-        let returned = judged && off_grid >= config.revisit_min_distance;
-        let drift = revisit_covariance(off_grid, config);
+        let returned = judged && off_grid >= config.saved_grid_search_after;
+        let drift = drift_off_grid(off_grid, config);
         if judged {
             self.on_grid_at = now;
         }
