@@ -7,7 +7,6 @@ use stage_kit::settings::{
 };
 
 use crate::localize_config::LocalizeConfig;
-use crate::pose_graph::GraphNoise;
 
 /// FastSLAM parameters. Metres, radians, probabilities in `(0, 1)`.
 ///
@@ -92,30 +91,6 @@ pub struct SlamConfig {
     pub update_min_distance: f64,
     /// Or turned this far, radians.
     pub update_min_rotation: f64,
-    /// A revisit: map corners last seen at least `revisit_min_distance` of path ago are
-    /// searched for within this radius of each observation, metres (0: no revisits).
-    /// Their association allows for the drift since then, so a loop longer than the
-    /// particles' spread still closes.
-    pub revisit_search_radius: f64,
-    /// Path length after which a corner not seen again counts as old, metres.
-    pub revisit_min_distance: f64,
-    /// Old corners a revisit must pair, at least (and at least as many as the usual
-    /// association paired with any corners).
-    pub revisit_min_corners: usize,
-    /// The drift a revisit allows for: translation standard deviation per metre of path
-    /// since the oldest corner was seen.
-    pub revisit_sigma_xy_per_metre: f64,
-    /// Rotation standard deviation per metre of path, rad/m.
-    pub revisit_sigma_yaw_per_metre: f64,
-    /// The largest translation standard deviation a revisit allows for, metres.
-    pub revisit_max_sigma_xy: f64,
-    /// The largest rotation standard deviation a revisit allows for, radians.
-    pub revisit_max_sigma_yaw: f64,
-    /// A revisit lands only within this probability region of the drift it allows for:
-    /// its translation from the prediction, chi-square with 2 dof under the allowance's
-    /// covariance. Two or three corners fit the allowance's far edge in a building of
-    /// repeated rooms; a real drift that far is rare.
-    pub revisit_jump_probability: f64,
     /// Smallest translation noise of a fitted step, metres: particles must stay diverse.
     pub noise_xy_floor: f64,
     /// Smallest rotation noise of a fitted step, radians.
@@ -166,10 +141,7 @@ pub struct SlamConfig {
     /// each particle climbs this scan's likelihood on the saved grid (the localizer's
     /// field and beam model, `[slam.localize]`'s `sigma_hit`, `beam_floor` and
     /// `max_distance`) before its corners correct it, so the new run stays in the saved
-    /// map's frame between corner sightings instead of drifting with the front end until a
-    /// revisit pulls it back in a jump. Revisits are then left out while the grid holds the
-    /// particles: every saved corner counts as seen long ago, and a revisit's wide
-    /// association pairs them wrongly and throws the particles off the grid they were on.
+    /// map's frame between corner sightings instead of drifting with the front end.
     pub saved_grid_refine: bool,
     /// The particle moves this fraction of the way to the grid's best fit, in (0, 1]: less
     /// than all of it smooths the fit's own jitter out of the path.
@@ -185,6 +157,19 @@ pub struct SlamConfig {
     /// of them the grid is left out of the scan. High: at the saved map's edge the grid
     /// holds walls seen from afar, and a climb on a few of them pulls the run off its own.
     pub saved_grid_min_known: f64,
+    /// Back on the saved grid after this much path off it, metres, the particles may have
+    /// drifted beyond the tracking climb's reach: they climb once from the localizer's
+    /// wider search steps, and take the fit if it lies within three standard deviations
+    /// of what the front end can have drifted over the path off the grid.
+    pub saved_grid_search_after: f64,
+    /// That drift: translation standard deviation per metre of path off the grid, m/m.
+    pub saved_grid_drift_xy_per_metre: f64,
+    /// Rotation standard deviation per metre of path off the grid, rad/m.
+    pub saved_grid_drift_yaw_per_metre: f64,
+    /// The largest translation standard deviation of that drift, metres.
+    pub saved_grid_max_drift_xy: f64,
+    /// The largest rotation standard deviation of that drift, radians.
+    pub saved_grid_max_drift_yaw: f64,
     /// Localization on a saved map (`slam-proc --map DIR --localize`).
     pub localize: LocalizeConfig,
 }
@@ -219,14 +204,6 @@ impl Default for SlamConfig {
             measured_yaw_variance_per_radian: 1.6e-6,
             update_min_distance: 0.5,
             update_min_rotation: 0.25,
-            revisit_search_radius: 6.0,
-            revisit_min_distance: 10.0,
-            revisit_min_corners: 2,
-            revisit_sigma_xy_per_metre: 0.02,
-            revisit_sigma_yaw_per_metre: 0.002,
-            revisit_max_sigma_xy: 3.0,
-            revisit_max_sigma_yaw: 0.2,
-            revisit_jump_probability: 0.95,
             noise_xy_floor: 0.002,
             noise_yaw_floor: 0.0005,
             fallback_noise_scale: 3.0,
@@ -249,23 +226,17 @@ impl Default for SlamConfig {
             saved_grid_weight: 0.0,
             saved_grid_beams: 120,
             saved_grid_min_known: 0.8,
+            saved_grid_search_after: 10.0,
+            saved_grid_drift_xy_per_metre: 0.02,
+            saved_grid_drift_yaw_per_metre: 0.002,
+            saved_grid_max_drift_xy: 3.0,
+            saved_grid_max_drift_yaw: 0.2,
             localize: LocalizeConfig::default(),
         }
     }
 }
 
 impl SlamConfig {
-    /// The variances the final path's smoothing gives its steps: the front end's drift, as
-    /// the particles spread by it.
-    pub(crate) fn graph_noise(&self) -> GraphNoise {
-        GraphNoise {
-            xy_per_metre: self.measured_xy_variance_per_metre,
-            xy_per_radian: self.measured_xy_variance_per_radian,
-            yaw_per_metre: self.measured_yaw_variance_per_metre,
-            yaw_per_radian: self.measured_yaw_variance_per_radian,
-        }
-    }
-
     /// Checks that every parameter is usable; [`crate::FastSlam::new`] refuses a
     /// configuration that fails this.
     pub fn validate(&self) -> Result<(), SettingError> {
@@ -282,9 +253,9 @@ impl SlamConfig {
             observation_extra_sigma_xy, observation_extra_sigma_angle, duplicate_radius,
             duplicate_heading, measured_xy_variance_per_metre, measured_xy_variance_per_radian,
             measured_yaw_variance_per_metre, measured_yaw_variance_per_radian, update_min_distance,
-            update_min_rotation, revisit_search_radius, revisit_min_distance,
-            revisit_sigma_xy_per_metre, revisit_sigma_yaw_per_metre, revisit_max_sigma_xy,
-            revisit_max_sigma_yaw, saved_grid_weight,
+            update_min_rotation, saved_grid_weight, saved_grid_search_after,
+            saved_grid_drift_xy_per_metre, saved_grid_drift_yaw_per_metre,
+            saved_grid_max_drift_xy, saved_grid_max_drift_yaw,
         ))?;
         check(
             "saved_grid_pull",
@@ -302,7 +273,6 @@ impl SlamConfig {
             ("motion_gate_probability", self.motion_gate_probability),
             ("motion_inlier_probability", self.motion_inlier_probability),
             ("association_probability", self.association_probability),
-            ("revisit_jump_probability", self.revisit_jump_probability),
         ];
         for (field, value) in probabilities {
             check(
@@ -338,8 +308,6 @@ impl SlamConfig {
         check_counts(&stage_kit::named_fields!(self; jcbb_max_nodes), 1..)?;
         let confirm = usize::try_from(self.confirm_observations).unwrap_or(usize::MAX);
         check_counts(&[("confirm_observations", confirm)], 1..)?;
-        // One corner alone fits a wrong offset too easily to close a loop on.
-        check_counts(&stage_kit::named_fields!(self; revisit_min_corners), 2..)?;
         let fov = self.view_fov;
         check(
             "view_fov",
@@ -362,7 +330,7 @@ impl SlamConfig {
         )?;
         let reach = SENSOR_REACH_M.min(MAX_LOOKUP_CELLS * self.grid_cell_size);
         check_within(
-            &stage_kit::named_fields!(self; search_radius, revisit_search_radius, duplicate_radius),
+            &stage_kit::named_fields!(self; search_radius, duplicate_radius),
             0.0..=reach,
             "m (the sensor's reach, and 32 cells of grid_cell_size)",
         )?;
@@ -377,14 +345,14 @@ impl SlamConfig {
         check_within(
             &stage_kit::named_fields!(self;
                 noise_xy_base, noise_xy_per_metre, noise_xy_per_radian, noise_yaw_base,
-                noise_yaw_per_radian, noise_yaw_per_metre, revisit_sigma_xy_per_metre,
-                revisit_sigma_yaw_per_metre,
+                noise_yaw_per_radian, noise_yaw_per_metre, saved_grid_drift_xy_per_metre,
+                saved_grid_drift_yaw_per_metre,
             ),
             0.0..=MAX_DRIFT,
             "(m or rad, per metre or radian)",
         )?;
         check_within(
-            &stage_kit::named_fields!(self; revisit_max_sigma_xy),
+            &stage_kit::named_fields!(self; saved_grid_max_drift_xy),
             0.0..=SENSOR_REACH_M,
             "m",
         )
@@ -443,10 +411,6 @@ mod tests {
             refused(|c| c.association_probability = 1.0),
             Some("association_probability")
         );
-        assert_eq!(
-            refused(|c| c.revisit_jump_probability = 0.0),
-            Some("revisit_jump_probability")
-        );
         assert_eq!(refused(|c| c.particles = 0), Some("particles"));
         assert_eq!(
             refused(|c| c.motion_candidates = 65),
@@ -457,10 +421,6 @@ mod tests {
             Some("confirm_observations")
         );
         assert_eq!(
-            refused(|c| c.revisit_min_corners = 1),
-            Some("revisit_min_corners")
-        );
-        assert_eq!(
             refused(|c| c.update_min_distance = -0.5),
             Some("update_min_distance")
         );
@@ -469,7 +429,10 @@ mod tests {
                 (|c| c.search_radius = 1e9) as fn(&mut SlamConfig),
                 "search_radius",
             ),
-            (|c| c.revisit_search_radius = 1e9, "revisit_search_radius"),
+            (
+                |c| c.saved_grid_max_drift_xy = 1e9,
+                "saved_grid_max_drift_xy",
+            ),
             (|c| c.duplicate_radius = 1e9, "duplicate_radius"),
             (|c| c.grid_cell_size = 1e-9, "grid_cell_size"),
             (

@@ -45,9 +45,8 @@ mod path;
 mod rigid_fit;
 mod update;
 
-// config.rs and rigid_fit.rs name these modules by their crate-root paths.
+// rigid_fit.rs names this module by its crate-root path.
 use filter::observation;
-use path::pose_graph;
 
 pub use config::SlamConfig;
 pub use filter::estimate::Estimate;

@@ -234,9 +234,8 @@ fn summary(stats: &FilterStats, saved: Option<&Path>) -> String {
         "slam-proc: summary of the filter\n  \
          scans:           {} ({} updated the particles with their corners)\n  \
          resamplings:     {}\n  \
-         loops closed:    {} by revisits of the best particle\n  \
          map:             {} corners",
-        stats.scans, stats.updates, stats.resamplings, stats.loops_closed, stats.map_corners,
+        stats.scans, stats.updates, stats.resamplings, stats.map_corners,
     );
     if let Some(dir) = saved {
         let fit = match stats.saved_map_set_aside_at {

@@ -268,7 +268,7 @@ pub fn summary_line(console: &str, head: &str) -> String {
         .to_owned()
 }
 
-/// The count that starts the summary line `head` (`loops closed: 3 by ...` gives 3).
+/// The count that starts the summary line `head` (`loop closures: 3 verified ...` gives 3).
 pub fn summary_count(console: &str, head: &str) -> u64 {
     let line = summary_line(console, head);
     line.split_whitespace()

@@ -240,10 +240,6 @@ fn settings_that_would_exhaust_the_machine_are_refused_with_their_range() {
     for (text, key) in [
         ("[front_end]\nvoxel_size = 1e-9\n", "voxel_size"),
         ("[slam]\nsearch_radius = 1e9\n", "search_radius"),
-        (
-            "[slam]\nrevisit_search_radius = 1e9\n",
-            "revisit_search_radius",
-        ),
         ("[slam]\nduplicate_radius = 1e9\n", "duplicate_radius"),
         ("[slam]\ngrid_cell_size = 1e-9\n", "grid_cell_size"),
         (

@@ -12,7 +12,7 @@ const MIT_CSAIL_400_MAX_TRANSLATION_M: f64 = 0.05;
 const FRAMES: &str = "400";
 /// Bound on the mean translational relative-pose error over the whole of aces (seed 1,
 /// 100 particles): GMapping's published figure, well above what the defaults give
-/// (docs/RESULTS.md), and below what each loop's jump spread back on its own gave.
+/// (docs/RESULTS.md).
 const ACES_MAX_TRANSLATION_M: f64 = 0.060;
 /// Bound on the mean translational relative-pose error of mit-csail replayed at a third of
 /// its scan rate, over the relations whose two scans it keeps: the last loop drifts metres
@@ -110,18 +110,18 @@ fn mit_csail_is_scored_against_the_relations_beside_it() {
 
 #[test]
 fn aces_closes_its_overlapping_loops_together() {
-    // The best particle closes several loops whose stretches overlap; the final path meets
-    // them all at once. Lockstep, so the figure is the same on a busy machine.
+    // The back end closes several loops whose stretches overlap; the final path meets them
+    // all at once. Lockstep, so the figure is the same on a busy machine.
     let log = test_data::carmen_log("aces");
     let Run {
         domain,
         out,
         output,
     } = replayed("aces-rpe", &log, &SEED_1_100_PARTICLES);
-    // slam-proc's summary block, on the console's stderr.
+    // graph-proc's summary block, on the console's stderr.
     let stderr = String::from_utf8_lossy(&output.stderr);
-    let closed = summary_count(&stderr, "loops closed:");
-    assert!(closed >= 2, "{closed} loops closed: {stderr}");
+    let closed = summary_count(&stderr, "loop closures:");
+    assert!(closed >= 2, "{closed} loop closures: {stderr}");
     let estimate = trajectory_score(&out);
     // 1279 lines, nine of them repeats, counted once.
     assert_eq!(estimate.used, 1270, "{estimate:?}");
@@ -199,13 +199,10 @@ fn a_loop_that_drifted_late_is_closed_without_bending_the_run() {
 }
 
 #[test]
-fn a_loop_closure_onto_corners_that_only_look_alike_is_refused() {
+fn a_place_that_only_looks_like_an_old_one_does_not_bend_the_run() {
     // aces at a third of its rate, seed 2: back in a corridor first seen ten minutes
-    // earlier, two old corners fit a pose 4.7 m and 13 degrees from where the particles
-    // were, and every particle jumped there; the scan's walls, which lay on the old walls
-    // where the particles were, fit them worse at the landing. Taken, the jump bent the run
-    // by metres until a later loop undid it (relations across the first loop 1.2-1.6 m
-    // off, 0.072 m on average).
+    // earlier, two old corners fit a pose 4.7 m and 13 degrees from where the robot was.
+    // A closure taken there would bend the final path by metres across the first loop.
     let estimate = third_rate_run("aces", "2", 2458);
     assert!(estimate.used >= 100, "{estimate:?}");
     translation_within(&estimate, ACES_MAX_TRANSLATION_M);

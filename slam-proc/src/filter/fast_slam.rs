@@ -18,15 +18,12 @@ use crate::filter::resample::{
     effective_sample_size, heaviest, log_sum_exp, normalise, systematic,
 };
 use crate::filter::rng::Streams;
-use crate::filter::saved_grid::SavedGrid;
-use crate::filter::wall_memory::WallMemory;
+use crate::filter::saved_grid::{SavedGrid, drift_off_grid};
 use crate::localize::localizer::ScanRanges;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
 use crate::motion::predict::{self, MotionNoise};
 use crate::path::particle_path::ScanLog;
-use crate::update::drift::revisit_covariance;
-use crate::update::free_space::WallSegment;
 use slam_eval::{FitVerdict, MapFit};
 use slam_geom::Pose2;
 use slam_geom::StampedPose;
@@ -57,15 +54,12 @@ pub struct FastSlam {
     parents: Vec<usize>,
     /// This scan's usable lines.
     lines: Vec<MeasuredLine>,
-    /// This scan's walls, and those of the scans that updated the particles before it.
-    walls: Vec<WallSegment>,
-    wall_memory: WallMemory,
     /// One set of update buffers per chunk of `PARTICLES_PER_TASK` particles.
     scratch: Vec<Scratch>,
     /// The motion since the corners last updated the particles.
     since_update: SinceUpdate,
-    /// The path length of the motion at each scan, metres.
-    path_length: Vec<f64>,
+    /// The path length of the motion so far, metres.
+    path_length: f64,
     /// The front end's pose at every scan, which places the scans a particle kept no pose
     /// for.
     scan_log: ScanLog,
@@ -95,8 +89,6 @@ pub struct FilterStats {
     pub updates: u64,
     /// Times the particles were resampled.
     pub resamplings: u64,
-    /// Loops the best particle closed by revisits (each spread back over its path).
-    pub loops_closed: usize,
     /// Confirmed corners of the best particle's map.
     pub map_corners: usize,
     /// Mapping on a saved grid: how well it explains the scans, from the best particle at
@@ -170,7 +162,6 @@ impl FastSlam {
                 mean: nalgebra::Vector4::new(corner.x, corner.y, corner.heading, corner.angle),
                 covariance: corner.covariance,
                 observations: corner.observations.max(config.confirm_observations),
-                last_seen: 0,
             };
             if state
                 .mean
@@ -204,11 +195,9 @@ impl FastSlam {
             weights: Vec::new(),
             parents: Vec::new(),
             lines: Vec::new(),
-            walls: Vec::new(),
-            wall_memory: WallMemory::default(),
             scratch: Vec::new(),
             since_update: SinceUpdate::default(),
-            path_length: Vec::new(),
+            path_length: 0.0,
             scan_log: ScanLog::default(),
             updates: 0,
             resamplings: 0,
@@ -270,7 +259,7 @@ impl FastSlam {
     pub fn best_path(&self) -> Vec<StampedPose> {
         self.particles
             .get(self.best)
-            .map(|p| p.path.smoothed(&self.config.graph_noise(), &self.scan_log))
+            .map(|p| p.path.poses(&self.scan_log))
             .unwrap_or_default()
     }
 
@@ -281,7 +270,6 @@ impl FastSlam {
             scans: self.scans,
             updates: self.updates,
             resamplings: self.resamplings,
-            loops_closed: best.map_or(0, |p| p.path.closures()),
             map_corners: best.map_or(0, |p| p.map.confirmed_count()),
             map_fit: self.map_fit,
             saved_map_set_aside_at: self.set_aside_at,
@@ -303,10 +291,10 @@ impl FastSlam {
     }
 
     /// Updates the filter with one scan: its acquisition time, its corners and wall lines
-    /// in the sensor frame (lines steady the motion estimate and check loop closures; pass
-    /// none if the extractor gives none) and, when the robot has odometry, the odometry
-    /// pose at the scan. Features that are not usable (non-finite, an angle outside `(0, pi)`, a
-    /// covariance that is not positive definite) are ignored.
+    /// in the sensor frame (lines steady the motion estimate; pass none if the extractor
+    /// gives none) and, when the robot has odometry, the odometry pose at the scan.
+    /// Features that are not usable (non-finite, an angle outside `(0, pi)`, a covariance
+    /// that is not positive definite) are ignored.
     pub fn process(
         &mut self,
         stamp_ns: u64,
@@ -364,11 +352,6 @@ impl FastSlam {
         self.lines.clear();
         self.lines
             .extend(lines.iter().filter(|l| l.is_well_formed()).copied());
-        self.walls.clear();
-        self.walls.extend(self.lines.iter().map(|l| WallSegment {
-            start: l.start,
-            end: l.end,
-        }));
         let motion = match step {
             StepMotion::Estimate(odometry) => {
                 self.motion
@@ -428,9 +411,7 @@ impl FastSlam {
         }
         let predict_done = Instant::now();
 
-        let length = self.path_length.last().copied().unwrap_or(0.0);
-        self.path_length
-            .push(length + motion.delta.translation_norm());
+        self.path_length += motion.delta.translation_norm();
         // With measured motion the corners wait until the robot has moved (see
         // `SlamConfig::update_min_distance`); the particles' uncertainty relative to their
         // maps is then the noise of every step since.
@@ -445,16 +426,7 @@ impl FastSlam {
         if skip {
             // No pose kept: the scan follows the last kept one by the front end's motion.
             for particle in &mut self.particles {
-                match particle.closure.take() {
-                    None => particle.path.pass(),
-                    closure => particle.path.push(
-                        StampedPose {
-                            stamp_ns,
-                            pose: particle.pose,
-                        },
-                        closure,
-                    ),
-                }
+                particle.path.pass();
             }
             return self.finish([start, motion_done, predict_done, predict_done], false);
         }
@@ -468,19 +440,13 @@ impl FastSlam {
             _ => false,
         };
         let saved_grid = self.saved_grid.as_ref().filter(|_| judged);
-        // With the saved grid, a revisit's wide gate pairs the saved corners (all seen
-        // "long ago") wrongly, on the saved map and beside it; the grid closes the loops
-        // instead. Back on the grid after a stretch off it as long as
-        // `revisit_min_distance`, the particles may have drifted beyond the tracking climb's
-        // reach: they climb from the search's wider steps once, as far as the front end can
-        // have drifted over that stretch (the revisits' allowance).
-        let now = self.path_length.last().copied().unwrap_or(0.0);
-        let revisits = self.saved_grid.is_none() || !config.saved_grid_refine;
-        let off_grid = now - self.on_grid_at;
-        let returned = judged && off_grid >= config.revisit_min_distance;
-        let drift = revisit_covariance(off_grid, config);
+        // Back on the grid after a stretch off it (`saved_grid_search_after`), the
+        // particles climb once from the search's wider steps.
+        let off_grid = self.path_length - self.on_grid_at;
+        let returned = judged && off_grid >= config.saved_grid_search_after;
+        let drift = drift_off_grid(off_grid, config);
         if judged {
-            self.on_grid_at = now;
+            self.on_grid_at = self.path_length;
         }
         let context = ScanContext {
             observations: &prepared,
@@ -494,12 +460,6 @@ impl FastSlam {
             // The first pose is the map frame: nothing to draw.
             draw_pose: config.observation_proposal && self.scans > 0,
             cos_half_fov: (0.5 * config.view_fov).cos(),
-            scan: self.scans,
-            path_length: &self.path_length,
-            scan_log: &self.scan_log,
-            revisits,
-            walls: &self.walls,
-            wall_memory: &self.wall_memory,
         };
         let (streams, scan) = (&self.streams, self.scans);
         let (refine, pull, grid_weight) = (
@@ -527,13 +487,10 @@ impl FastSlam {
                     }
                 }
                 particle.log_weight += particle.update(&context, scratch, &mut rng);
-                particle.path.push(
-                    StampedPose {
-                        stamp_ns,
-                        pose: particle.pose,
-                    },
-                    particle.closure.take(),
-                );
+                particle.path.push(StampedPose {
+                    stamp_ns,
+                    pose: particle.pose,
+                });
             }
         };
         if rayon::current_num_threads() > 1 {
@@ -551,7 +508,6 @@ impl FastSlam {
                 .enumerate()
                 .for_each(|(chunk, work)| update_chunk(chunk, work));
         }
-        self.wall_memory.push(scan as usize, &self.walls);
         let update_done = Instant::now();
         self.finish([start, motion_done, predict_done, update_done], true)
     }
@@ -763,7 +719,6 @@ mod tests {
             }
             let stats = slam.stats();
             assert_eq!(stats.scans, 40);
-            assert_eq!(stats.loops_closed, 0);
             let seen = slam
                 .best_map()
                 .iter()
@@ -820,7 +775,7 @@ mod tests {
         let mut changed = slam.particles[0].map.clone();
         let id = 0;
         let corner = *changed.get(id).unwrap();
-        changed.update(id, 2, 0, |c| (c.mean.add_scalar(0.5), c.covariance));
+        changed.update(id, 2, |c| (c.mean.add_scalar(0.5), c.covariance));
         slam.particles[0].map = changed;
         assert_eq!(slam.particles[1].map.confirmed(2), before);
         assert!(

@@ -9,4 +9,3 @@ pub(crate) mod particle;
 pub(crate) mod resample;
 pub(crate) mod rng;
 pub(crate) mod saved_grid;
-pub(crate) mod wall_memory;

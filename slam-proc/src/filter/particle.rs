@@ -12,13 +12,9 @@ use crate::filter::observation::Prepared;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::math::chi2::Gates;
 use crate::math::linalg::sample_information_form3;
-use slam_geom::StampedPose;
 
-use crate::filter::wall_memory::WallMemory;
-use crate::path::particle_path::{self, Closure, Path, ScanLog};
+use crate::path::particle_path::Path;
 use crate::update::corner_model::{PoseTransform, WorldObservation};
-use crate::update::drift::{jump_within, revisit_covariance};
-use crate::update::free_space::{PlacedWalls, WallSegment, closure_fits};
 use crate::update::jcbb::{Association, Jcbb, Pairing, PoseUncertainty};
 use crate::update::kalman;
 use slam_geom::Pose2;
@@ -32,22 +28,13 @@ pub(crate) struct Particle {
     /// The particle's last step, in its frame before the step, as the constant-velocity
     /// prior will repeat it: the prediction's increment (noise included) plus the part of
     /// the observation correction within three standard deviations of the step's noise.
-    /// A larger correction is the map undoing accumulated drift (a loop closing), not
-    /// motion, and repeated as a velocity it would throw the next steps off.
+    /// A larger correction is the map undoing accumulated drift, not motion, and repeated
+    /// as a velocity it would throw the next steps off.
     pub increment: Pose2,
     pub map: CornerMap,
     /// Every pose so far, shared with the copies of its ancestors.
     pub path: Path,
-    /// The loop this scan's update closed, for the path to keep with the pose.
-    pub closure: Option<Closure>,
 }
-
-/// How far along the path from a closure's ties the scans whose walls judge it reach,
-/// metres: the ties saw the corners the closure landed on, the scans around them the walls
-/// between those corners and beside them.
-const TIED_WALLS_REACH_M: f64 = 3.0;
-/// The most scans whose walls judge a closure, so that its cost is bounded.
-const TIED_WALLS_MAX_SCANS: usize = 24;
 
 /// What every particle's update reads, the same for all particles of a scan.
 #[derive(Debug, Clone, Copy)]
@@ -63,33 +50,6 @@ pub(crate) struct ScanContext<'a> {
     pub draw_pose: bool,
     /// `cos(view_fov / 2)`, for the field-of-view test of tentative corners.
     pub cos_half_fov: f64,
-    /// This scan's number, counted from 0.
-    pub scan: u64,
-    /// The path length of the motion at each scan so far, this one last, metres.
-    pub path_length: &'a [f64],
-    /// The front end's pose at each scan so far, this one last.
-    pub scan_log: &'a ScanLog,
-    /// This scan's walls.
-    pub walls: &'a [WallSegment],
-    /// The walls of the scans that updated the particles before this one.
-    pub wall_memory: &'a WallMemory,
-    /// Whether old corners may close a loop (a revisit) at this scan.
-    pub revisits: bool,
-}
-
-impl ScanContext<'_> {
-    /// The path length when `corner` was last seen, metres.
-    fn seen_at(&self, corner: &CornerState) -> Option<f64> {
-        let scan = usize::try_from(corner.last_seen).ok()?;
-        self.path_length.get(scan).copied()
-    }
-
-    /// Whether `corner` is confirmed and was last seen where the path was at most
-    /// `before` metres long.
-    fn is_old(&self, corner: &CornerState, before: f64) -> bool {
-        corner.observations >= self.config.confirm_observations
-            && self.seen_at(corner).is_some_and(|seen| seen <= before)
-    }
 }
 
 /// Buffers of one worker, reused across particles so the update does not allocate once
@@ -116,7 +76,6 @@ impl Particle {
             increment: Pose2::IDENTITY,
             map,
             path: Path::default(),
-            closure: None,
         }
     }
 
@@ -139,63 +98,17 @@ impl Particle {
             .extend(context.observations.iter().map(|o| transform.to_world(o)));
 
         // The weight is the likelihood of the scan under the predicted pose, its
-        // uncertainty included, from the usual association: the same whether or not a
-        // revisit then corrects the pose, so particles are compared on one footing.
-        let mut pose = context.pose;
-        let mut revisit_ties = Vec::new();
-        let mut association = self.associate(context, scratch, &pose, config.search_radius, None);
+        // uncertainty included.
+        let association = self.associate(context, scratch);
         let unexplained = scratch.world.len() - association.pairings;
         let log_likelihood =
             association.log_likelihood + unexplained as f64 * config.new_corner_log_likelihood;
-        if let Some((revisit, old)) = self.revisit(context, scratch) {
-            // Old corners alone, under the drift since they were seen: a loop closing. It
-            // is taken when it explains at least as many observations as the usual
-            // association did with the corners mapped since (a loop's second visit maps
-            // its corners again before it recognises them; a symmetric building offers a
-            // few old corners that fit a wrong offset, fewer than the ones in view).
-            let wide = self.associate(
-                context,
-                scratch,
-                &revisit,
-                config.revisit_search_radius,
-                Some(old),
-            );
-            // The landing: the pose posterior's mean given the old corners. Without one (the
-            // information not positive definite) there is no jump to bound, and the update
-            // draws no pose from the old corners either.
-            let landed = self.posterior_pose(&revisit, &wide, &Vector3::zeros());
-            let within = landed.is_none_or(|landed| {
-                let jump = landed.position() - self.pose.position();
-                jump_within(&jump, &revisit.covariance, config.revisit_jump_probability)
-            });
-            let ties = if within
-                && wide.pairings >= config.revisit_min_corners.max(association.pairings)
-            {
-                self.ties(scratch)
-            } else {
-                Vec::new()
-            };
-            if !ties.is_empty()
-                && landed.is_none_or(|landed| self.walls_allow(context, &landed, &ties))
-            {
-                association = wide;
-                pose = revisit;
-                revisit_ties = ties;
-            } else {
-                association = self.associate(context, scratch, &pose, config.search_radius, None);
-            }
-        }
-
         if context.draw_pose
             && association.pairings > 0
-            && let Some(corrected) = self.corrected_pose(&pose, &association, rng)
+            && let Some(corrected) = self.corrected_pose(&context.pose, &association, rng)
         {
             let predicted = self.pose;
             self.pose = corrected;
-            self.closure = Closure::new(revisit_ties, predicted);
-            if let Some(closure) = self.closure.clone() {
-                self.reanchor_since(&closure, corrected, context.scan_log);
-            }
             // The step the next constant-velocity prior repeats takes the correction only
             // up to three sigma of the step's noise (see `increment`). The correction in
             // the predicted frame: `transform` is still the predicted pose's.
@@ -226,11 +139,8 @@ impl Particle {
                     // The gain comes from `(P + R)^-1` at the predicted pose; after a pose
                     // correction `R` has turned by a fraction of a degree. The Joseph form
                     // gives the right covariance for any gain, so it stays consistent.
-                    self.map.update(
-                        pairing.corner,
-                        config.confirm_observations,
-                        context.scan,
-                        |corner| {
+                    self.map
+                        .update(pairing.corner, config.confirm_observations, |corner| {
                             kalman::update_with_inverse(
                                 &corner.mean,
                                 &corner.covariance,
@@ -238,8 +148,7 @@ impl Particle {
                                 &observation.covariance,
                                 &pairing.d_inverse,
                             )
-                        },
-                    );
+                        });
                     let near = &scratch.near[scratch.near_lists[i].clone()];
                     self.drop_duplicate_of(pairing.corner, near, config);
                 }
@@ -253,7 +162,6 @@ impl Particle {
                             mean: observation.z,
                             covariance: observation.covariance,
                             observations: 1,
-                            last_seen: context.scan,
                         };
                         scratch
                             .observed
@@ -276,47 +184,16 @@ impl Particle {
         log_likelihood
     }
 
-    /// After a loop closed at `landed`: moves the corners mapped since the closure's drift
-    /// start as the path that mapped them will be spread (see
-    /// [`crate::path::particle_path`]), so the map stays the one its path implies. Left as
-    /// they were, the corners of the drifted stretch would pull the particle back into its
-    /// drift when it sees them again.
-    fn reanchor_since(&mut self, closure: &Closure, landed: Pose2, log: &ScanLog) {
-        let from = closure.drift_start();
-        let raw = self.path.since(from, log);
-        if raw.is_empty() {
-            return;
-        }
-        let mut spread = raw.clone();
-        spread.push(StampedPose {
-            stamp_ns: 0,
-            pose: landed,
-        });
-        let Some(jump) = Closure::new(vec![0], closure.drifted) else {
-            return;
-        };
-        particle_path::spread(&mut spread, raw.len(), &jump);
-        let first = from as u64;
-        self.map.reanchor(first..first + raw.len() as u64, |scan| {
-            let i = usize::try_from(scan - first).ok()?;
-            Some(spread.get(i)?.pose.compose(&raw.get(i)?.pose.inverse()))
-        });
-    }
-
     /// Pairs the scan's observations (already in `scratch.world`) with the map corners
-    /// within `radius` that pass the individual gate under `pose`, and solves for the
-    /// joint hypothesis (JCBB). With `seen_before`, only confirmed corners last seen where
-    /// the path was at most that long are candidates. Leaves the candidate lists in
-    /// `scratch` for the update.
-    fn associate(
-        &self,
-        context: &ScanContext<'_>,
-        scratch: &mut Scratch,
-        pose: &PoseUncertainty,
-        radius: f64,
-        seen_before: Option<f64>,
-    ) -> Association {
-        let gate = context.gates.individual();
+    /// within the search radius that pass the individual gate under the predicted pose's
+    /// uncertainty, and solves for the joint hypothesis (JCBB). Leaves the candidate lists
+    /// in `scratch` for the update.
+    fn associate(&self, context: &ScanContext<'_>, scratch: &mut Scratch) -> Association {
+        let (gate, pose, radius) = (
+            context.gates.individual(),
+            &context.pose,
+            context.config.search_radius,
+        );
         scratch.pairings.clear();
         scratch.lists.clear();
         scratch.near.clear();
@@ -337,11 +214,6 @@ impl Particle {
                     corner.mean.y - observation.z.y,
                 );
                 if dx * dx + dy * dy > radius_squared {
-                    continue;
-                }
-                if let Some(before) = seen_before
-                    && !context.is_old(corner, before)
-                {
                     continue;
                 }
                 scratch.near.push(id);
@@ -367,98 +239,6 @@ impl Particle {
         )
     }
 
-    /// A revisit, when one is due: at least `revisit_min_corners` observations have an
-    /// old corner (last seen `revisit_min_distance` of path ago or more) within the revisit
-    /// radius, and the usual association paired fewer old corners than that (else the loop
-    /// is closed already). Returns the pose uncertainty that allows for the drift since the
-    /// oldest of them was seen, and the path length before which a corner is old.
-    fn revisit(
-        &self,
-        context: &ScanContext<'_>,
-        scratch: &mut Scratch,
-    ) -> Option<(PoseUncertainty, f64)> {
-        let config = context.config;
-        let now = *context.path_length.last()?;
-        if !context.revisits || config.revisit_search_radius <= 0.0 {
-            return None;
-        }
-        let before = now - config.revisit_min_distance;
-        let paired_old = scratch
-            .jcbb
-            .assignment()
-            .iter()
-            .flatten()
-            .filter_map(|&index| self.map.get(scratch.pairings[index].corner))
-            .filter(|corner| context.is_old(corner, before))
-            .count();
-        if paired_old >= config.revisit_min_corners {
-            return None;
-        }
-        let mut oldest = f64::INFINITY;
-        let mut revisiting = 0;
-        for observation in &scratch.world {
-            scratch.ids.clear();
-            self.map.near(
-                observation.z.x,
-                observation.z.y,
-                config.revisit_search_radius,
-                &mut scratch.ids,
-            );
-            let seen = scratch
-                .ids
-                .iter()
-                .filter_map(|&id| self.map.get(id))
-                .filter(|corner| context.is_old(corner, before))
-                .filter_map(|corner| context.seen_at(corner))
-                .fold(f64::INFINITY, f64::min);
-            if seen.is_finite() {
-                revisiting += 1;
-                oldest = oldest.min(seen);
-            }
-        }
-        if revisiting < config.revisit_min_corners {
-            return None;
-        }
-        let p = context.pose.covariance + revisit_covariance(now - oldest, config);
-        Some((
-            PoseUncertainty::from_variances(p[(0, 0)], p[(1, 1)], p[(2, 2)]),
-            before,
-        ))
-    }
-
-    /// The scans that last saw the old corners the association just made paired.
-    fn ties(&self, scratch: &Scratch) -> Vec<usize> {
-        scratch
-            .jcbb
-            .assignment()
-            .iter()
-            .flatten()
-            .filter_map(|&index| self.map.get(scratch.pairings[index].corner))
-            .filter_map(|corner| usize::try_from(corner.last_seen).ok())
-            .collect()
-    }
-
-    /// Whether a revisit's `landed` pose (the mean of the pose posterior given the old
-    /// corners) fits the walls of the scans around its `ties` about as well as the
-    /// predicted pose does, or better (see [`closure_fits`]).
-    fn walls_allow(&self, context: &ScanContext<'_>, landed: &Pose2, ties: &[usize]) -> bool {
-        let around = context.wall_memory.around(
-            ties,
-            context.path_length,
-            TIED_WALLS_REACH_M,
-            TIED_WALLS_MAX_SCANS,
-        );
-        let scans: Vec<usize> = around.iter().map(|(scan, _)| *scan).collect();
-        let tied: Vec<PlacedWalls> = self
-            .path
-            .map_frame_poses(&scans, context.scan_log)
-            .iter()
-            .zip(&around)
-            .filter_map(|(pose, (_, walls))| Some(PlacedWalls::new(pose.as_ref()?, walls)))
-            .collect();
-        closure_fits(context.walls, &tied, landed, &self.pose)
-    }
-
     /// A draw from the pose posterior given the associated corners: the Gaussian with
     /// information `P^-1 + A` and mean `predicted - (P^-1 + A)^-1 b` (one Gauss-Newton step
     /// of the linearised observations from the predicted pose). `None` when the
@@ -470,20 +250,9 @@ impl Particle {
         rng: &mut impl Rng,
     ) -> Option<Pose2> {
         let normal = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
-        self.posterior_pose(pose, association, &normal)
-    }
-
-    /// The posterior's mean moved by `normal` (standard normal numbers) times its square
-    /// root: zeros give the mean.
-    fn posterior_pose(
-        &self,
-        pose: &PoseUncertainty,
-        association: &Association,
-        normal: &Vector3<f64>,
-    ) -> Option<Pose2> {
         let evidence = &association.evidence;
         let information = pose.information + evidence.information;
-        let step = sample_information_form3(&information, &evidence.gradient, normal)?;
+        let step = sample_information_form3(&information, &evidence.gradient, &normal)?;
         let pose = Pose2::new(
             self.pose.x + step.x,
             self.pose.y + step.y,
@@ -580,7 +349,6 @@ mod tests {
                     mean: Vector4::new(x, y, heading, 1.5),
                     covariance: Matrix4::identity() * 1e-6,
                     observations: 10,
-                    last_seen: 0,
                 },
                 2,
             );
@@ -606,30 +374,9 @@ mod tests {
         observations: &[Prepared],
         draw_pose: bool,
         predicted: Pose2,
-        noise: (f64, f64),
-    ) -> Particle {
-        update_after(
-            map,
-            observations,
-            draw_pose,
-            predicted,
-            noise,
-            &SlamConfig::default(),
-            0.1,
-        )
-    }
-
-    /// The update of a particle at `predicted` whose path is `path_length` metres long, its
-    /// map's corners last seen at the start of it.
-    fn update_after(
-        map: CornerMap,
-        observations: &[Prepared],
-        draw_pose: bool,
-        predicted: Pose2,
         (sigma_xy, sigma_yaw): (f64, f64),
-        config: &SlamConfig,
-        path_length: f64,
     ) -> Particle {
+        let config = &SlamConfig::default();
         let mut gates = Gates::new(config.association_probability);
         gates.ensure(observations.len());
         let context = ScanContext {
@@ -643,12 +390,6 @@ mod tests {
             config,
             draw_pose,
             cos_half_fov: (0.5 * config.view_fov).cos(),
-            scan: 1,
-            path_length: &[0.0, path_length],
-            scan_log: &ScanLog::default(),
-            revisits: true,
-            walls: &[],
-            wall_memory: &WallMemory::default(),
         };
         let mut particle = Particle {
             pose: predicted,
@@ -691,52 +432,14 @@ mod tests {
     }
 
     #[test]
-    fn a_revisit_closes_a_loop_wider_than_the_step_noise() {
-        // Back at four corners last seen 50 m of path ago, 0.6 m and 3 degrees off: far
-        // outside this step's noise, within the drift 50 m allow for (1 m, 0.1 rad).
+    fn a_prediction_far_off_its_map_stays_where_it_is() {
+        // 0.6 m and 3 degrees off four well-known corners, far outside this step's noise:
+        // no pairing passes the gate, and the particle keeps its prediction (closing such
+        // a loop is the back end's).
         let truth = Pose2::new(0.5, 0.2, 0.3);
         let predicted = Pose2::new(1.0, -0.15, 0.35);
-        let run = |config: &SlamConfig, path_length: f64| {
-            let (map, observations) = scene(&truth);
-            update_after(
-                map,
-                &observations,
-                true,
-                predicted,
-                PREDICTION,
-                config,
-                path_length,
-            )
-        };
-        let closed = run(&SlamConfig::default(), 50.0);
-        let error = (closed.pose.x - truth.x).hypot(closed.pose.y - truth.y);
-        assert!(error < 0.02, "{:?}", closed.pose);
-        assert!(wrap_angle(closed.pose.yaw - truth.yaw).abs() < 0.01);
-        // The old corners were seen again: no longer old. The jump is kept for the path,
-        // back to the scan that last saw them.
-        assert!(closed.map.get(0).is_some_and(|c| c.last_seen == 1));
-        assert_eq!(closed.closure, Closure::new(vec![0], predicted));
-
-        // Without revisits, or with the corners seen only 5 m ago, the particle stays off.
-        // So it does when the landing must lie closer than the 0.61 m jump: 0.61 sigma of
-        // the drift 50 m allow for, outside the 10 % region (0.46 sigma).
-        let no_revisits = SlamConfig {
-            revisit_search_radius: 0.0,
-            ..SlamConfig::default()
-        };
-        let near_landings_only = SlamConfig {
-            revisit_jump_probability: 0.1,
-            ..SlamConfig::default()
-        };
-        for (config, path_length) in [
-            (no_revisits, 50.0),
-            (SlamConfig::default(), 5.0),
-            (near_landings_only, 50.0),
-        ] {
-            let kept = run(&config, path_length);
-            assert_eq!(kept.pose, predicted);
-            assert_eq!(kept.closure, None);
-        }
+        let kept = update(true, predicted, &truth);
+        assert_eq!(kept.pose, predicted);
     }
 
     #[test]
@@ -767,7 +470,6 @@ mod tests {
                 mean: Vector4::new(3.2, 1.15, 0.7, 1.5),
                 covariance: Matrix4::identity() * 1e-6,
                 observations: 3,
-                last_seen: 0,
             },
             2,
         );

@@ -12,7 +12,7 @@ use crate::localize::localizer::{ScanRanges, sample_beam_ends};
 use crate::localize::map_fit::FitField;
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use map_sink::GridMap;
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 use slam_eval::MapFit;
 use slam_geom::{Pose2, wrap_angle};
 
@@ -25,6 +25,16 @@ const TRACKING: HillClimb = HillClimb {
     yaw: 0.02,
     ..HillClimb::SEARCH
 };
+
+/// The pose covariance the front end can have drifted by over `length` metres of path off
+/// the saved grid: standard deviations that grow with the path, up to the configured
+/// largest (`saved_grid_*drift*`).
+pub(crate) fn drift_off_grid(length: f64, config: &SlamConfig) -> Matrix3<f64> {
+    let length = length.max(0.0);
+    let xy = (config.saved_grid_drift_xy_per_metre * length).min(config.saved_grid_max_drift_xy);
+    let yaw = (config.saved_grid_drift_yaw_per_metre * length).min(config.saved_grid_max_drift_yaw);
+    Matrix3::from_diagonal(&Vector3::new(xy * xy, xy * xy, yaw * yaw))
+}
 
 /// The saved grid's field and this scan's beam ends that fall on it.
 #[derive(Debug, Clone)]
@@ -143,13 +153,12 @@ impl SavedGrid {
 
 #[cfg(test)]
 mod tests {
-    use super::SavedGrid;
+    use super::{SavedGrid, drift_off_grid};
     use crate::config::SlamConfig;
     use crate::filter::fast_slam::{FastSlam, FilterStats};
     use crate::filter::observation::MeasuredMotion;
     use crate::localize::localizer::ScanRanges;
     use crate::localize::tracking_field::{TrackingField, beam_bearings};
-    use crate::update::drift::revisit_covariance;
     use map_sink::{CellState, GridMap, MapYaml};
     use nalgebra::{Matrix3, Matrix4};
     use slam_eval::{FitVerdict, MAP_FIT_BEAMS_PER_SCAN, MAP_FIT_MIN_BEAMS};
@@ -274,6 +283,25 @@ mod tests {
     }
 
     #[test]
+    fn the_drift_off_the_grid_grows_with_the_path_up_to_its_cap() {
+        let config = SlamConfig {
+            saved_grid_drift_xy_per_metre: 0.02,
+            saved_grid_drift_yaw_per_metre: 0.002,
+            saved_grid_max_drift_xy: 3.0,
+            saved_grid_max_drift_yaw: 0.2,
+            ..SlamConfig::default()
+        };
+        let p = drift_off_grid(50.0, &config);
+        assert!((p[(0, 0)].sqrt() - 1.0).abs() < 1e-12);
+        assert_eq!(p[(0, 0)], p[(1, 1)]);
+        assert!((p[(2, 2)].sqrt() - 0.1).abs() < 1e-12);
+        let far = drift_off_grid(1000.0, &config);
+        assert!((far[(0, 0)].sqrt() - 3.0).abs() < 1e-12);
+        assert!((far[(2, 2)].sqrt() - 0.2).abs() < 1e-12);
+        assert_eq!(drift_off_grid(-1.0, &config), Matrix3::zeros());
+    }
+
+    #[test]
     fn the_search_moves_a_particle_only_as_far_as_the_drift_allows() {
         // A particle 0.3 m and 0.25 rad off the pose the scan was taken from: the search's
         // climb finds the true pose, which takes it after 50 m off the grid (a metre and
@@ -288,14 +316,14 @@ mod tests {
         let off = Pose2::new(4.2, 0.72, 0.25);
         let pull = config.saved_grid_pull;
 
-        let found = grid.search(off, &revisit_covariance(50.0, &config), pull);
+        let found = grid.search(off, &drift_off_grid(50.0, &config), pull);
         assert!(
             (found.x - truth.x).hypot(found.y - truth.y) < 0.05,
             "{found:?}"
         );
         assert!(found.yaw.abs() < 0.02, "{found:?}");
 
-        let kept = grid.search(off, &revisit_covariance(10.0, &config), pull);
+        let kept = grid.search(off, &drift_off_grid(10.0, &config), pull);
         assert_eq!(kept, grid.refine(off, pull));
         assert!(kept.yaw > 0.15, "{kept:?}");
     }

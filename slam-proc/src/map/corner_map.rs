@@ -3,12 +3,11 @@
 //! sighting. Cloning a map copies three pointers; particles resampled from one parent share
 //! everything until one of them writes.
 
-use std::ops::Range;
 use std::sync::Arc;
 
-use nalgebra::{Matrix4, Vector2, Vector4};
+use nalgebra::{Matrix4, Vector4};
 
-use slam_geom::{MapCorner, Pose2, wrap_angle};
+use slam_geom::MapCorner;
 
 use crate::map::grid::SpatialGrid;
 use crate::map::persistent::PersistentArray;
@@ -19,8 +18,6 @@ pub(crate) struct CornerState {
     pub mean: Vector4<f64>,
     pub covariance: Matrix4<f64>,
     pub observations: u32,
-    /// The scan (counted from 0) that last observed it.
-    pub last_seen: u64,
 }
 
 impl CornerState {
@@ -93,7 +90,6 @@ impl CornerMap {
         &mut self,
         id: u32,
         confirm_at: u32,
-        scan: u64,
         estimate: impl FnOnce(&CornerState) -> (Vector4<f64>, Matrix4<f64>),
     ) {
         let Some(state) = self.corners.get_mut(id as usize).as_mut() else {
@@ -102,45 +98,12 @@ impl CornerMap {
         let from = (state.mean.x, state.mean.y);
         (state.mean, state.covariance) = estimate(state);
         state.observations = state.observations.saturating_add(1);
-        state.last_seen = scan;
         let confirmed_now = state.observations == confirm_at;
         let to = (state.mean.x, state.mean.y);
         self.grid.relocate(id, from, to);
         if confirmed_now {
             self.confirmed += 1;
             Arc::make_mut(&mut self.tentative).retain(|t| t.id != id);
-        }
-    }
-
-    /// Moves every corner last seen at a scan in `scans` by the rigid correction
-    /// `correction(scan)` of the pose that saw it: a loop closed, and the poses the corner
-    /// was mapped from moved.
-    pub fn reanchor(&mut self, scans: Range<u64>, correction: impl Fn(u64) -> Option<Pose2>) {
-        let mut moved = Vec::new();
-        self.corners.for_each(|id, slot| {
-            if let Some(state) = slot
-                && scans.contains(&state.last_seen)
-                && let Some(fix) = correction(state.last_seen)
-            {
-                moved.push((id, fix));
-            }
-        });
-        for (id, fix) in moved {
-            let Some(state) = self.corners.get_mut(id).as_mut() else {
-                continue;
-            };
-            let from = (state.mean.x, state.mean.y);
-            let position = fix.transform(Vector2::new(state.mean.x, state.mean.y));
-            state.mean.x = position.x;
-            state.mean.y = position.y;
-            state.mean.z = wrap_angle(state.mean.z + fix.yaw);
-            let mut turn = Matrix4::identity();
-            turn.fixed_view_mut::<2, 2>(0, 0).copy_from(&fix.rotation());
-            state.covariance = turn * state.covariance * turn.transpose();
-            state.covariance = 0.5 * (state.covariance + state.covariance.transpose());
-            if let Ok(id) = u32::try_from(id) {
-                self.grid.relocate(id, from, (state.mean.x, state.mean.y));
-            }
         }
     }
 
@@ -241,39 +204,7 @@ mod tests {
             mean: Vector4::new(x, y, 0.0, 1.5),
             covariance: Matrix4::identity() * 1e-4,
             observations: 1,
-            last_seen: 0,
         }
-    }
-
-    #[test]
-    fn a_closed_loop_moves_the_corners_its_drift_mapped() {
-        let mut map = CornerMap::new(2.0);
-        let seen_at = |scan: u64, x: f64| CornerState {
-            last_seen: scan,
-            covariance: Matrix4::from_diagonal(&Vector4::new(4e-4, 1e-4, 1e-3, 1e-3)),
-            ..state(x, 0.0)
-        };
-        let before = map.insert(seen_at(5, 1.0), 1);
-        let during = map.insert(seen_at(15, 2.0), 1);
-        let after = map.insert(seen_at(30, 3.0), 1);
-        // Scans 10 to 19 moved by a quarter turn about the origin.
-        let quarter = Pose2::new(0.0, 0.0, std::f64::consts::FRAC_PI_2);
-        map.reanchor(10..20, |scan| (scan == 15).then_some(quarter));
-        let corner = |id: u32| map.get(id).copied().unwrap();
-        assert_eq!(corner(before).mean, Vector4::new(1.0, 0.0, 0.0, 1.5));
-        assert_eq!(corner(after).mean, Vector4::new(3.0, 0.0, 0.0, 1.5));
-        let moved = corner(during);
-        assert!((moved.mean.x).abs() < 1e-12 && (moved.mean.y - 2.0).abs() < 1e-12);
-        assert!((moved.mean.z - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
-        assert_eq!(moved.mean.w, 1.5);
-        // Its uncertainty turned with it: the long axis now along y.
-        assert!((moved.covariance[(1, 1)] - 4e-4).abs() < 1e-15);
-        assert!((moved.covariance[(0, 0)] - 1e-4).abs() < 1e-15);
-        assert_eq!(moved.last_seen, 15);
-        // The grid follows: found where it is now, not where it was.
-        let mut ids = Vec::new();
-        map.near(0.0, 2.0, 0.1, &mut ids);
-        assert!(ids.contains(&during));
     }
 
     #[test]
@@ -289,7 +220,7 @@ mod tests {
             Vector4::new(1.01, 0.0, 0.0, 1.5),
             Matrix4::identity() * 5e-5,
         );
-        map.update(kept, 2, 0, |_| updated);
+        map.update(kept, 2, |_| updated);
         assert_eq!((map.confirmed_count(), map.tentative_count()), (1, 2));
         map.age_tentative(&[], near, 2);
         // Two misses in view: gone. Out of view: kept, however long.

@@ -357,7 +357,6 @@ mod tests {
             mean: Vector4::new(x, y, 0.5, 1.4),
             covariance: Matrix4::from_diagonal(&Vector4::new(1e-4, 1e-4, 1e-4, 1e-4)),
             observations: 3,
-            last_seen: 0,
         }
     }
 
