@@ -44,6 +44,7 @@ mod layout;
 pub mod losses;
 mod message;
 pub mod messages;
+pub mod peak_memory;
 pub mod progress;
 pub mod shm;
 pub mod shutdown;

@@ -50,6 +50,10 @@ pub struct Args {
     /// Scans to simulate or replay (0 = the whole path of the world, the whole log).
     #[arg(long)]
     frames: Option<u64>,
+    /// Drive the simulated world's route N times in a row (1 to 1000): round again when it
+    /// ends where it starts, else back and forth along it. Only with the simulator.
+    #[arg(long, value_name = "N", value_parser = lidar_sim::parse_laps)]
+    laps: Option<lidar_sim::Laps>,
     /// Scans per second (a replay: times the log's own speed); 0 = lockstep: nothing is lost
     /// and a run repeats exactly.
     #[arg(long)]
@@ -146,14 +150,32 @@ impl Args {
             Some(path) => RunConfig::load(path)?,
             None => RunConfig::default(),
         };
-        self.options()?
+        let config: RunConfig = self
+            .options()?
             .into_iter()
             .fold(
                 Figment::from(Serialized::defaults(file)),
                 |figment, (key, value)| figment.merge(Serialized::default(key, value)),
             )
             .extract()
-            .map_err(|e| ConfigError::Invalid(format!("the options over the config file: {e}")))
+            .map_err(|e| ConfigError::Invalid(format!("the options over the config file: {e}")))?;
+        self.check_laps(&config)?;
+        Ok(config)
+    }
+
+    /// `--laps` asks the simulator for its route again: another source would silently
+    /// give one pass over its scans instead.
+    fn check_laps(&self, config: &RunConfig) -> Result<(), ConfigError> {
+        let source = match config.source {
+            _ if self.laps.is_none() => return Ok(()),
+            SourceKind::Sim => return Ok(()),
+            SourceKind::Replay => "a replayed log (--replay)",
+            SourceKind::Hokuyo => "a live Hokuyo (--source hokuyo)",
+        };
+        Err(ConfigError::Invalid(format!(
+            "--laps drives the simulator's route again, but this run's scans come from \
+             {source}; leave --laps out, or simulate a world (--world)"
+        )))
     }
 
     /// The config keys the options given set, each with its value. One option may set
@@ -164,7 +186,7 @@ impl Args {
             .as_deref()
             .filter(|file| file.extension().is_some_and(|e| e == "mcap"))
             .map(|_| lidar_replay::LogFormat::Mcap.name().to_owned());
-        let given: [(&'static str, Option<Value>); 26] = [
+        let given: [(&'static str, Option<Value>); 27] = [
             (
                 "source",
                 value(
@@ -183,6 +205,7 @@ impl Args {
             ("sim.rate", value(self.rate)?),
             ("sim.world", value(self.world.clone())?),
             ("sim.frames", value(self.frames)?),
+            ("sim.laps", value(self.laps.map(lidar_sim::Laps::get))?),
             ("replay.frames", value(self.frames)?),
             ("relations", value(self.relations.clone())?),
             ("sim.seed", value(self.seed)?),

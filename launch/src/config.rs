@@ -22,8 +22,10 @@ pub enum ConfigError {
 pub struct SimSection {
     /// `hall`, `office`, `corridor` or a world file (JSON).
     pub world: String,
-    /// Scans to publish (0 = until the end of the path).
+    /// Scans to publish (0 = until the end of the path's last lap).
     pub frames: u64,
+    /// Times to drive the world's route in a row (`--laps`, 1 to [`lidar_sim::MAX_LAPS`]).
+    pub laps: u32,
     /// Scans per second; 0 = lockstep (lossless and deterministic).
     pub rate: f64,
     /// Noise seed.
@@ -40,6 +42,7 @@ impl Default for SimSection {
         Self {
             world: "office".into(),
             frames: 0,
+            laps: 1,
             rate: 0.0,
             seed: 1,
             odometry: false,
@@ -313,6 +316,9 @@ impl RunConfig {
         // exactly when the source would refuse it.
         if let Err(e) = lidar_sim::check_rate(self.sim.rate) {
             return Err(ConfigError::Invalid(format!("[sim] rate (--rate) {e}")));
+        }
+        if let Err(e) = lidar_sim::Laps::new(i64::from(self.sim.laps)) {
+            return Err(ConfigError::Invalid(format!("[sim] laps (--laps) {e}")));
         }
         if self.source == SourceKind::Replay {
             if self.replay.file.is_none() {

@@ -477,6 +477,7 @@ fn settings_args(
                 let mut args = flag_values([
                     ("--world", Some(config.sim.world.clone())),
                     ("--frames", Some(config.sim.frames.to_string())),
+                    ("--laps", Some(config.sim.laps.to_string())),
                     ("--rate", Some(config.sim.rate.to_string())),
                     ("--seed", Some(config.sim.seed.to_string())),
                 ]);

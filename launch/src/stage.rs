@@ -4,6 +4,7 @@ use std::collections::VecDeque;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
 
@@ -61,6 +62,8 @@ pub struct Stage {
     exit: Option<ExitStatus>,
     /// The child's peak resident memory at the last reading, KiB.
     peak_kib: Option<u64>,
+    /// The peak the child told as it ended (its stdout), KiB; 0 until then.
+    told_peak_kib: Arc<AtomicU64>,
 }
 
 impl Stage {
@@ -118,9 +121,18 @@ impl Stage {
             source,
         })?;
         let mut stdout_reader = None;
+        let told_peak_kib = Arc::new(AtomicU64::new(0));
         if let Some(stdout) = child.stdout.take() {
+            let told_peak_kib = Arc::clone(&told_peak_kib);
             stdout_reader = Some(std::thread::spawn(move || {
                 for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                    if let Some(kib) = line
+                        .strip_prefix(ipc_types::peak_memory::PREFIX)
+                        .and_then(ipc_types::peak_memory::parse)
+                    {
+                        told_peak_kib.fetch_max(kib, Ordering::Relaxed);
+                        continue;
+                    }
                     let event = if line == "ready" {
                         StageEvent::Ready(index)
                     } else if let Some(rest) = line.strip_prefix("status ") {
@@ -175,6 +187,7 @@ impl Stage {
             stderr_reader,
             exit: None,
             peak_kib: None,
+            told_peak_kib,
         })
     }
 
@@ -196,9 +209,11 @@ impl Stage {
         }
     }
 
-    /// The child's peak resident memory at the last reading, KiB.
+    /// The child's peak resident memory, KiB: the larger of the last reading and what it
+    /// told as it ended (once [`Stage::join_stdout`] has read that).
     pub fn peak_memory_kib(&self) -> Option<u64> {
-        self.peak_kib
+        let told = Some(self.told_peak_kib.load(Ordering::Relaxed)).filter(|&kib| kib > 0);
+        self.peak_kib.max(told)
     }
 
     /// The last lines the child wrote to stderr; once it has ended, all of them up to its end.

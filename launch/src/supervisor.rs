@@ -52,7 +52,8 @@ pub enum Outcome {
 pub struct Ended {
     pub outcome: Outcome,
     pub losses: Losses,
-    /// Each stage's peak resident memory as last read while it ran (every [`POLL`]), KiB.
+    /// Each stage's peak resident memory, read while it ran (every [`POLL`]) and told by it
+    /// as it ended, KiB.
     pub peak_memory_kib: Vec<(String, u64)>,
 }
 

@@ -147,3 +147,49 @@ fn a_typo_in_a_process_s_section_is_the_file_s_error() {
     assert_eq!(config.slam.filter.particles, 30);
     assert_eq!(config.slam.filter.view_range, 9.5);
 }
+
+#[test]
+fn laps_go_to_the_simulator_and_are_refused_for_any_other_source() {
+    let file = ConfigFile::new("laps", "[sim]\nlaps = 2\n");
+    assert_eq!(file.config(&[]).sim.laps, 2);
+    assert_eq!(file.config(&["--laps", "3"]).sim.laps, 3);
+    assert_eq!(RunConfig::default().sim.laps, 1);
+    // Out of range: refused as the option is read, naming it and the range.
+    for laps in ["0", "1001", "-1", "x"] {
+        let refusal = Args::try_parse_from(["slam-launch", &format!("--laps={laps}")])
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            refusal.contains(&format!("invalid value '{laps}' for '--laps <N>'")),
+            "{refusal}"
+        );
+    }
+    // A replay or a live sensor has no route to drive again.
+    for source in [
+        &["--replay", "log.clf"][..],
+        &["--source", "hokuyo"],
+        &["--source", "replay", "--replay", "run.mcap"],
+    ] {
+        let argv = ["slam-launch", "--laps", "3"].iter().chain(source);
+        let refusal = Args::try_parse_from(argv)
+            .expect("options parse")
+            .run_config()
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            refusal.starts_with("--laps drives the simulator's route again"),
+            "{refusal}"
+        );
+    }
+    // A value out of range in the file is the file's, named with its key.
+    let file = ConfigFile::new("laps-zero", "[sim]\nlaps = 0\n");
+    let error = file
+        .config(&[])
+        .validate()
+        .expect_err("refused")
+        .to_string();
+    assert_eq!(
+        error,
+        "[sim] laps (--laps) must be from 1 to 1000 laps, not 0"
+    );
+}

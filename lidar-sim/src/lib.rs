@@ -7,7 +7,8 @@
 //! - [`LidarModel`] with [`SensorConfig`] (default: Hokuyo UTM-30LX): noise, dropouts and
 //!   REP 117 invalid ranges.
 //! - [`Vehicle`]: a pure-pursuit follower of the path with limited yaw rate and
-//!   acceleration; [`Odometer`] integrates its motion with noise.
+//!   acceleration, once or for several [`Laps`]; [`Odometer`] integrates its motion with
+//!   noise.
 //! - [`Simulation`]: ties them together into deterministic [`SimulatedScan`]s for a seed.
 //! - [`check_rate`]: the real-time rates the process accepts ([`RATE_RANGE`]).
 //!
@@ -17,6 +18,7 @@
 mod builtin;
 mod corners;
 pub mod geometry;
+mod laps;
 mod lidar;
 mod odometry;
 mod outline;
@@ -32,6 +34,7 @@ mod visibility;
 mod world;
 mod world_error;
 
+pub use laps::{Laps, MAX_LAPS, parse_laps};
 pub use lidar::LidarModel;
 pub use odometry::{Odometer, OdometryConfig};
 pub use rate::{RATE_RANGE, SCANS_PER_SECOND, check_rate, parse_rate};

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
-use lidar_sim::{SimSettings, Simulation, World};
+use lidar_sim::{Laps, SimSettings, Simulation, World};
 use stage_kit::odometry_covariance::OdometryCovariance;
 use stage_kit::pacing::Pacer;
 use stage_kit::{SourceArgs, say, say_err, shutdown};
@@ -20,9 +20,13 @@ struct Args {
     /// "waypoints": [[x, y], ...], "speed": 1.0}
     #[arg(long, default_value = "office")]
     world: String,
-    /// Scans to publish; 0 = until the end of the path.
+    /// Scans to publish; 0 = until the end of the path's last lap.
     #[arg(long, default_value_t = 0)]
     frames: u64,
+    /// Times to drive the world's route in a row (1 to 1000): a route that ends where it
+    /// starts is driven round again, any other back and forth along itself.
+    #[arg(long, value_name = "N", default_value = "1", value_parser = lidar_sim::parse_laps)]
+    laps: Laps,
     /// Scans per second (0.001 to 1000); 0 = lockstep: each scan is sent only when every
     /// subscriber has taken the previous one, so nothing is lost and a run repeats exactly
     /// for its seed.
@@ -56,7 +60,13 @@ fn run(args: Args) -> Result<()> {
     let sensor = settings.sensor.clone();
     let geometry = sensor.scan_geometry();
     let mut odometry_covariance = OdometryCovariance::new(settings.vehicle.odometry.noise());
-    let mut sim = Simulation::new(world, settings.sensor, settings.vehicle, args.seed)?;
+    let mut sim = Simulation::with_laps(
+        world,
+        settings.sensor,
+        settings.vehicle,
+        args.seed,
+        args.laps,
+    )?;
 
     let delivery = if args.rate == 0.0 {
         Delivery::Lossless

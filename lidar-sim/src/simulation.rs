@@ -5,7 +5,7 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 
 use crate::{
-    LidarModel, Odometer, Pose2, RayCaster, SensorConfig, SimError, TrueCorner, Vehicle,
+    Laps, LidarModel, Odometer, Pose2, RayCaster, SensorConfig, SimError, TrueCorner, Vehicle,
     VehicleConfig, World,
 };
 
@@ -50,22 +50,36 @@ pub struct Simulation {
 }
 
 impl Simulation {
+    /// The world's route driven once.
     pub fn new(
         world: World,
         sensor: SensorConfig,
         vehicle: VehicleConfig,
         seed: u64,
     ) -> Result<Simulation, SimError> {
+        Simulation::with_laps(world, sensor, vehicle, seed, Laps::ONE)
+    }
+
+    /// The world's route driven `laps` times in a row ([`Vehicle::with_laps`]): one run, its
+    /// stamps, sequence numbers and noise carrying on from lap to lap.
+    pub fn with_laps(
+        world: World,
+        sensor: SensorConfig,
+        vehicle: VehicleConfig,
+        seed: u64,
+        laps: Laps,
+    ) -> Result<Simulation, SimError> {
         let lidar = LidarModel::new(sensor).map_err(SimError::Sensor)?;
         let odometry = vehicle.odometry.clone();
-        let vehicle = Vehicle::new(&world, vehicle)?;
+        let vehicle = Vehicle::with_laps(&world, vehicle, laps)?;
         let odometer = Odometer::new(odometry, vehicle.pose());
         // Separate streams, so turning one noise source off leaves the other unchanged.
         let mut master = StdRng::seed_from_u64(seed);
         let scan_rng = StdRng::from_rng(&mut master);
         let odometry_rng = StdRng::from_rng(&mut master);
-        let expected_s = world.path_length() / world.speed;
-        let frame_limit = ((3.0 * expected_s + 60.0) * lidar.config().rate) as u64;
+        let laps = f64::from(laps.get());
+        let expected_s = world.path_length() * laps / world.speed;
+        let frame_limit = ((3.0 * expected_s + 60.0 * laps) * lidar.config().rate) as u64;
         Ok(Simulation {
             corners: world.true_corners(),
             caster: RayCaster::new(&world),
@@ -99,7 +113,7 @@ impl Simulation {
     }
 
     /// The scan at the current time, then the vehicle moves on by one period. `None` once
-    /// the frame at the end of the path has been returned.
+    /// the frame at the end of the path's last lap has been returned.
     pub fn next_frame(&mut self) -> Option<SimulatedScan> {
         if self.done {
             return None;

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::path::Path;
-use crate::{OdometryConfig, Point2, Pose2, SimError, World, wrap_angle};
+use crate::{Laps, OdometryConfig, Point2, Pose2, SimError, World, wrap_angle};
 use stage_kit::{SettingError, check};
 
 /// Below this speed the vehicle may also turn on the spot towards the carrot, so that a
@@ -66,15 +66,27 @@ pub struct Vehicle {
     speed: f64,
     yaw_rate: f64,
     progress: f64,
+    /// The leg being driven (see `crate::path`): an open route's laps each end at rest.
+    leg: u32,
     finished: bool,
 }
 
 impl Vehicle {
-    /// At rest on the first waypoint, facing the second.
+    /// At rest on the first waypoint, facing the second, to drive the route once.
     pub fn new(world: &World, config: VehicleConfig) -> Result<Vehicle, SimError> {
+        Vehicle::with_laps(world, config, Laps::ONE)
+    }
+
+    /// [`Vehicle::new`], to drive the route `laps` times in a row: round again from its end
+    /// when it ends where it starts, else back and forth along it, turning at its ends.
+    pub fn with_laps(
+        world: &World,
+        config: VehicleConfig,
+        laps: Laps,
+    ) -> Result<Vehicle, SimError> {
         world.validate()?;
         config.validate().map_err(SimError::Vehicle)?;
-        let path = Path::new(&world.waypoints);
+        let path = Path::new(&world.waypoints, laps);
         let start = path.start();
         Ok(Vehicle {
             pose: Pose2::new(start.x, start.y, path.start_heading()),
@@ -84,6 +96,7 @@ impl Vehicle {
             speed: 0.0,
             yaw_rate: 0.0,
             progress: 0.0,
+            leg: 0,
             finished: false,
         })
     }
@@ -102,12 +115,12 @@ impl Vehicle {
         self.yaw_rate
     }
 
-    /// Arc length of the path covered, metres.
+    /// Arc length of the path covered, metres, over every lap.
     pub fn progress(&self) -> f64 {
         self.progress
     }
 
-    /// At rest at the end of the path.
+    /// At rest at the end of the path's last lap.
     pub fn finished(&self) -> bool {
         self.finished
     }
@@ -121,21 +134,25 @@ impl Vehicle {
         let (a, lookahead) = (c.max_accel, c.lookahead);
         let pos = Point2::new(self.pose.x, self.pose.y);
         let window = 2.0 * lookahead + self.speed * dt + 0.5;
-        self.progress = self.path.project(pos, self.progress, window);
-        let remaining = self.path.length() - self.progress;
+        self.progress = self.path.project(self.leg, pos, self.progress, window);
+        let remaining = self.path.leg_end(self.leg) - self.progress;
         if remaining <= ARRIVED && self.speed <= a * dt {
-            self.finished = true;
             self.speed = 0.0;
             self.yaw_rate = 0.0;
+            if self.leg + 1 < self.path.legs() {
+                self.leg += 1;
+            } else {
+                self.finished = true;
+            }
             return;
         }
-        let carrot = self.path.point_at(self.progress + lookahead);
+        let carrot = self.path.point_at(self.leg, self.progress + lookahead);
         let to_carrot = carrot - pos;
         let alpha = wrap_angle(to_carrot.y.atan2(to_carrot.x) - self.pose.yaw);
 
         // Speed limit: cruise, slow enough at every corner ahead for the yaw-rate limit
         // (pure pursuit rounds a corner of turn `theta` on a radius of about
-        // lookahead / (2 sin(theta / 2))), a braking curve to a stop at the end, and slower
+        // lookahead / (2 sin(theta / 2))), a braking curve to a stop at the leg's end, and slower
         // while the heading is off.
         // Braking at `a` in steps of `dt` from speed v covers v (v / a + dt) / 2; the
         // largest v that stops within `remaining` (the continuous sqrt(2 a d) would end
@@ -144,7 +161,7 @@ impl Vehicle {
         let mut target = self.cruise.min(stop);
         for (s, theta) in self
             .path
-            .turns()
+            .turns(self.leg, self.progress - lookahead)
             .filter(|&(s, _)| s + lookahead > self.progress)
         {
             let radius = lookahead / (2.0 * (0.5 * theta).sin()).max(1e-9);

@@ -23,7 +23,8 @@ pub const WORLD_INPUT: stage_kit::InputKind = stage_kit::InputKind {
 ///
 /// JSON form: `{"walls": [[[x, y], ...], ...], "waypoints": [[x, y], ...], "speed": 1.0}`.
 /// A wall is a polyline; a closed polygon repeats its first point. `speed` (m/s) is
-/// optional and defaults to 1.
+/// optional and defaults to 1. Waypoints that end on the first make a loop, which several
+/// [`crate::Laps`] drive round and round; any other route they drive back and forth.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct World {
     pub walls: Vec<Vec<[f64; 2]>>,

@@ -3,7 +3,7 @@
 
 use lidar_sim::geometry::Segment;
 use lidar_sim::{
-    BUILTIN_WORLDS, Point2, RayCaster, SensorConfig, SimulatedScan, Simulation, Vehicle,
+    BUILTIN_WORLDS, Laps, Point2, RayCaster, SensorConfig, SimulatedScan, Simulation, Vehicle,
     VehicleConfig, World, visible_corners, wrap_angle,
 };
 
@@ -63,24 +63,27 @@ fn same_seed_same_frames_other_seed_other_noise() {
     assert!((last.x - odo.x).hypot(last.y - odo.y) < 0.5);
 }
 
-/// Drives the vehicle alone at 10 ms and checks its limits, its clearance from every wall
-/// and that it stops on the last waypoint.
+/// Drives the vehicle alone at 10 ms, once and three laps (round a loop, back and forth
+/// along an open route), and checks its limits, its clearance from every wall and that it
+/// stops on the last waypoint.
 #[test]
 fn vehicle_turns_within_its_limits_keeps_clear_and_stops_at_the_end() {
     let config = VehicleConfig::default();
-    for name in BUILTIN_WORLDS {
+    for (name, laps) in BUILTIN_WORLDS.into_iter().flat_map(|w| [(w, 1), (w, 3)]) {
         let w = world(name);
         let walls: Vec<Segment> = w.segments().map(|[a, b]| Segment::new(a, b)).collect();
-        let mut v = Vehicle::new(&w, config.clone()).unwrap_or_else(|e| panic!("{e}"));
+        let laps = Laps::new(laps).unwrap_or_else(|e| panic!("{e}"));
+        let mut v = Vehicle::with_laps(&w, config.clone(), laps).unwrap_or_else(|e| panic!("{e}"));
         let dt = 0.01;
         let (mut t, mut prev_speed, mut clearance) = (0.0, 0.0, f64::INFINITY);
+        let laps = f64::from(laps.get());
         while !v.finished() {
             let before = v.pose();
             v.step(dt);
             let p = v.pose();
             t += dt;
             assert!(
-                t < 3.0 * w.path_length() / w.speed + 60.0,
+                t < (3.0 * w.path_length() / w.speed + 60.0) * laps,
                 "{name}: never arrives"
             );
             assert!(wrap_angle(p.yaw - before.yaw).abs() <= config.max_yaw_rate * dt + 1e-12);
@@ -98,7 +101,7 @@ fn vehicle_turns_within_its_limits_keeps_clear_and_stops_at_the_end() {
         }
         let end = w.waypoints[w.waypoints.len() - 1];
         let p = v.pose();
-        println!("{name}: {t:.1} s, clearance of the driven path {clearance:.2} m");
+        println!("{name}, {laps} laps: {t:.1} s, clearance of the driven path {clearance:.2} m");
         assert!(
             (p.x - end[0]).hypot(p.y - end[1]) < 0.05,
             "{name}: stopped at {p:?}"

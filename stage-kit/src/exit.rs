@@ -36,9 +36,12 @@ pub fn run_tool<A: clap::Parser>(
     })
 }
 
-/// Runs `run`; an error becomes one `name: error` line (`{:#}`) and a failing status.
+/// Runs `run`; an error becomes one `name: error` line (`{:#}`) and a failing status. The
+/// peak memory is told last either way, for slam-launch ([`ipc_types::peak_memory`]).
 fn report(name: &str, run: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
-    match run() {
+    let result = run();
+    ipc_types::peak_memory::report();
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             say_err(&format!("{name}: {e:#}"));

@@ -70,7 +70,13 @@ pub const SIM: Section = Section {
             "frames",
             "scans",
             Range::ANY,
-            "Scans to publish; 0 = until the end of the world's path (--frames).",
+            "Scans to publish; 0 = until the end of the world's path, every lap of it (--frames).",
+        ),
+        set(
+            "laps",
+            "",
+            Range::closed(1.0, 1000.0),
+            "Times to drive the world's route in a row: round again if it ends where it starts, else back and forth (--laps).",
         ),
         set(
             "rate",
