@@ -171,12 +171,21 @@ impl<T: Message> Outlet<T> {
 /// after the stop; a reader that does not costs this once, then the send fails.
 const STOP_PATIENCE: Duration = Duration::from_secs(1);
 
+/// Retries of a blocked send before it sleeps between them, and how long.
+const SPIN_RETRIES: u64 = 64;
+const BACKOFF: Duration = Duration::from_micros(100);
+
 /// A lossless publisher blocked on a full subscriber: give up once stopped (after
 /// [`STOP_PATIENCE`]), and every so often remove dead nodes, since a killed subscriber would
 /// otherwise block us for ever.
 fn on_backpressure(domain: &Domain, info: &BackpressureInfo) -> BackpressureAction {
     if shutdown::requested() && info.elapsed_time >= STOP_PATIENCE {
         return BackpressureAction::DiscardDataAndFail;
+    }
+    // A reader a scan behind frees a slot within microseconds; one that is busy for longer
+    // should not have the waiting publisher spin on a core it needs.
+    if info.retries >= SPIN_RETRIES {
+        std::thread::sleep(BACKOFF);
     }
     let sweeps_due = info.elapsed_time.as_millis() / DEAD_NODE_SWEEP.as_millis();
     if sweeps_due > 0 && info.retries.is_multiple_of(64) {
