@@ -186,27 +186,13 @@ impl Submap {
     /// are rigid in it; placed by its first one alone, the front end's drift along the
     /// submap would pile up at its far end.
     pub fn placed(&self, world_from_node: impl Fn(usize) -> Pose2) -> Pose2 {
-        let placed: Vec<(Pose2, Pose2)> = self
+        let pairs: Vec<(Pose2, Pose2)> = self
             .poses
             .iter()
             .enumerate()
             .map(|(k, pose)| (*pose, world_from_node(self.anchor + k)))
             .collect();
-        if placed.is_empty() {
-            return world_from_node(self.anchor);
-        }
-        let (sin, cos) = placed.iter().fold((0.0, 0.0), |(s, c), (p, q)| {
-            let (ds, dc) = (q.yaw - p.yaw).sin_cos();
-            (s + ds, c + dc)
-        });
-        let rotation = nalgebra::Rotation2::new(sin.atan2(cos));
-        let n = placed.len() as f64;
-        let offset = placed
-            .iter()
-            .map(|(p, q)| q.position() - rotation * p.position())
-            .sum::<Vector2<f64>>()
-            / n;
-        Pose2::new(offset.x, offset.y, rotation.angle())
+        Pose2::fit(&pairs).unwrap_or_else(|| world_from_node(self.anchor))
     }
 
     /// Whether no more keyframes go in.

@@ -94,9 +94,9 @@ mod tests {
         assert!(shape.topics.contains(&("robot/odometry", 1)));
         config.record.enabled = true;
         assert!(run_shape(&config).topics.contains(&("robot/odometry", 2)));
-        // On a saved map, slam-proc reads the scans too.
+        // On a saved map, slam-proc reads the scans too (and mapping, so does graph-proc).
         config.map = Some("runs/office".into());
-        assert_eq!(run_shape(&config).topics[0], ("lidar/scan", 4));
+        assert_eq!(run_shape(&config).topics[0], ("lidar/scan", 5));
     }
 
     #[test]

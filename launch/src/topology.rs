@@ -54,8 +54,6 @@ pub enum When {
     Mapping,
     /// The run has a saved map (`--map DIR`), localizing on it or mapping on top of it.
     SavedMap,
-    /// The run maps from nothing: neither `--localize` nor `--map`.
-    NewMap,
     /// The run is recorded.
     Recorded,
 }
@@ -69,7 +67,6 @@ impl When {
             When::Localize => run.localize,
             When::Mapping => !run.localize,
             When::SavedMap => run.saved_map,
-            When::NewMap => !run.localize && !run.saved_map,
             When::Recorded => run.recorded,
         }
     }
@@ -252,8 +249,9 @@ pub const STAGES: &[Stage] = &[
     Stage {
         binary: "graph-proc",
         role: Role::Graph,
-        // Its graph starts at the first scan: a saved map's frame is the filter's to find.
-        runs: When::NewMap,
+        // Its graph starts at the first scan; on a saved map, map-sink moves its path into
+        // the map's frame, which the filter finds.
+        runs: When::Mapping,
         // Its grid as it grows, for a recording (map-sink traces the run's own).
         publishes: &[publishes(GRAPH_PATH), for_the_recording(GRAPH_GRID)],
         reads: &[reads(FEATURES), reads(SCAN)],
@@ -458,7 +456,6 @@ fn condition_text(when: When) -> Option<&'static str> {
         When::Localize => Some("--localize"),
         When::Mapping => Some("without --localize"),
         When::SavedMap => Some("--map"),
-        When::NewMap => Some("without --map or --localize"),
         When::Recorded => Some("--record"),
     }
 }

@@ -509,7 +509,11 @@ fn drain_path(
         {
             // A path as it stands is kept too: a run stopped before the last one came
             // still has it.
-            recorder.set_final_path(path);
+            if from_graph {
+                recorder.set_back_end_path(path);
+            } else {
+                recorder.set_final_path(path);
+            }
             final_path.complete = chunk.header.is_final();
         }
     }

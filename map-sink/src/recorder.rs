@@ -151,6 +151,8 @@ pub struct Recorder {
     scans: ScanKeeper,
     /// Mapping on a saved map: its grid on this run's cells ([`Self::map_on`]).
     prior: Option<OccupancyGrid>,
+    /// Whether the run maps on a saved map (whose frame the filter's estimate is in).
+    on_saved_map: bool,
     latencies_ns: Vec<u64>,
     map: Vec<MapCorner>,
     true_corners: Vec<[f64; 2]>,
@@ -211,6 +213,7 @@ impl Recorder {
             dir: dir.to_path_buf(),
             scans: ScanKeeper::new(resolution),
             prior: None,
+            on_saved_map: false,
             options,
             online,
             ground_truth: TumStream::lazy(&dir.join(GROUND_TRUTH_FILE)),
@@ -390,7 +393,45 @@ impl Recorder {
     /// the final path is refined against its walls too: [`crate::prior_grid`]).
     pub fn map_on(&mut self, saved: &GridMap) -> Result<(), SinkError> {
         self.prior = prior_grid(saved, self.options.grid.resolution_m)?;
+        self.on_saved_map = true;
         Ok(())
+    }
+
+    /// The back end's path, which becomes `trajectory.tum` (the latest path wins). Its
+    /// graph starts at the run's first scan; on a saved map the filter's estimate is in the
+    /// map's frame, so the path is moved there whole: by the rigid motion that best lays it
+    /// on that estimate (from convergence, where the run reports one).
+    pub fn set_back_end_path(&mut self, path: &[StampedPose]) {
+        let path = match self
+            .on_saved_map
+            .then(|| self.map_from_graph(path))
+            .flatten()
+        {
+            Some(map_from_graph) => path
+                .iter()
+                .map(|p| StampedPose {
+                    stamp_ns: p.stamp_ns,
+                    pose: map_from_graph.compose(&p.pose),
+                })
+                .collect(),
+            None => path.to_vec(),
+        };
+        self.final_path = Some(path);
+    }
+
+    /// The motion from the back end's frame to the filter's, fitted over the poses both have.
+    fn map_from_graph(&self, path: &[StampedPose]) -> Option<Pose2> {
+        let from = self.converged_at.map_or(0, |(seq, _)| seq);
+        let online: HashMap<u64, Pose2> = self
+            .estimates
+            .range(from..)
+            .map(|(_, e)| (e.stamp_ns, e.pose))
+            .collect();
+        let pairs: Vec<(Pose2, Pose2)> = path
+            .iter()
+            .filter_map(|p| Some((p.pose, *online.get(&p.stamp_ns)?)))
+            .collect();
+        Pose2::fit(&pairs)
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).

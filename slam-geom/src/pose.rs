@@ -108,10 +108,61 @@ impl Pose2 {
     pub fn translation_norm(&self) -> f64 {
         self.x.hypot(self.y)
     }
+
+    /// The rigid motion `outer_from_inner` that lays poses of the inner frame on the same
+    /// poses as the outer frame has them (`(inner, outer)` pairs): its turn the mean of the
+    /// pairs' turns, its translation the one that fits the positions in the least-squares
+    /// sense. `None` without pairs.
+    pub fn fit(pairs: &[(Pose2, Pose2)]) -> Option<Pose2> {
+        if pairs.is_empty() {
+            return None;
+        }
+        let (sin, cos) = pairs.iter().fold((0.0, 0.0), |(s, c), (inner, outer)| {
+            let (ds, dc) = (outer.yaw - inner.yaw).sin_cos();
+            (s + ds, c + dc)
+        });
+        let turn = Pose2::new(0.0, 0.0, sin.atan2(cos));
+        let offset = pairs
+            .iter()
+            .map(|(inner, outer)| outer.position() - turn.transform(inner.position()))
+            .sum::<Vector2<f64>>()
+            / pairs.len() as f64;
+        Some(Pose2::new(offset.x, offset.y, turn.yaw))
+    }
 }
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_fit_recovers_the_motion_between_two_frames_and_averages_their_disagreement() {
+        let motion = Pose2::new(-3.0, 4.0, 2.9);
+        let inner: Vec<Pose2> = (0..10)
+            .map(|k| Pose2::new(0.5 * k as f64, 0.1 * (k * k) as f64, 0.3 * k as f64))
+            .collect();
+        let pairs: Vec<(Pose2, Pose2)> = inner.iter().map(|p| (*p, motion.compose(p))).collect();
+        let fit = Pose2::fit(&pairs).unwrap();
+        let error = motion.between(&fit);
+        assert!(
+            error.translation_norm() < 1e-9 && error.yaw.abs() < 1e-12,
+            "{error:?}"
+        );
+        // Outer poses pushed apart symmetrically about the motion: the fit stays on it.
+        let pushed: Vec<(Pose2, Pose2)> = pairs
+            .iter()
+            .enumerate()
+            .map(|(k, (i, o))| {
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                (*i, Pose2::new(o.x + 0.1 * sign, o.y, o.yaw + 0.01 * sign))
+            })
+            .collect();
+        let error = motion.between(&Pose2::fit(&pushed).unwrap());
+        assert!(
+            error.translation_norm() < 1e-3 && error.yaw.abs() < 1e-3,
+            "{error:?}"
+        );
+        assert_eq!(Pose2::fit(&[]), None);
+    }
+
     use super::*;
 
     #[test]
