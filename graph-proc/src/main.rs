@@ -57,7 +57,7 @@ fn run(args: Args) -> Result<()> {
     let domain = Domain::new(&args.domain)?;
     let node = domain.node("graph-proc")?;
     // The path and grid go out in many pieces: lossless whatever the run's delivery. Made
-    // first: map-sink waits for them.
+    // first: map-sink and the recorder wait for them.
     let mut results = Results {
         path: Outlet::create(&domain, &node, topic::GRAPH_PATH, Delivery::Lossless, 0)?,
         grid: if args.grid {
