@@ -153,6 +153,8 @@ pub struct GlobalSlam {
     submaps: Submaps,
     /// Search maps of the submaps searched last, the latest first.
     search_maps: VecDeque<(usize, SearchMaps)>,
+    /// The most memory one submap's search maps took, bytes: room made before a build.
+    largest_search_maps: usize,
     /// The node each submap was last searched for.
     last_attempt: Vec<Option<usize>>,
     scans: Vec<ScanPlace>,
@@ -178,6 +180,7 @@ impl GlobalSlam {
             graph: PoseGraph::new(Pose2::IDENTITY)?,
             submaps: Submaps::new(config.submaps),
             search_maps: VecDeque::new(),
+            largest_search_maps: 0,
             last_attempt: Vec::new(),
             scans: Vec::new(),
             odom_from_node: Pose2::IDENTITY,
@@ -328,9 +331,8 @@ impl GlobalSlam {
             }
             self.last_attempt[index] = Some(node);
             self.cache_search_maps(index);
-            let (Some(submap), Some((_, maps))) =
-                (self.submaps.get(index), self.search_maps.front())
-            else {
+            let cached = self.search_maps.front().filter(|(i, _)| *i == index);
+            let (Some(submap), Some((_, maps))) = (self.submaps.get(index), cached) else {
                 continue;
             };
             let Some(free) = submap.free_space() else {
@@ -425,31 +427,37 @@ impl GlobalSlam {
         }
     }
 
-    /// Puts the match grid of submap `index` first in the cache, built on first use and
-    /// kept while it is recent.
+    /// Puts the search maps of submap `index` first in the cache, built on first use and
+    /// kept while they are recent. Room for them is made before they are built, as much as
+    /// the largest built so far takes: the cache then stays within its budget while they
+    /// are built, and they take the memory the evicted maps freed, of the same shapes,
+    /// before anything else is put there (built first, the cache would reach for new memory
+    /// at every miss, and leave the evicted maps' as holes).
     fn cache_search_maps(&mut self, index: usize) {
         if let Some(at) = self.search_maps.iter().position(|(i, _)| *i == index) {
             if let Some(entry) = self.search_maps.remove(at) {
                 self.search_maps.push_front(entry);
             }
-        } else if let Some(maps) = self
-            .submaps
-            .get(index)
-            .and_then(|submap| submap.search_maps(self.config.resolution, self.config.max_window_m))
-        {
+            return;
+        }
+        let Some(submap) = self.submaps.get(index) else {
+            return;
+        };
+        let room = SEARCH_MAPS_BYTES.saturating_sub(self.largest_search_maps);
+        let mut kept = 0;
+        let within = self
+            .search_maps
+            .iter()
+            .take_while(|(_, maps)| {
+                kept += maps.bytes();
+                kept <= room
+            })
+            .count();
+        self.search_maps.truncate(within);
+        if let Some(maps) = submap.search_maps(self.config.resolution, self.config.max_window_m) {
             self.stats.grids_built += 1;
+            self.largest_search_maps = self.largest_search_maps.max(maps.bytes());
             self.search_maps.push_front((index, maps));
-            let mut kept = 0;
-            let within = self
-                .search_maps
-                .iter()
-                .take_while(|(_, maps)| {
-                    kept += maps.bytes();
-                    kept <= SEARCH_MAPS_BYTES
-                })
-                .count();
-            // The newest stays whatever it costs: the search needs it.
-            self.search_maps.truncate(within.max(1));
         }
     }
 
