@@ -12,7 +12,7 @@
 //! floor for the front end's own noise), so a robot that keeps seeing its old map searches
 //! narrow windows, cheaply, and one back from a long loop searches wide.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 
 use nalgebra::Matrix3;
@@ -28,6 +28,7 @@ use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 use crate::pose_graph::{PoseGraph, PoseGraphError};
 use crate::submap::{NodeScan, SearchMaps, SubmapConfig, Submaps};
 use crate::submap_grid::SubmapGrid;
+use crate::trim::{Overlap, localized_all_along};
 
 /// Memory the search maps of the submaps searched last may hold, bytes: those around the
 /// robot are searched again and again, and a submap of a large hall costs megabytes.
@@ -144,6 +145,8 @@ pub struct GlobalStats {
     pub unconstrained: usize,
     pub optimizations: usize,
     pub grids_built: usize,
+    /// Submaps retired because they repeated older ones ([`crate::trim`]).
+    pub retired: usize,
 }
 
 /// The back end's state over a run.
@@ -168,6 +171,10 @@ pub struct GlobalSlam {
     node_travelled_m: Vec<f64>,
     /// Per submap, the path driven when a closure last tied the robot to it.
     tied_at_m: Vec<f64>,
+    /// The nodes a closure tied to an older submap (the submap, and where the node is in
+    /// it), from the oldest open submap's first on: whether a submap was localized all
+    /// along, and where, is judged on them when it finishes.
+    tied_nodes: BTreeMap<usize, (usize, Pose2)>,
     /// Jumps waiting for confirmation.
     held: Confirmations,
     stats: GlobalStats,
@@ -189,6 +196,7 @@ impl GlobalSlam {
             travelled_m: 0.0,
             node_travelled_m: Vec::new(),
             tied_at_m: Vec::new(),
+            tied_nodes: BTreeMap::new(),
             held: Confirmations::default(),
             stats: GlobalStats::default(),
         })
@@ -290,9 +298,58 @@ impl GlobalSlam {
     ) -> Result<(), GridError> {
         self.stats.nodes += 1;
         self.node_travelled_m.resize(node + 1, self.travelled_m);
-        self.submaps.insert(node, odom_from_robot, points, beams)?;
+        if let Some(finished) = self.submaps.insert(node, odom_from_robot, points, beams)? {
+            self.trim(finished);
+            if let Some(first) = self.submaps.open_from() {
+                self.tied_nodes = self.tied_nodes.split_off(&first);
+            }
+        }
         self.stats.submaps = self.submaps.len();
         Ok(())
+    }
+
+    /// Retires submap `index`, just finished, if it repeats the map: its nodes were tied to
+    /// older submaps all along, and those know its walls ([`crate::trim`]). It is laid
+    /// over them where its closures put its nodes, not where the graph has them: closures
+    /// the graph already agrees with wait for the next solve, and the front end's drift
+    /// since the last would show as walls out of place.
+    fn trim(&mut self, index: usize) {
+        let Some(submap) = self.submaps.get(index) else {
+            return;
+        };
+        let tied: Vec<(usize, usize, Pose2)> = self
+            .tied_nodes
+            .range(submap.anchor..=submap.last_node)
+            .map(|(&node, &(older, seen))| (node, older, seen))
+            .collect();
+        let localized =
+            localized_all_along(tied.iter().map(|t| t.0), submap.anchor, submap.last_node);
+        let Some(grid) = submap.kept_grid().filter(|_| localized) else {
+            return;
+        };
+        let world_from_node = |node: usize| self.graph.pose(node);
+        let older: Vec<(usize, Pose2, &SubmapGrid)> = self
+            .submaps
+            .iter()
+            .filter(|(i, _)| *i != index)
+            .filter_map(|(i, s)| s.kept_grid().map(|g| (i, s.placed(world_from_node), g)))
+            .collect();
+        // Where each closure puts its node: the older submap as laid out, and the node
+        // where the scan matched in it.
+        let implied = tied.iter().filter_map(|&(node, of, seen)| {
+            let at = older.iter().find(|o| o.0 == of)?;
+            Some((node, at.1.compose(&seen)))
+        });
+        let Some(world_from_submap) = submap.fitted(implied) else {
+            return;
+        };
+        let laid: Vec<(Pose2, &SubmapGrid)> = older.iter().map(|o| (o.1, o.2)).collect();
+        let overlap = Overlap::of(grid, &world_from_submap, &laid);
+        if overlap.repeats() {
+            self.submaps.retire(index);
+            self.search_maps.retain(|(i, _)| *i != index);
+            self.stats.retired += 1;
+        }
     }
 
     /// Searches the finished submaps the node may be in; adds what the scans confirm.
@@ -304,7 +361,7 @@ impl GlobalSlam {
             .submaps
             .iter()
             .filter(|(index, s)| {
-                s.is_finished()
+                s.is_kept()
                     && s.last_node + recent < node
                     && self
                         .last_attempt
@@ -386,6 +443,7 @@ impl GlobalSlam {
         self.graph
             .add_closure(tie.anchor, tie.node, tie.seen, tie.information)?;
         self.stats.closures += 1;
+        self.tied_nodes.insert(tie.node, (tie.submap, tie.seen));
         if self.tied_at_m.len() <= tie.submap {
             self.tied_at_m.resize(tie.submap + 1, f64::NAN);
         }
