@@ -27,8 +27,8 @@ pub mod pose_graph;
 pub mod submap;
 pub mod submap_grid;
 
+pub use global_slam::ScanRanges;
 pub use global_slam::{GlobalConfig, GlobalError, GlobalSlam, GlobalStats};
 pub use pose_graph::{
     ACCEPTED_SCALE, ClosureId, PoseGraph, PoseGraphError, PoseGraphSettings, SolveReport,
 };
-pub use submap::NodeScan;

@@ -272,6 +272,28 @@ impl OccupancyGrid {
         })
     }
 
+    /// A grid of trinary pixels ([`OCCUPIED_PIXEL`], [`FREE_PIXEL`], anything else unknown),
+    /// row by row from the lowest y, cell `(0, 0)`'s lower-left corner at `origin`: each
+    /// known cell as certain as a cell can be, so that laid over another grid
+    /// ([`crate::global_grid`]) it decides where it knows.
+    pub fn from_pixels(
+        resolution_m: f64,
+        origin: [f64; 2],
+        width: usize,
+        pixels: &[u8],
+    ) -> Result<Self, GridError> {
+        let log_odds = pixels
+            .iter()
+            .map(|&pixel| match pixel {
+                OCCUPIED_PIXEL => MAX_LOG_ODDS,
+                FREE_PIXEL => MIN_LOG_ODDS,
+                _ => 0.0,
+            })
+            .collect();
+        let min_index = origin.map(|o| (o / resolution_m).round() as i64);
+        Self::from_log_odds(resolution_m, min_index, width, log_odds)
+    }
+
     pub fn resolution_m(&self) -> f64 {
         self.resolution_m
     }
@@ -299,9 +321,14 @@ impl OccupancyGrid {
         self.min_index
     }
 
+    /// The log-odds of cell `(col, row)` (0 for a cell never seen).
+    pub fn log_odds(&self, col: usize, row: usize) -> f32 {
+        self.log_odds[row * self.width + col]
+    }
+
     /// The probability that cell `(col, row)` is occupied (0.5 for a cell never seen).
     pub fn probability(&self, col: usize, row: usize) -> f64 {
-        let l = f64::from(self.log_odds[row * self.width + col]);
+        let l = f64::from(self.log_odds(col, row));
         1.0 - 1.0 / (1.0 + l.exp())
     }
 
@@ -468,6 +495,12 @@ mod tests {
                 assert_eq!(pixel, trinary_pixel(grid.state(col, row)), "{col} {row}");
             }
         }
+        // Read back from its pixels, the grid is the same, cell for cell and in place.
+        let read =
+            OccupancyGrid::from_pixels(grid.resolution_m(), grid.origin(), grid.width(), &pixels)
+                .unwrap();
+        assert_eq!(read.min_index(), grid.min_index());
+        assert_eq!(read.pixels(), pixels);
     }
 
     #[test]

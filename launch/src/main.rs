@@ -461,8 +461,8 @@ fn settings_args(
         Role::Graph => {
             let front_end = text("front_end", RunConfig::section_text(&config.front_end))?;
             let mut args = section_file("front_end", front_end, "--front-end-config")?;
-            let grid = topology::published(&run, ipc_types::topic::GRAPH_GRID.name());
-            args.extend(switch(grid, "--grid"));
+            // The grid as it grows is for the recording; map-sink needs only the last.
+            args.extend(switch(run.recorded, "--interim-grids"));
             args
         }
         Role::Perception => {

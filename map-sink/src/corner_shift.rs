@@ -1,8 +1,13 @@
-//! The map's corners carried along when the refinement moves the path: the filter placed
-//! each corner from the poses that saw it, so where the refinement moved those poses the
-//! corner moves with them. `landmarks.json` and `map_corners.csv` then lie in the frame of
-//! the grid, which is traced from the refined path; a run mapping on the saved map starts
-//! from corners and walls that agree.
+//! The map's corners carried along when the final path differs from the filter's (the back
+//! end's, or the filter's refined): the filter placed each corner from the poses that saw
+//! it, so where the final path moved those poses the corner moves with them.
+//! `landmarks.json` and `map_corners.csv` then lie in the frame of the grid, which is laid
+//! along the final path; a run mapping on the saved map starts from corners and walls that
+//! agree.
+//!
+//! A corner is placed when first seen; seen again on a later pass, it is the filter's pose
+//! that is fitted to it, not the corner to the pose. So the poses of the first pass near
+//! it decide: a later pass may have been moved by a quite different correction.
 
 use nalgebra::Matrix4;
 use slam_geom::{MapCorner, Point2, StampedPose, wrap_angle};
@@ -11,10 +16,11 @@ use slam_geom::{MapCorner, Point2, StampedPose, wrap_angle};
 /// the range at which the front end finds corners, so mostly the poses that saw it.
 const NEAR_POSES_M: f64 = 3.0;
 
-/// `corners` (in the frame of `filter`, the filter's path) moved as the refinement moved
-/// the path to `refined` (the same stamps, in the same order). Each corner moves as the
-/// poses within [`NEAR_POSES_M`] of it moved, on average (the nearest pose when none is that
-/// near): its position and heading by their rigid motions, its covariance turned with them.
+/// `corners` (in the frame of `filter`, the filter's path) moved as the final path moved
+/// the filter's to `refined` (the same stamps, in the same order). Each corner moves as the
+/// poses of the first pass within [`NEAR_POSES_M`] of it moved, on average (the nearest
+/// pose when none is that near): its position and heading by their rigid motions, its
+/// covariance turned with them.
 /// `None` when the two paths do not hold the same stamps.
 pub(crate) fn follow_refined_path(
     corners: &[MapCorner],
@@ -40,8 +46,10 @@ pub(crate) fn follow_refined_path(
 fn follow(corner: &MapCorner, filter: &[StampedPose], refined: &[StampedPose]) -> MapCorner {
     let at = Point2::new(corner.x, corner.y);
     let distance2 = |p: &StampedPose| (p.pose.position() - at).norm_squared();
+    let is_near = |i: &usize| distance2(&filter[*i]) <= NEAR_POSES_M * NEAR_POSES_M;
     let near: Vec<usize> = (0..filter.len())
-        .filter(|&i| distance2(&filter[i]) <= NEAR_POSES_M * NEAR_POSES_M)
+        .skip_while(|i| !is_near(i))
+        .take_while(is_near)
         .collect();
     let near = if near.is_empty() {
         (0..filter.len())
@@ -135,6 +143,28 @@ mod tests {
         assert!((after[1].x - 18.0).abs() < 1e-9, "{:?}", after[1]);
         assert!((after[1].y - 1.2).abs() < 1e-9, "{:?}", after[1]);
         assert!((after[1].heading - 0.3).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_corner_passed_twice_moves_as_the_first_pass_moved() {
+        // Out along x to 20 m and back: the way back was corrected by 0.5 m sideways.
+        let out = path();
+        let back: Vec<StampedPose> = out
+            .iter()
+            .rev()
+            .enumerate()
+            .map(|(k, p)| StampedPose {
+                stamp_ns: 1000 + k as u64,
+                pose: Pose2::new(p.pose.x, 0.0, std::f64::consts::PI),
+            })
+            .collect();
+        let filter: Vec<StampedPose> = out.iter().chain(&back).copied().collect();
+        let refined = moved(&filter, |p| match p.yaw.abs() > 1.0 {
+            true => Pose2::new(p.x, 0.5, p.yaw),
+            false => Pose2::new(p.x, 0.1, p.yaw),
+        });
+        let after = follow_refined_path(&[corner(5.0, 1.0)], &filter, &refined).unwrap()[0];
+        assert!((after.y - 1.1).abs() < 1e-9, "{after:?}");
     }
 
     #[test]

@@ -61,9 +61,9 @@ struct Args {
     /// slam-launch gives what is left of its grace period after a margin.
     #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
     stop_budget: Option<Duration>,
-    /// The back end (graph-proc) runs: the final path is its `graph/path`, not the filter's.
-    /// The run waits for it at its end and does not refine it (--refine-passes is for the
-    /// filter's).
+    /// The back end (graph-proc) runs: the final path is its `graph/path` and the grid its
+    /// `graph/grid`, not the filter's path and a grid traced here. The run waits for them at
+    /// its end, keeps no scan and refines nothing (--refine-passes is for the filter's path).
     #[arg(long)]
     back_end: bool,
 }
@@ -146,6 +146,7 @@ fn run(args: Args) -> Result<()> {
                 passes: if args.back_end { 0 } else { args.refine_passes },
                 ..PathRefinementConfig::default()
             },
+            back_end: args.back_end,
             ..RecorderOptions::default()
         },
     )?;
@@ -176,8 +177,11 @@ fn run(args: Args) -> Result<()> {
     let maps = Inlet::open(&node, topic::MAP)?;
     let poses = Inlet::open(&node, topic::POSE)?;
     let path = Inlet::open(&node, topic::PATH)?;
-    let graph_path = if args.back_end {
-        Some(Inlet::open(&node, topic::GRAPH_PATH)?)
+    let graph = if args.back_end {
+        Some(Graph {
+            path: Inlet::open(&node, topic::GRAPH_PATH)?,
+            grid: Inlet::open(&node, topic::GRAPH_GRID)?,
+        })
     } else {
         None
     };
@@ -185,8 +189,9 @@ fn run(args: Args) -> Result<()> {
     say("ready");
 
     let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps, &path];
-    if let Some(graph_path) = &graph_path {
-        wakeables.push(graph_path);
+    if let Some(graph) = &graph {
+        wakeables.push(&graph.path);
+        wakeables.push(&graph.grid);
     }
     if let Some(truth) = &truth {
         wakeables.push(truth);
@@ -198,9 +203,9 @@ fn run(args: Args) -> Result<()> {
     let mut progress = Progress::default();
     let mut told = 0;
     let mut assembly = PathAssembly::new();
-    let mut graph_assembly = PathAssembly::new();
     // The filter's path is final only in a run without the back end's.
-    let mut final_path = FinalPath::new(graph_path.is_some());
+    let mut final_path = FinalPath::new(graph.is_some());
+    let mut graph_pieces = GraphPieces::default();
     let mut published = None;
     let mut last_status = Instant::now();
     let mut finished = false;
@@ -234,14 +239,8 @@ fn run(args: Args) -> Result<()> {
             recorder.set_map(map_corners(&sample));
         }
         drain_path(&path, &mut assembly, &mut recorder, &mut final_path, false)?;
-        if let Some(graph_path) = &graph_path {
-            drain_path(
-                graph_path,
-                &mut graph_assembly,
-                &mut recorder,
-                &mut final_path,
-                true,
-            )?;
+        if let Some(graph) = &graph {
+            graph.drain(&mut graph_pieces, &mut recorder, &mut final_path)?;
         }
         while let Some(sample) = poses.receive()? {
             if sample.header.is_end_of_stream() {
@@ -287,17 +286,12 @@ fn run(args: Args) -> Result<()> {
             }
         }
         if finished
-            && let Some(graph_path) = &graph_path
+            && let Some(graph) = &graph
             && !final_path.complete
         {
             // The back end solves its graph once more at the end of the stream, then sends
-            // its path.
-            finished = wait_for_graph_path(
-                graph_path,
-                &mut graph_assembly,
-                &mut recorder,
-                &mut final_path,
-            )?;
+            // its grid and path.
+            finished = graph.wait_for_final(&mut graph_pieces, &mut recorder, &mut final_path)?;
         }
         tell_incomplete(&recorder, &mut told);
         if args.status && last_status.elapsed() >= STATUS_PERIOD {
@@ -342,6 +336,7 @@ fn run(args: Args) -> Result<()> {
     let FinishedRun {
         metrics,
         report: grid,
+        corners_left_out,
         ..
     } = finished;
     say_err(&format!(
@@ -350,7 +345,19 @@ fn run(args: Args) -> Result<()> {
         metrics.map_corners,
         args.out.display()
     ));
-    if let Some(g) = grid {
+    if corners_left_out > 0 {
+        say_err(&format!(
+            "map-sink: {corners_left_out} of the filter's corners lay off the grid's walls \
+             once moved onto the final path and were left out"
+        ));
+    }
+    if let Some(g) = grid.as_ref().filter(|_| args.back_end) {
+        say_err(&format!(
+            "map-sink: occupancy grid {} x {} cells of {} m from the back end, written in {:.2} s",
+            g.width, g.height, g.resolution_m, g.build_s
+        ));
+    }
+    if let Some(g) = grid.filter(|_| !args.back_end) {
         say_err(&format!(
             "map-sink: occupancy grid {} x {} cells of {} m from {} scans ({} beams kept, {:.1} MB) in {:.2} s, {:.1} MB of log-odds",
             g.width,
@@ -524,24 +531,73 @@ fn drain_path(
 /// its last solve, bounded all the same (a back end that died must not hang the end).
 const GRAPH_PATH_WAIT: Duration = Duration::from_secs(30);
 
-/// Waits for the back end's path at the end of the stream; false when stopped first.
-fn wait_for_graph_path(
-    inlet: &Inlet<PathChunk>,
-    assembly: &mut PathAssembly,
-    recorder: &mut Recorder,
-    final_path: &mut FinalPath,
-) -> Result<bool> {
-    let since = Instant::now();
-    while !final_path.complete && since.elapsed() < GRAPH_PATH_WAIT {
-        if wait_any(&[inlet], PATH_POLL)? == Wake::Shutdown {
-            return Ok(false);
+/// The back end's results, as they come.
+struct Graph {
+    path: Inlet<PathChunk>,
+    grid: Inlet<GridCells>,
+}
+
+/// The back end's path and grid, as far as their pieces have come.
+#[derive(Default)]
+struct GraphPieces {
+    path: PathAssembly,
+    grid: GridPieces,
+}
+
+impl Graph {
+    /// Takes what has come of the back end's grid and path. The back end sends its grid
+    /// before its path: once the final path is whole, so is the grid before it.
+    fn drain(
+        &self,
+        pieces: &mut GraphPieces,
+        recorder: &mut Recorder,
+        final_path: &mut FinalPath,
+    ) -> Result<()> {
+        self.drain_grid(&mut pieces.grid, recorder)?;
+        drain_path(&self.path, &mut pieces.path, recorder, final_path, true)?;
+        self.drain_grid(&mut pieces.grid, recorder)
+    }
+
+    fn drain_grid(&self, pieces: &mut GridPieces, recorder: &mut Recorder) -> Result<()> {
+        while let Some(piece) = self.grid.receive()? {
+            let Some(whole) = pieces.add(&piece) else {
+                continue;
+            };
+            let g = whole.geometry;
+            let grid =
+                OccupancyGrid::from_pixels(g.resolution, g.origin, g.width as usize, &whole.cells)
+                    .context("the back end's grid")?;
+            recorder.set_back_end_grid(grid);
         }
-        drain_path(inlet, assembly, recorder, final_path, true)?;
+        Ok(())
     }
-    if !final_path.complete {
-        say_err("map-sink: the back end's path did not come; the filter's estimate stands in");
+
+    /// Waits for the back end's final path at the end of the stream; false when stopped
+    /// first.
+    fn wait_for_final(
+        &self,
+        pieces: &mut GraphPieces,
+        recorder: &mut Recorder,
+        final_path: &mut FinalPath,
+    ) -> Result<bool> {
+        let since = Instant::now();
+        while !final_path.complete && since.elapsed() < GRAPH_PATH_WAIT {
+            if wait_any(&[&self.path, &self.grid], PATH_POLL)? == Wake::Shutdown {
+                return Ok(false);
+            }
+            self.drain(pieces, recorder, final_path)?;
+        }
+        if !final_path.complete {
+            say_err("map-sink: the back end's path did not come; the filter's estimate stands in");
+        }
+        if pieces.grid.out_of_place > 0 {
+            say_err(&format!(
+                "map-sink: {} pieces of the back end's grid did not fit it and were dropped",
+                pieces.grid.out_of_place
+            ));
+        }
+        Ok(true)
     }
-    Ok(true)
 }
 
 fn drain_scans(

@@ -19,7 +19,8 @@ use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
 use back_end::compact_scan::CompactScan;
-use back_end::occupancy_grid::{GridConfig, OccupancyGrid};
+use back_end::global_grid::{self, Layer};
+use back_end::occupancy_grid::{CellState, GridConfig, OccupancyGrid};
 use slam_eval::{
     AteStats, DEAD_RECKONING_FILE, FitVerdict, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput,
     METRICS_FILE, MapFit, Metrics, PathRefinement, RefinementState, RelationsFile,
@@ -27,6 +28,7 @@ use slam_eval::{
     nearest_rmse, percentile, score_run, score_tum_file,
 };
 use slam_geom::MapCorner;
+use slam_geom::Point2;
 use slam_geom::Pose2;
 use slam_geom::Se2Alignment;
 use slam_geom::StampedPose;
@@ -50,6 +52,10 @@ pub struct RecorderOptions {
     pub relations_tolerance_ns: u64,
     /// How the filter's final path is refined against its own grid before it is written.
     pub refinement: PathRefinementConfig,
+    /// The back end (graph-proc) runs: its path and grid are the run's
+    /// ([`Recorder::set_back_end_path`], [`Recorder::set_back_end_grid`]), so no scan is
+    /// kept and nothing is traced here.
+    pub back_end: bool,
 }
 
 impl Default for RecorderOptions {
@@ -60,6 +66,7 @@ impl Default for RecorderOptions {
             relations: None,
             relations_tolerance_ns: slam_eval::DEFAULT_TOLERANCE_NS,
             refinement: PathRefinementConfig::default(),
+            back_end: false,
         }
     }
 }
@@ -100,6 +107,8 @@ pub struct FinishedRun {
     /// The grid of `map.pgm` and `map.yaml`, or `None` when there is none or it was not
     /// written.
     pub grid: Option<OccupancyGrid>,
+    /// The filter's corners left out for lying where the back end's grid shows free space.
+    pub corners_left_out: usize,
 }
 
 /// A pose whose trajectory lines wait for its scan (or a later one, if this stage lost it):
@@ -133,8 +142,9 @@ struct Estimate {
 /// last.
 ///
 /// Poses, truth and scans are matched by sequence number (the scan's), in any arrival order.
-/// The occupancy grid is traced at the end from the final path, so scans are kept until
-/// then: compactly, and only those taken from a new viewpoint ([`ScanKeeper`]).
+/// Without the back end, the occupancy grid is traced at the end from the final path, so
+/// scans are kept until then: compactly, and only those taken from a new viewpoint
+/// ([`ScanKeeper`]). With it, the grid is the back end's.
 #[derive(Debug)]
 pub struct Recorder {
     dir: PathBuf,
@@ -151,6 +161,14 @@ pub struct Recorder {
     scans: ScanKeeper,
     /// Mapping on a saved map: its grid on this run's cells ([`Self::map_on`]).
     prior: Option<OccupancyGrid>,
+    /// The back end's latest grid, in its frame.
+    back_end_grid: Option<OccupancyGrid>,
+    /// On a saved map, the motion from the back end's frame to the map's.
+    map_from_graph: Option<Pose2>,
+    /// The back end's grid laid in the run's frame, at the end ([`Self::lay_back_end_grid`]).
+    laid_grid: Option<OccupancyGrid>,
+    /// Corners left out for lying off the walls of the grid written.
+    corners_left_out: usize,
     /// Whether the run maps on a saved map (whose frame the filter's estimate is in).
     on_saved_map: bool,
     latencies_ns: Vec<u64>,
@@ -213,6 +231,10 @@ impl Recorder {
             dir: dir.to_path_buf(),
             scans: ScanKeeper::new(resolution),
             prior: None,
+            back_end_grid: None,
+            map_from_graph: None,
+            laid_grid: None,
+            corners_left_out: 0,
             on_saved_map: false,
             options,
             online,
@@ -374,6 +396,10 @@ impl Recorder {
         self.touch();
         self.scans_seen += 1;
         self.scans_through = Some(self.scans_through.map_or(seq, |through| through.max(seq)));
+        if self.options.back_end {
+            self.write_lines(false);
+            return;
+        }
         let grid = &self.options.grid;
         let scan = CompactScan::new(
             angle_min,
@@ -402,11 +428,11 @@ impl Recorder {
     /// map's frame, so the path is moved there whole: by the rigid motion that best lays it
     /// on that estimate (from convergence, where the run reports one).
     pub fn set_back_end_path(&mut self, path: &[StampedPose]) {
-        let path = match self
+        self.map_from_graph = self
             .on_saved_map
             .then(|| self.map_from_graph(path))
-            .flatten()
-        {
+            .flatten();
+        let path = match self.map_from_graph {
             Some(map_from_graph) => path
                 .iter()
                 .map(|p| StampedPose {
@@ -432,6 +458,46 @@ impl Recorder {
             .filter_map(|p| Some((p.pose, *online.get(&p.stamp_ns)?)))
             .collect();
         Pose2::fit(&pairs)
+    }
+
+    /// The corners, placed by the filter, moved as the back end's final path moved the
+    /// filter's estimate of the poses near them: they lie on the grid traced from that path.
+    /// A corner the robot passed more than once moves by the mean of the passes'
+    /// corrections, which need not be its own: one that lands off the walls of the grid
+    /// written is left out, lest a run on the saved map hold on to it.
+    fn corners_onto_final_path(&mut self) {
+        let Some(path) = &self.final_path else {
+            return;
+        };
+        let online: HashMap<u64, Pose2> = self
+            .estimates
+            .values()
+            .map(|e| (e.stamp_ns, e.pose))
+            .collect();
+        let (filter, last): (Vec<StampedPose>, Vec<StampedPose>) = path
+            .iter()
+            .filter_map(|p| {
+                let pose = *online.get(&p.stamp_ns)?;
+                let stamp_ns = p.stamp_ns;
+                Some((StampedPose { stamp_ns, pose }, *p))
+            })
+            .unzip();
+        if let Some(moved) = follow_refined_path(&self.map, &filter, &last) {
+            self.map = moved;
+        }
+        let Some(grid) = &self.laid_grid else {
+            return;
+        };
+        let before = self.map.len();
+        self.map
+            .retain(|corner| wall_near(grid, Point2::new(corner.x, corner.y), CORNER_WALL_REACH_M));
+        self.corners_left_out = before - self.map.len();
+    }
+
+    /// The back end's grid (in its frame; the latest wins), which becomes `map.pgm`: on a
+    /// saved map laid over the saved grid where the back end's path was laid.
+    pub fn set_back_end_grid(&mut self, grid: OccupancyGrid) {
+        self.back_end_grid = Some(grid);
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).
@@ -535,6 +601,10 @@ impl Recorder {
             self.prior = None;
         }
         let started = Instant::now();
+        if self.options.back_end {
+            self.laid_grid = self.lay_back_end_grid()?;
+            self.corners_onto_final_path();
+        }
         let asked = self.options.refinement.passes;
         let (filter_path, refinement) = match &self.final_path {
             Some(path) => (
@@ -588,6 +658,7 @@ impl Recorder {
             report,
             final_path: run.final_path,
             grid: run.grid,
+            corners_left_out: self.corners_left_out,
         })
     }
 
@@ -917,9 +988,36 @@ impl Recorder {
         )?)
     }
 
+    /// The run's grid: the back end's where it runs ([`Self::lay_back_end_grid`]), else
+    /// traced here.
+    fn grid(&self, path: &[StampedPose]) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
+        if self.options.back_end {
+            Ok(self.laid_grid.clone().map(|g| (g, 0)))
+        } else {
+            self.traced_grid(path)
+        }
+    }
+
+    /// The back end's grid in the run's frame: on a saved map, laid over the saved grid
+    /// where the back end's path was laid.
+    fn lay_back_end_grid(&self) -> Result<Option<OccupancyGrid>, SinkError> {
+        Ok(match (&self.back_end_grid, &self.prior) {
+            (Some(run), Some(prior)) => {
+                let map_from_graph = self.map_from_graph.unwrap_or(Pose2::IDENTITY);
+                let layers: [(Pose2, &dyn Layer); 2] =
+                    [(Pose2::IDENTITY, prior), (map_from_graph, run)];
+                global_grid::render(&layers, self.options.grid.resolution_m)?
+            }
+            (run, prior) => run.as_ref().or(prior.as_ref()).cloned(),
+        })
+    }
+
     /// The occupancy grid of the scans kept, each traced from its pose on `path` (matched by
     /// stamp; a scan the path does not hold is left out), with the number traced.
-    fn grid(&self, path: &[StampedPose]) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
+    fn traced_grid(
+        &self,
+        path: &[StampedPose],
+    ) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
         let poses: HashMap<u64, Pose2> = path.iter().map(|p| (p.stamp_ns, p.pose)).collect();
         let scans: Vec<(Pose2, &CompactScan)> = self
             .scans
@@ -1167,6 +1265,37 @@ fn tum_text(path: &[StampedPose]) -> String {
     path.iter()
         .map(|p| format_tum_line(p.stamp_ns, &p.pose))
         .collect()
+}
+
+/// How far from a corner the back end's grid must show a wall for it to stay, metres: the
+/// cell the corner lies in and the next, whichever way the two walls' cells were cut.
+const CORNER_WALL_REACH_M: f64 = 0.1;
+
+/// Whether `grid` holds an occupied cell within `reach` of `at`.
+fn wall_near(grid: &OccupancyGrid, at: Point2, reach: f64) -> bool {
+    let res = grid.resolution_m();
+    let [x0, y0] = grid.origin();
+    let span = (reach / res).ceil() as i64;
+    let col = ((at.x - x0) / res).floor() as i64;
+    let row = ((at.y - y0) / res).floor() as i64;
+    for r in row - span..=row + span {
+        for c in col - span..=col + span {
+            let (Ok(c), Ok(r)) = (usize::try_from(c), usize::try_from(r)) else {
+                continue;
+            };
+            if c >= grid.width() || r >= grid.height() {
+                continue;
+            }
+            let centre = Point2::new(x0 + (c as f64 + 0.5) * res, y0 + (r as f64 + 0.5) * res);
+            if (centre - at).norm() > reach + 0.5 * res {
+                continue;
+            }
+            if grid.state(c, r) == CellState::Occupied {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// The grid's size and cost, and the scans traced, for the [`GridReport`].
