@@ -30,8 +30,16 @@ pub trait Layer {
     /// The stretches of cells it may know something of, row by row: the centre of each
     /// stretch's first cell (its frame) and how many cells run from there along +x.
     fn stretches(&self) -> Vec<(Vector2<f64>, usize)>;
-    /// The log-odds at `point` (its frame), 0 where it knows nothing.
-    fn log_odds_at(&self, point: Vector2<f64>) -> f32;
+    /// The log-odds at `out.len()` points (its frame) from `from` on by steps of `step`, 0
+    /// where it knows nothing.
+    fn sample_row(&self, from: Vector2<f64>, step: Vector2<f64>, out: &mut [f32]);
+}
+
+/// `v` rounded down, without the library call `f64::floor` is on a baseline x86-64 (this
+/// runs for every cell of every layer).
+pub(crate) fn floor(v: f64) -> i64 {
+    let i = v as i64;
+    i - i64::from((i as f64) > v)
 }
 
 impl Layer for SubmapGrid {
@@ -43,8 +51,8 @@ impl Layer for SubmapGrid {
         SubmapGrid::stretches(self).collect()
     }
 
-    fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
-        SubmapGrid::log_odds_at(self, point)
+    fn sample_row(&self, from: Vector2<f64>, step: Vector2<f64>, out: &mut [f32]) {
+        SubmapGrid::sample_row(self, from, step, out);
     }
 }
 
@@ -64,15 +72,21 @@ impl Layer for OccupancyGrid {
             .collect()
     }
 
-    fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
-        let [x, y] = self.origin();
+    fn sample_row(&self, from: Vector2<f64>, step: Vector2<f64>, out: &mut [f32]) {
+        let [x0, y0] = self.origin();
         let res = self.resolution_m();
-        let col = ((point.x - x) / res).floor();
-        let row = ((point.y - y) / res).floor();
-        if col < 0.0 || row < 0.0 || col >= self.width() as f64 || row >= self.height() as f64 {
-            return 0.0;
+        let (x, y) = ((from.x - x0) / res, (from.y - y0) / res);
+        let (dx, dy) = (step.x / res, step.y / res);
+        for (k, value) in out.iter_mut().enumerate() {
+            let k = k as f64;
+            let (col, row) = (floor(x + k * dx), floor(y + k * dy));
+            *value = match (usize::try_from(col), usize::try_from(row)) {
+                (Ok(col), Ok(row)) if col < self.width() && row < self.height() => {
+                    self.log_odds(col, row)
+                }
+                _ => 0.0,
+            };
         }
-        self.log_odds(col as usize, row as usize)
     }
 }
 
@@ -84,33 +98,48 @@ struct Footprint {
 
 impl Footprint {
     /// Where `layer`'s stretches fall when laid at `pose` on cells of `resolution`: every
-    /// world cell whose centre one of its cells may cover.
+    /// world cell whose centre lies in one of their cells. A stretch is a rectangle one
+    /// cell high, so each world row it reaches takes the span between the rectangle's
+    /// edges at the row's centre line.
     fn of(layer: &dyn Layer, pose: &Pose2, resolution: f64) -> Self {
-        let cell = |v: f64| (v / resolution).floor() as i64;
-        // A turned cell covers centres up to half its diagonal from its own.
-        let reach = layer.resolution() * std::f64::consts::FRAC_1_SQRT_2;
-        let step = pose.rotation() * Vector2::new(layer.resolution(), 0.0);
-        let stretches: Vec<(Vector2<f64>, usize)> = layer
+        let half = 0.5 * layer.resolution();
+        let rectangles: Vec<[Vector2<f64>; 4]> = layer
             .stretches()
             .into_iter()
-            .map(|(start, count)| (pose.transform(start), count))
+            .map(|(start, count)| {
+                let end = start.x + (count as f64 - 1.0) * layer.resolution();
+                [
+                    (-half, -half),
+                    (end - start.x + half, -half),
+                    (end - start.x + half, half),
+                    (-half, half),
+                ]
+                .map(|(dx, dy)| pose.transform(start + Vector2::new(dx, dy)))
+            })
             .collect();
-        // A stretch is straight: its rows lie between its ends'.
-        let ends = stretches
-            .iter()
-            .flat_map(|&(at, count)| [at.y, (at + step * count.saturating_sub(1) as f64).y]);
-        let lo_row = ends.clone().map(|y| cell(y - reach)).min().unwrap_or(0);
-        let hi_row = ends.map(|y| cell(y + reach)).max().unwrap_or(-1);
+        let row_of = |y: f64| floor(y / resolution - 0.5);
+        let ys = rectangles.iter().flatten().map(|c| c.y);
+        let lo_row = ys.clone().map(row_of).min().unwrap_or(0);
+        let hi_row = ys.map(|y| row_of(y) + 1).max().unwrap_or(-1);
         let rows = usize::try_from(hi_row - lo_row + 1).unwrap_or(0);
         let mut cols = vec![(i64::MAX, i64::MIN); rows];
-        for (mut at, count) in stretches {
-            for _ in 0..count {
-                let (x0, x1) = (cell(at.x - reach), cell(at.x + reach));
-                for y in cell(at.y - reach)..=cell(at.y + reach) {
-                    let range = &mut cols[(y - lo_row) as usize];
-                    *range = (range.0.min(x0), range.1.max(x1));
+        for corners in &rectangles {
+            let (low, high) = corners
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), c| {
+                    (l.min(c.y), h.max(c.y))
+                });
+            for row in row_of(low)..=row_of(high) + 1 {
+                let centre_y = (row as f64 + 0.5) * resolution;
+                let Some((x0, x1)) = span_at(corners, centre_y) else {
+                    continue;
+                };
+                let first = -floor(-(x0 / resolution - 0.5));
+                let last = floor(x1 / resolution - 0.5);
+                if first <= last {
+                    let range = &mut cols[(row - lo_row) as usize];
+                    *range = (range.0.min(first), range.1.max(last));
                 }
-                at += step;
             }
         }
         Self { lo_row, cols }
@@ -124,6 +153,20 @@ impl Footprint {
         let hi_row = self.lo_row + self.cols.len() as i64 - 1;
         Some(([lo_col, self.lo_row], [hi_col, hi_row]))
     }
+}
+
+/// Where the line `y` crosses the convex polygon `corners`: the lowest and highest x.
+fn span_at(corners: &[Vector2<f64>; 4], y: f64) -> Option<(f64, f64)> {
+    let mut span: Option<(f64, f64)> = None;
+    for (k, p) in corners.iter().enumerate() {
+        let q = corners[(k + 1) % 4];
+        if (p.y - y) * (q.y - y) > 0.0 || p.y == q.y {
+            continue;
+        }
+        let x = p.x + (y - p.y) * (q.x - p.x) / (q.y - p.y);
+        span = Some(span.map_or((x, x), |(l, h)| (l.min(x), h.max(x))));
+    }
+    span
 }
 
 /// Lays `layers` (each with its `world_from_layer`) out on a grid of `resolution` and adds
@@ -151,15 +194,20 @@ pub fn render(
     }
     // Per world cell, the layers' evidence for occupied and for free, apart.
     let mut sum = vec![(0.0_f32, 0.0_f32); width * height];
+    let mut samples = Vec::new();
     for ((pose, layer), footprint) in layers.iter().zip(&footprints) {
         let layer_from_world = pose.inverse();
+        let step = layer_from_world.rotation() * Vector2::new(resolution, 0.0);
         for (k, &(x0, x1)) in footprint.cols.iter().enumerate() {
+            if x0 > x1 {
+                continue;
+            }
             let y = footprint.lo_row + k as i64;
-            let row = (y - lo[1]) as usize * width;
-            for x in x0..=x1 {
-                let centre = Vector2::new(x as f64 + 0.5, y as f64 + 0.5) * resolution;
-                let l = layer.log_odds_at(layer_from_world.transform(centre));
-                let cell = &mut sum[row + (x - lo[0]) as usize];
+            let centre = Vector2::new(x0 as f64 + 0.5, y as f64 + 0.5) * resolution;
+            samples.resize((x1 - x0 + 1) as usize, 0.0);
+            layer.sample_row(layer_from_world.transform(centre), step, &mut samples);
+            let first = (y - lo[1]) as usize * width + (x0 - lo[0]) as usize;
+            for (cell, &l) in sum[first..first + samples.len()].iter_mut().zip(&samples) {
                 if l > 0.0 {
                     cell.0 += l;
                 } else {

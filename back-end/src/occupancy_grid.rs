@@ -41,6 +41,23 @@ pub const MAX_LOG_ODDS: f32 = 3.5;
 /// convention the grid is written in (see `map_yaml`).
 pub const OCCUPIED_PROBABILITY: f64 = 0.65;
 pub const FREE_PROBABILITY: f64 = 0.25;
+/// [`OCCUPIED_PROBABILITY`] as log-odds, `ln(0.65 / 0.35)`: thresholding needs no `exp`.
+const OCCUPIED_THRESHOLD_LOG_ODDS: f32 = 0.619_039_2;
+/// [`FREE_PROBABILITY`] as log-odds, `ln(0.25 / 0.75)`.
+const FREE_THRESHOLD_LOG_ODDS: f32 = -1.098_612_3;
+
+/// A cell of these log-odds thresholded: occupied above [`OCCUPIED_PROBABILITY`], free
+/// below [`FREE_PROBABILITY`], unknown in between.
+pub fn state_of(log_odds: f32) -> CellState {
+    if log_odds > OCCUPIED_THRESHOLD_LOG_ODDS {
+        CellState::Occupied
+    } else if log_odds < FREE_THRESHOLD_LOG_ODDS {
+        CellState::Free
+    } else {
+        CellState::Unknown
+    }
+}
+
 /// More cells than this are refused: at 8 bytes a cell (log-odds and a per-scan mark) this
 /// is 800 MB; such an area wants a coarser resolution.
 pub const MAX_CELLS: usize = 100_000_000;
@@ -334,14 +351,7 @@ impl OccupancyGrid {
 
     /// The cell thresholded.
     pub fn state(&self, col: usize, row: usize) -> CellState {
-        let p = self.probability(col, row);
-        if p > OCCUPIED_PROBABILITY {
-            CellState::Occupied
-        } else if p < FREE_PROBABILITY {
-            CellState::Free
-        } else {
-            CellState::Unknown
-        }
+        state_of(self.log_odds(col, row))
     }
 
     /// The free and occupied cells, row by row from the lowest y (unknown ones left out).
@@ -476,6 +486,17 @@ mod tests {
         let mut cells = Vec::new();
         trace(a, b, include_end, |c, r| cells.push((c, r)));
         cells
+    }
+
+    #[test]
+    fn the_thresholds_in_log_odds_are_the_probabilities() {
+        let log_odds = |p: f64| (p / (1.0 - p)).ln() as f32;
+        assert!((OCCUPIED_THRESHOLD_LOG_ODDS - log_odds(OCCUPIED_PROBABILITY)).abs() < 1e-6);
+        assert!((FREE_THRESHOLD_LOG_ODDS - log_odds(FREE_PROBABILITY)).abs() < 1e-6);
+        assert_eq!(state_of(0.62), CellState::Occupied);
+        assert_eq!(state_of(0.61), CellState::Unknown);
+        assert_eq!(state_of(-1.09), CellState::Unknown);
+        assert_eq!(state_of(-1.1), CellState::Free);
     }
 
     #[test]

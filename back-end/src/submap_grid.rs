@@ -10,6 +10,7 @@ use nalgebra::Vector2;
 use slam_geom::Pose2;
 
 use crate::compact_scan::CompactScan;
+use crate::global_grid::floor;
 use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 
 /// Steps of log-odds a byte counts in: 32 a unit keeps the clamps (-2 to 3.5) within a
@@ -65,8 +66,24 @@ impl SubmapGrid {
 
     /// The log-odds of the cell holding `point` (submap frame): 0 where nothing is known.
     pub fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
-        let col = (point.x / self.resolution).floor() as i64 - self.min_index[0];
-        let row = (point.y / self.resolution).floor() as i64 - self.min_index[1];
+        let col = floor(point.x / self.resolution) - self.min_index[0];
+        let row = floor(point.y / self.resolution) - self.min_index[1];
+        self.cell(col, row)
+    }
+
+    /// The log-odds at `out.len()` points from `from` on by steps of `step` (submap frame).
+    pub fn sample_row(&self, from: Vector2<f64>, step: Vector2<f64>, out: &mut [f32]) {
+        let x = from.x / self.resolution - self.min_index[0] as f64;
+        let y = from.y / self.resolution - self.min_index[1] as f64;
+        let (dx, dy) = (step.x / self.resolution, step.y / self.resolution);
+        for (k, value) in out.iter_mut().enumerate() {
+            let k = k as f64;
+            *value = self.cell(floor(x + k * dx), floor(y + k * dy));
+        }
+    }
+
+    /// The log-odds of cell `(col, row)` of the box: 0 where nothing is known.
+    fn cell(&self, col: i64, row: i64) -> f32 {
         let (Ok(col), Ok(row)) = (usize::try_from(col), usize::try_from(row)) else {
             return 0.0;
         };
