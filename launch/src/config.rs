@@ -473,7 +473,7 @@ mod tests {
             [sim.vehicle]
             max_accel = 2
             [features]
-            split_threshold = 0.05
+            min_line_points = 5
             [front_end]
             voxel_size = 0.1
             [slam]
@@ -491,7 +491,7 @@ mod tests {
         assert_eq!(config.sim.frames, 300);
         assert_eq!(config.sim.settings.sensor.noise_sigma, 0.02);
         assert_eq!(config.sim.settings.vehicle.max_accel, 2.0);
-        assert_eq!(config.features.split_threshold, 0.05);
+        assert_eq!(config.features.min_line_points, 5);
         assert_eq!(config.front_end.voxel_size, 0.1);
         assert_eq!(config.slam.filter.particles, 50);
         assert_eq!(config.slam.filter.resample_threshold, 0.4);
@@ -517,7 +517,10 @@ mod tests {
             ("[slam.localize]\nmax_partcles = 10", "max_partcles"),
             ("[sim]\nrange_noise = 0.02", "range_noise"),
             ("[sim.sensor]\nrange_noise = 0.02", "range_noise"),
-            ("[features]\nsplit = 0.05", "split"),
+            ("[features]\nmin_points = 5", "min_points"),
+            // Constants now, no longer settings.
+            ("[features]\nsplit_threshold = 0.05", "split_threshold"),
+            ("[front_end]\nmax_keyframes = 50", "max_keyframes"),
             ("[front_end]\nvoxel = 0.1", "voxel"),
             ("[hokuyo]\nclustr = 2", "clustr"),
         ] {
@@ -538,10 +541,7 @@ mod tests {
                 "[slam]\nresample_threshold = 2",
                 "[slam] resample_threshold = 2",
             ),
-            (
-                "[features]\nsplit_threshold = -1",
-                "[features] split_threshold = -1",
-            ),
+            ("[features]\nmax_range = -1", "[features] max_range = -1"),
             ("[front_end]\nvoxel_size = 0", "[front_end] voxel_size = 0"),
             ("[sim.sensor]\nbeams = 0", "[sim.sensor] beams = 0"),
             (
@@ -563,7 +563,7 @@ mod tests {
     fn a_section_goes_to_its_process_as_it_was_read() {
         let config: RunConfig = toml::from_str(
             "[slam]\nparticles = 7\nview_range = 9.5\n[slam.localize]\nmax_particles = 500\n\
-             [sim.vehicle]\nmax_accel = 2\n[front_end]\nrecovery_yaw = 0.1",
+             [sim.vehicle]\nmax_accel = 2\n[front_end]\nkeyframe_angle = 0.1",
         )
         .unwrap();
         let slam = RunConfig::section_text(&config.slam.filter)

@@ -163,7 +163,7 @@ const RUN_SECTIONS: &[(&str, &[&str])] = &[
     ),
     ("hokuyo", &["addr"]),
     ("slam", &["particles", "seed", "map_every"]),
-    ("features", &["split_threshold"]),
+    ("features", &["max_range"]),
     ("front_end", &["voxel_size"]),
 ];
 
