@@ -177,18 +177,13 @@ impl HokuyoSection {
 }
 
 /// The filter: `particles` and every other setting of slam-proc's [`slam_proc::SlamConfig`]
-/// (handed to `slam-proc --config`), with the run's seed and map rate.
+/// (handed to `slam-proc --config`), with the run's seed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 // With `flatten`, serde refuses the keys neither this struct nor the flattened one takes
 // (the flattened one alone cannot: it sees only its own).
 #[serde(default, deny_unknown_fields)]
 pub struct SlamSection {
     pub seed: u64,
-    /// Publish the map every this many scans (and at the end).
-    pub map_every: u64,
-    /// Publish the particle cloud every this many scans, when the run is recorded (each
-    /// cloud holds every particle, so it is kept rare for the recording's size).
-    pub particle_cloud_every: u64,
     #[serde(flatten)]
     pub filter: slam_proc::SlamConfig,
 }
@@ -197,8 +192,6 @@ impl Default for SlamSection {
     fn default() -> Self {
         Self {
             seed: 1,
-            map_every: 20,
-            particle_cloud_every: 40,
             filter: slam_proc::SlamConfig::default(),
         }
     }
@@ -356,14 +349,6 @@ impl RunConfig {
         if self.slam.filter.particles == 0 {
             return Err(ConfigError::Invalid("particles must be at least 1".into()));
         }
-        if self.slam.map_every == 0 {
-            return Err(ConfigError::Invalid("map_every must be at least 1".into()));
-        }
-        if self.slam.particle_cloud_every == 0 {
-            return Err(ConfigError::Invalid(
-                "particle_cloud_every must be at least 1".into(),
-            ));
-        }
         for (key, value) in [
             ("stall_warning (--stall-warning)", self.stall_warning),
             ("stall_limit (--stall-limit)", self.stall_limit),
@@ -478,7 +463,7 @@ mod tests {
             voxel_size = 0.1
             [slam]
             particles = 50
-            resample_threshold = 0.4
+            update_min_distance = 0.4
             [slam.localize]
             max_particles = 5000
             [hokuyo]
@@ -494,7 +479,7 @@ mod tests {
         assert_eq!(config.features.min_line_points, 5);
         assert_eq!(config.front_end.voxel_size, 0.1);
         assert_eq!(config.slam.filter.particles, 50);
-        assert_eq!(config.slam.filter.resample_threshold, 0.4);
+        assert_eq!(config.slam.filter.update_min_distance, 0.4);
         assert_eq!(config.slam.filter.localize.max_particles, 5000);
         assert_eq!(
             config.hokuyo.args(),
@@ -521,6 +506,8 @@ mod tests {
             // Constants now, no longer settings.
             ("[features]\nsplit_threshold = 0.05", "split_threshold"),
             ("[front_end]\nmax_keyframes = 50", "max_keyframes"),
+            ("[slam]\nresample_threshold = 0.4", "resample_threshold"),
+            ("[slam]\nmap_every = 20", "map_every"),
             ("[front_end]\nvoxel = 0.1", "voxel"),
             ("[hokuyo]\nclustr = 2", "clustr"),
         ] {
@@ -538,8 +525,8 @@ mod tests {
     fn values_out_of_range_are_refused_with_their_section() {
         for (text, start) in [
             (
-                "[slam]\nresample_threshold = 2",
-                "[slam] resample_threshold = 2",
+                "[slam]\nupdate_min_distance = -1",
+                "[slam] update_min_distance = -1",
             ),
             ("[features]\nmax_range = -1", "[features] max_range = -1"),
             ("[front_end]\nvoxel_size = 0", "[front_end] voxel_size = 0"),

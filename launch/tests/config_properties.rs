@@ -162,7 +162,7 @@ const RUN_SECTIONS: &[(&str, &[&str])] = &[
         ],
     ),
     ("hokuyo", &["addr"]),
-    ("slam", &["particles", "seed", "map_every"]),
+    ("slam", &["particles", "seed", "view_range"]),
     ("features", &["max_range"]),
     ("front_end", &["voxel_size"]),
 ];
