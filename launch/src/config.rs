@@ -508,6 +508,7 @@ mod tests {
             ("[front_end]\nmax_keyframes = 50", "max_keyframes"),
             ("[slam]\nresample_threshold = 0.4", "resample_threshold"),
             ("[slam]\nmap_every = 20", "map_every"),
+            ("[slam.localize]\nkld_z = 2.3", "kld_z"),
             ("[front_end]\nvoxel = 0.1", "voxel"),
             ("[hokuyo]\nclustr = 2", "clustr"),
         ] {

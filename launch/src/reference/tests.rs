@@ -191,7 +191,7 @@ fn the_toml_file_reads_back_as_the_configuration() {
         ..RunConfig::default()
     };
     config.slam.filter.particles = 7;
-    config.slam.filter.localize.kld_bin_yaw = 0.25;
+    config.slam.filter.localize.initial_sigma_yaw = 0.25;
     for config in [RunConfig::default(), config] {
         let text = toml_file(&config).unwrap();
         assert_eq!(
