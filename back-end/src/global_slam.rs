@@ -103,9 +103,6 @@ impl GlobalConfig {
                 registration: scan_match::registration::RegistrationParams {
                     range_sigma: front_end.range_sigma,
                     voxel: front_end.voxel_size,
-                    max_iterations: front_end.max_iterations,
-                    convergence: front_end.convergence,
-                    degeneracy_ratio: front_end.degeneracy_ratio,
                     weak_steps: false,
                 },
             },

@@ -177,18 +177,13 @@ impl HokuyoSection {
 }
 
 /// The filter: `particles` and every other setting of slam-proc's [`slam_proc::SlamConfig`]
-/// (handed to `slam-proc --config`), with the run's seed and map rate.
+/// (handed to `slam-proc --config`), with the run's seed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 // With `flatten`, serde refuses the keys neither this struct nor the flattened one takes
 // (the flattened one alone cannot: it sees only its own).
 #[serde(default, deny_unknown_fields)]
 pub struct SlamSection {
     pub seed: u64,
-    /// Publish the map every this many scans (and at the end).
-    pub map_every: u64,
-    /// Publish the particle cloud every this many scans, when the run is recorded (each
-    /// cloud holds every particle, so it is kept rare for the recording's size).
-    pub particle_cloud_every: u64,
     #[serde(flatten)]
     pub filter: slam_proc::SlamConfig,
 }
@@ -197,8 +192,6 @@ impl Default for SlamSection {
     fn default() -> Self {
         Self {
             seed: 1,
-            map_every: 20,
-            particle_cloud_every: 40,
             filter: slam_proc::SlamConfig::default(),
         }
     }
@@ -356,14 +349,6 @@ impl RunConfig {
         if self.slam.filter.particles == 0 {
             return Err(ConfigError::Invalid("particles must be at least 1".into()));
         }
-        if self.slam.map_every == 0 {
-            return Err(ConfigError::Invalid("map_every must be at least 1".into()));
-        }
-        if self.slam.particle_cloud_every == 0 {
-            return Err(ConfigError::Invalid(
-                "particle_cloud_every must be at least 1".into(),
-            ));
-        }
         for (key, value) in [
             ("stall_warning (--stall-warning)", self.stall_warning),
             ("stall_limit (--stall-limit)", self.stall_limit),
@@ -473,12 +458,12 @@ mod tests {
             [sim.vehicle]
             max_accel = 2
             [features]
-            split_threshold = 0.05
+            min_line_points = 5
             [front_end]
             voxel_size = 0.1
             [slam]
             particles = 50
-            resample_threshold = 0.4
+            update_min_distance = 0.4
             [slam.localize]
             max_particles = 5000
             [hokuyo]
@@ -491,10 +476,10 @@ mod tests {
         assert_eq!(config.sim.frames, 300);
         assert_eq!(config.sim.settings.sensor.noise_sigma, 0.02);
         assert_eq!(config.sim.settings.vehicle.max_accel, 2.0);
-        assert_eq!(config.features.split_threshold, 0.05);
+        assert_eq!(config.features.min_line_points, 5);
         assert_eq!(config.front_end.voxel_size, 0.1);
         assert_eq!(config.slam.filter.particles, 50);
-        assert_eq!(config.slam.filter.resample_threshold, 0.4);
+        assert_eq!(config.slam.filter.update_min_distance, 0.4);
         assert_eq!(config.slam.filter.localize.max_particles, 5000);
         assert_eq!(
             config.hokuyo.args(),
@@ -517,7 +502,13 @@ mod tests {
             ("[slam.localize]\nmax_partcles = 10", "max_partcles"),
             ("[sim]\nrange_noise = 0.02", "range_noise"),
             ("[sim.sensor]\nrange_noise = 0.02", "range_noise"),
-            ("[features]\nsplit = 0.05", "split"),
+            ("[features]\nmin_points = 5", "min_points"),
+            // Constants now, no longer settings.
+            ("[features]\nsplit_threshold = 0.05", "split_threshold"),
+            ("[front_end]\nmax_keyframes = 50", "max_keyframes"),
+            ("[slam]\nresample_threshold = 0.4", "resample_threshold"),
+            ("[slam]\nmap_every = 20", "map_every"),
+            ("[slam.localize]\nkld_z = 2.3", "kld_z"),
             ("[front_end]\nvoxel = 0.1", "voxel"),
             ("[hokuyo]\nclustr = 2", "clustr"),
         ] {
@@ -535,13 +526,10 @@ mod tests {
     fn values_out_of_range_are_refused_with_their_section() {
         for (text, start) in [
             (
-                "[slam]\nresample_threshold = 2",
-                "[slam] resample_threshold = 2",
+                "[slam]\nupdate_min_distance = -1",
+                "[slam] update_min_distance = -1",
             ),
-            (
-                "[features]\nsplit_threshold = -1",
-                "[features] split_threshold = -1",
-            ),
+            ("[features]\nmax_range = -1", "[features] max_range = -1"),
             ("[front_end]\nvoxel_size = 0", "[front_end] voxel_size = 0"),
             ("[sim.sensor]\nbeams = 0", "[sim.sensor] beams = 0"),
             (
@@ -563,7 +551,7 @@ mod tests {
     fn a_section_goes_to_its_process_as_it_was_read() {
         let config: RunConfig = toml::from_str(
             "[slam]\nparticles = 7\nview_range = 9.5\n[slam.localize]\nmax_particles = 500\n\
-             [sim.vehicle]\nmax_accel = 2\n[front_end]\nrecovery_yaw = 0.1",
+             [sim.vehicle]\nmax_accel = 2\n[front_end]\nkeyframe_angle = 0.1",
         )
         .unwrap();
         let slam = RunConfig::section_text(&config.slam.filter)

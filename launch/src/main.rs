@@ -375,6 +375,11 @@ fn plan(
         .collect()
 }
 
+/// A recorded run's particle cloud every this many scans: each cloud holds every particle,
+/// so it is kept rare for the recording's size, while a cloud every few seconds of a log
+/// still shows how it spreads and collapses.
+const PARTICLE_CLOUD_EVERY: u64 = 40;
+
 /// A stage's arguments besides its topics: the settings of its config section, those the
 /// launcher interprets as options and the process's own settings as a file of their own
 /// (none when they are the defaults).
@@ -440,16 +445,12 @@ fn settings_args(
                     Some(config.slam.filter.particles.to_string()),
                 ),
                 ("--seed", Some(config.slam.seed.to_string())),
-                ("--map-every", Some(config.slam.map_every.to_string())),
             ]);
             if config.localize {
                 args.push("--localize".into());
             }
             if particles {
-                args.push(format!(
-                    "--particles-every={}",
-                    config.slam.particle_cloud_every
-                ));
+                args.push(format!("--particles-every={PARTICLE_CLOUD_EVERY}"));
             }
             if let Some(pose) = &config.initial_pose {
                 args.push(format!("--initial-pose={pose}"));

@@ -239,9 +239,12 @@ fn settings_that_would_exhaust_the_machine_are_refused_with_their_range() {
     let dir = scratch("absurd-settings");
     for (text, key) in [
         ("[front_end]\nvoxel_size = 1e-9\n", "voxel_size"),
-        ("[slam]\nsearch_radius = 1e9\n", "search_radius"),
-        ("[slam]\nduplicate_radius = 1e9\n", "duplicate_radius"),
-        ("[slam]\ngrid_cell_size = 1e-9\n", "grid_cell_size"),
+        ("[front_end]\nvoxel_size = 1e9\n", "voxel_size"),
+        ("[slam]\nview_range = 1e9\n", "view_range"),
+        (
+            "[slam.localize]\nmax_particles = 1000000000\n",
+            "max_particles",
+        ),
         (
             "[slam]\nmeasured_xy_variance_per_metre = 1e9\n",
             "measured_xy_variance_per_metre",

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use tests::*;
 
 const FRAMES: u64 = 200;
-/// `[slam] particle_cloud_every`'s default: a recorded run's particle cloud every this many
+/// slam-launch's `PARTICLE_CLOUD_EVERY`: a recorded run's particle cloud every this many
 /// scans.
 const CLOUD_EVERY: u64 = 40;
 
