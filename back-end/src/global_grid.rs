@@ -252,16 +252,21 @@ mod tests {
     use crate::compact_scan::CompactScan;
     use crate::occupancy_grid::{CellState, GridConfig};
 
-    /// A submap of a wall 2 m ahead, seen from its origin three times (free space is free
-    /// after three passes).
-    fn wall_submap() -> SubmapGrid {
+    /// A scan of a wall 2 m ahead.
+    fn wall_scan() -> CompactScan {
         let ranges: Vec<f32> = (0..91)
             .map(|i| {
                 let bearing = -0.7 + 1.4 * f64::from(i) / 90.0;
                 (2.0 / bearing.cos()) as f32
             })
             .collect();
-        let scan = CompactScan::new(-0.7, 1.4 / 90.0, 0.1, 30.0, &ranges, 0.0, 5.0);
+        CompactScan::new(-0.7, 1.4 / 90.0, 0.1, 30.0, &ranges, 0.0, 5.0)
+    }
+
+    /// A submap of a wall 2 m ahead, seen from its origin three times (free space is free
+    /// after three passes).
+    fn wall_submap() -> SubmapGrid {
+        let scan = wall_scan();
         SubmapGrid::trace(&GridConfig::default(), &[(Pose2::IDENTITY, &scan); 3])
             .unwrap()
             .unwrap()
@@ -296,13 +301,7 @@ mod tests {
 
     #[test]
     fn submaps_laid_out_add_up_to_one_trace_of_all_their_scans() {
-        let ranges: Vec<f32> = (0..91)
-            .map(|i| {
-                let bearing = -0.7 + 1.4 * f64::from(i) / 90.0;
-                (2.0 / bearing.cos()) as f32
-            })
-            .collect();
-        let scan = CompactScan::new(-0.7, 1.4 / 90.0, 0.1, 30.0, &ranges, 0.0, 5.0);
+        let scan = wall_scan();
         let config = GridConfig::default();
         // One pass each from two submaps: neither alone makes the free space free.
         let first = SubmapGrid::trace(&config, &[(Pose2::IDENTITY, &scan)])
