@@ -211,29 +211,14 @@ const STALL_RANGE_S: std::ops::RangeInclusive<f64> = 0.5..=86_400.0;
 pub struct GridSection {
     /// Edge of a cell, metres (`map-sink --resolution`).
     pub resolution: f64,
-    /// Passes refining the final path against its own grid (`map-sink --refine-passes`);
-    /// 0 keeps the filter's path.
-    pub refine_passes: usize,
-    /// Seconds map-sink has, from a stop (Ctrl-C, SIGTERM), to write its results
-    /// (`map-sink --stop-budget`): the refinement stops in time to write what it reached.
-    /// At most what the launcher's grace period leaves after its margin, the default.
-    pub stop_budget: f64,
 }
 
 impl Default for GridSection {
     fn default() -> Self {
         Self {
             resolution: map_sink::GridConfig::default().resolution_m,
-            refine_passes: map_sink::PathRefinementConfig::default().passes,
-            stop_budget: max_stop_budget_s(),
         }
     }
-}
-
-/// The longest `[grid] stop_budget`: the grace period stopped stages have before they are
-/// killed, less the margin kept for noticing the stop and exiting.
-pub fn max_stop_budget_s() -> f64 {
-    (crate::supervisor::STOP_GRACE - crate::supervisor::STOP_MARGIN).as_secs_f64()
 }
 
 /// The whole run. Every section is the settings of the process that reads it, so a typo or
@@ -376,15 +361,6 @@ impl RunConfig {
         if let Err(e) = grid.validate() {
             return Err(ConfigError::Invalid(format!(
                 "[grid] resolution (--resolution): {e}"
-            )));
-        }
-        let budget = self.grid.stop_budget;
-        if !(0.0..=max_stop_budget_s()).contains(&budget) {
-            return Err(ConfigError::Invalid(format!(
-                "[grid] stop_budget must be from 0 to {} seconds (what the {} s grace \
-                 period for stopped stages leaves), not {budget}",
-                max_stop_budget_s(),
-                crate::supervisor::STOP_GRACE.as_secs()
             )));
         }
         Ok(())
@@ -649,24 +625,6 @@ mod tests {
             );
         }
         assert!(toml::from_str::<RunConfig>("[grid]\ncell = 0.1").is_err());
-    }
-
-    #[test]
-    fn the_stop_budget_fits_in_the_grace_period() {
-        assert_eq!(RunConfig::default().grid.stop_budget, 25.0);
-        let config: RunConfig = toml::from_str("[grid]\nstop_budget = 0.5").unwrap();
-        assert_eq!(config.grid.stop_budget, 0.5);
-        let refusal = |budget: f64| {
-            let mut config = RunConfig::default();
-            config.grid.stop_budget = budget;
-            config.validate().err().map(|e| e.to_string())
-        };
-        assert_eq!(refusal(0.5), None);
-        assert_eq!(refusal(25.0), None);
-        let expected = "[grid] stop_budget must be from 0 to 25 seconds";
-        assert!(refusal(-1.0).is_some_and(|m| m.starts_with(expected)));
-        assert!(refusal(25.5).is_some_and(|m| m.starts_with(expected)));
-        assert!(refusal(f64::NAN).is_some_and(|m| m.starts_with(expected)));
     }
 
     #[test]

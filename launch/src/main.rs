@@ -432,8 +432,6 @@ fn settings_args(
             ]);
             args.push("--status".into());
             args.push(format!("--resolution={}", config.grid.resolution));
-            args.push(format!("--refine-passes={}", config.grid.refine_passes));
-            args.push(format!("--stop-budget={}", config.grid.stop_budget));
             args.extend(switch(final_map, "--publish-final"));
             args.extend(switch(back_end, "--back-end"));
             args

@@ -9,11 +9,10 @@ use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use map_sink::{
-    EndClock, FinishedRun, GridConfig, OccupancyGrid, PathAssembly, PathRefinementConfig, Recorder,
-    RecorderOptions, StampedPose,
+    FinishedRun, GridConfig, OccupancyGrid, PathAssembly, Recorder, RecorderOptions, StampedPose,
 };
-use slam_eval::{FrameCounts, METRICS_FILE, MapFit, RefinementState, RelationsFile};
-use stage_kit::{say, say_err, shutdown};
+use slam_eval::{FrameCounts, METRICS_FILE, MapFit, RelationsFile};
+use stage_kit::{say, say_err};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
 /// trajectory.tum, ground_truth.tum, map_corners.csv, the saved map (map.yaml, map.pgm,
@@ -41,11 +40,6 @@ struct Args {
     /// Edge of the occupancy grid's cells, metres (0.005 to 5).
     #[arg(long, value_name = "METRES", default_value_t = GridConfig::default().resolution_m)]
     resolution: f64,
-    /// Passes refining the final path against the grid its scans trace before it is
-    /// written, the last two (the last one of two) aligning every scan to every wall; 0
-    /// keeps the filter's path as it is.
-    #[arg(long, value_name = "N", default_value_t = PathRefinementConfig::default().passes)]
-    refine_passes: usize,
     /// Once the files are written, publish the final path of trajectory.tum on `map/path`
     /// and the grid of map.pgm on `map/grid`, then an end marker on `map/grid` (for a
     /// recording).
@@ -55,28 +49,15 @@ struct Args {
     /// and this run's scans add to it.
     #[arg(long, value_name = "DIR")]
     map: Option<PathBuf>,
-    /// Once stopped (SIGINT, SIGTERM), the seconds from the stop to having written the
-    /// results: the refinement of the path stops in time to write what it reached (the
-    /// filter's path at worst, written first). Without it the end takes what it needs.
-    /// slam-launch gives what is left of its grace period after a margin.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
-    stop_budget: Option<Duration>,
     /// The back end (graph-proc) runs: the final path is its `graph/path` and the grid its
     /// `graph/grid`, not the filter's path and a grid traced here. The run waits for them at
-    /// its end, keeps no scan and refines nothing (--refine-passes is for the filter's path).
+    /// its end and keeps no scan.
     #[arg(long)]
     back_end: bool,
 }
 
-/// A budget in seconds, finite and not negative.
-fn parse_budget(text: &str) -> Result<Duration, String> {
-    let seconds: f64 = text.parse().map_err(|e| format!("{e}"))?;
-    Duration::try_from_secs_f64(seconds)
-        .map_err(|_| format!("{seconds} is not a number of seconds from 0 up"))
-}
-
-/// How long a stopped run waits for slam-proc's final path, which it sends as it stops:
-/// without it the online estimate would stand in and nothing could be refined.
+/// How long a stopped run waits for the final path, which slam-proc or the back end sends
+/// as it stops: without it the online estimate would stand in.
 const PATH_WAIT_ON_STOP: Duration = Duration::from_secs(2);
 /// How often that wait looks for the path (the wait on the inlets ends at once once a stop
 /// was asked for).
@@ -139,12 +120,6 @@ fn run(args: Args) -> Result<()> {
             grid: GridConfig {
                 resolution_m: args.resolution,
                 ..GridConfig::default()
-            },
-            refinement: PathRefinementConfig {
-                // The back end's path is solved against its own verified closures; the
-                // refinement is for the filter's.
-                passes: if args.back_end { 0 } else { args.refine_passes },
-                ..PathRefinementConfig::default()
             },
             back_end: args.back_end,
             ..RecorderOptions::default()
@@ -213,8 +188,8 @@ fn run(args: Args) -> Result<()> {
     while !finished {
         if wait_any(&wakeables, Duration::from_millis(100))? == Wake::Shutdown {
             let stopped = *stop_seen.get_or_insert_with(Instant::now);
-            // slam-proc sends the best particle's path as it stops: take it, unless the
-            // run localizes on a saved map (no path comes) or never started.
+            // The back end (or slam-proc, without it) sends its path as it stops: take it,
+            // unless the run localizes on a saved map (no path comes) or never started.
             let mapping = progress.poses > 0 && progress.localization == PoseEstimate::MAPPING;
             if !mapping || final_path.complete || stopped.elapsed() >= PATH_WAIT_ON_STOP {
                 break;
@@ -319,12 +294,7 @@ fn run(args: Args) -> Result<()> {
             args.out.display()
         ));
     }
-    let stopped = shutdown::requested;
-    let clock = EndClock::new(args.stop_budget, &stopped);
-    if let Some(at) = stop_seen {
-        clock.stop_seen_at(at);
-    }
-    let finished = recorder.finish_run_within(&clock)?;
+    let finished = recorder.finish_run()?;
     if let Some((path_outlet, grid_outlet)) = &final_outlets {
         // The run's results are written; what cannot be passed on is said, not fatal.
         if let Err(e) = publish_final(path_outlet, grid_outlet, &finished) {
@@ -374,35 +344,6 @@ fn run(args: Args) -> Result<()> {
                 "map-sink: {} scans left out of the grid: taken where kept scans had been, past the cap on the beams kept",
                 g.revisits_left_out
             ));
-        }
-        if let Some(r) = g
-            .refinement
-            .as_ref()
-            .filter(|r| !r.aligned_per_pass.is_empty())
-        {
-            let aligned: Vec<String> = r.aligned_per_pass.iter().map(|n| n.to_string()).collect();
-            say_err(&format!(
-                "map-sink: final path refined against its grid in {} passes ({} of {} scans aligned), poses moved up to {:.2} m",
-                r.aligned_per_pass.len(),
-                aligned.join(" / "),
-                r.scans,
-                r.largest_move_m
-            ));
-        }
-    }
-    if let Some(refinement) = &metrics.refinement {
-        match refinement.state {
-            RefinementState::CutShort => say_err(&format!(
-                "map-sink: the run was stopped and its time to write ran out: the refinement \
-                 of the final path was cut short after {} of {} passes; trajectory.tum and \
-                 the map hold the path after {} (metrics.json: refinement)",
-                refinement.passes_done, refinement.passes_asked, refinement.passes_done
-            )),
-            RefinementState::NotDone => say_err(
-                "map-sink: the final path was not refined; trajectory.tum and the map hold \
-                 the filter's path (metrics.json: refinement)",
-            ),
-            _ => {}
         }
     }
     if let Some(peak) = peak_memory_kb() {

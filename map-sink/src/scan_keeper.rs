@@ -13,8 +13,8 @@ const MAX_PENDING: usize = 256;
 const KEEP_TURN_RAD: f64 = 0.02;
 
 /// Beams kept before a scan must also come from a viewpoint where no kept scan was taken:
-/// about 16 MB of scans, and an end step (tracing, refining) that fits slam-launch's stop
-/// budget on a loaded machine. Well above a run of the benchmark logs (the office loop
+/// about 16 MB of scans, and an end step (tracing the grid) that fits slam-launch's grace
+/// period for stopped stages on a loaded machine. Well above a run of the benchmark logs (the office loop
 /// keeps 0.66 M beams), so their maps do not change; a robot that goes round the same rooms
 /// for an hour keeps a lap or two of scans and then only those of places new to it.
 const REVISIT_BEAMS: usize = 4_000_000;
