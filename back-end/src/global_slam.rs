@@ -45,7 +45,7 @@ const MAX_CANDIDATES: usize = 2;
 /// that did (or moved a cell): turning by it moves a wall 2.5 m away by a cell of 5 cm. A
 /// scan from (nearly) the same viewpoint only adds certainty the log-odds clamp would cap,
 /// so a robot standing still costs neither memory nor tracing.
-const GRID_TURN_RAD: f64 = 0.02;
+pub const GRID_TURN_RAD: f64 = 0.02;
 
 /// A scan's ranges and how its beams were cast.
 #[derive(Debug, Clone, Copy)]

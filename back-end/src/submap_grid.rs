@@ -65,7 +65,8 @@ impl SubmapGrid {
     }
 
     /// The log-odds of the cell holding `point` (submap frame): 0 where nothing is known.
-    pub fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
+    #[cfg(test)]
+    fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
         let col = floor(point.x / self.resolution) - self.min_index[0];
         let row = floor(point.y / self.resolution) - self.min_index[1];
         self.cell(col, row)

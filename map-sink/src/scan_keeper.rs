@@ -9,8 +9,8 @@ use slam_geom::Pose2;
 /// process dropped it) would otherwise be kept for ever; the oldest are dropped first.
 const MAX_PENDING: usize = 256;
 /// A scan is kept when the robot turned this much since the last scan kept (or moved a
-/// grid cell): turning by it moves a wall 2.5 m away by a cell of 5 cm.
-const KEEP_TURN_RAD: f64 = 0.02;
+/// grid cell): the back end's rule for the scans its submaps trace.
+const KEEP_TURN_RAD: f64 = back_end::global_slam::GRID_TURN_RAD;
 
 /// Beams kept before a scan must also come from a viewpoint where no kept scan was taken:
 /// about 16 MB of scans, and an end step (tracing the grid) that fits slam-launch's grace
