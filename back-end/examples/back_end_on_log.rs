@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use back_end::{GlobalConfig, GlobalSlam};
+use back_end::{GlobalConfig, GlobalSlam, ScanRanges};
 use lidar_replay::LogFormat;
 use scan_match::{FrontEnd, FrontEndConfig};
 use slam_eval::{Trajectory, read_relations, score};
@@ -47,16 +47,20 @@ fn main() -> Result<()> {
         let output = front_end.process(&input)?;
         front_path.push((output.stamp_ns, output.odom_from_robot));
         let started = Instant::now();
-        // The CPU clock costs a system call: read around nodes only, where the work is.
-        let wanted = back_end.wants_node(&output.odom_from_robot);
+        // The CPU clock costs a system call: read around the scans it takes only, where the
+        // work is.
+        let wanted = back_end.wants_scan(&output.odom_from_robot);
         let cpu = wanted.then(thread_cpu_ns);
-        let points = wanted.then(|| back_end.node_scan(&input.geometry, input.ranges));
+        let scan = wanted.then_some(ScanRanges {
+            geometry: &input.geometry,
+            ranges: input.ranges,
+        });
         back_end.add_scan(
             output.stamp_ns,
             &output.odom_from_robot,
             &output.increment,
             &output.increment_covariance,
-            points,
+            scan,
         )?;
         let elapsed = started.elapsed().as_nanos();
         back_ns += elapsed;

@@ -5,7 +5,9 @@
 //! confirm it; confirmed, both go in and the graph is solved at once: the next nodes'
 //! searches start from its poses. A closure the graph already agrees with changes little
 //! and waits for the next solve (or the last, at the end). A scan between keyframes
-//! follows its keyframe rigidly, by the front end's motion since.
+//! follows its keyframe rigidly, by the front end's motion since; its beams go into the
+//! grid of the newest submap when the robot moved a cell or turned a little since the last
+//! scan that did.
 //!
 //! The search window is as wide as the drift the front end can have built up since the graph
 //! was last tied to an old place: a share of the path driven since the last closure (and a
@@ -26,7 +28,7 @@ use crate::confirmation::{Confirmations, Tie};
 use crate::global_grid;
 use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 use crate::pose_graph::{PoseGraph, PoseGraphError};
-use crate::submap::{NodeScan, SearchMaps, SubmapConfig, Submaps};
+use crate::submap::{SearchMaps, SubmapConfig, Submaps};
 use crate::submap_grid::SubmapGrid;
 use crate::trim::{Overlap, localized_all_along};
 
@@ -40,6 +42,19 @@ const ATTEMPT_GAP: usize = 3;
 
 /// Submaps a node is checked against at most: those whose middle it is nearest.
 const MAX_CANDIDATES: usize = 2;
+
+/// A scan's beams go into the grid when the robot turned this much since the last scan
+/// that did (or moved a cell): turning by it moves a wall 2.5 m away by a cell of 5 cm. A
+/// scan from (nearly) the same viewpoint only adds certainty the log-odds clamp would cap,
+/// so a robot standing still costs neither memory nor tracing.
+pub const GRID_TURN_RAD: f64 = 0.02;
+
+/// A scan's ranges and how its beams were cast.
+#[derive(Debug, Clone, Copy)]
+pub struct ScanRanges<'a> {
+    pub geometry: &'a ScanGeometry,
+    pub ranges: &'a [f32],
+}
 
 /// Why the back end could not go on.
 #[derive(Debug, thiserror::Error)]
@@ -90,9 +105,6 @@ impl GlobalConfig {
                 registration: scan_match::registration::RegistrationParams {
                     range_sigma: front_end.range_sigma,
                     voxel: front_end.voxel_size,
-                    max_iterations: front_end.max_iterations,
-                    convergence: front_end.convergence,
-                    degeneracy_ratio: front_end.degeneracy_ratio,
                     weak_steps: false,
                 },
             },
@@ -163,6 +175,8 @@ pub struct GlobalSlam {
     scans: Vec<ScanPlace>,
     /// The front end's pose of the last node.
     odom_from_node: Pose2,
+    /// The front end's pose of the last scan whose beams went into the grid.
+    odom_from_traced: Option<Pose2>,
     /// The front end's motion since the last node, and its covariance in the node's frame.
     pending: Pose2,
     pending_covariance: Matrix3<f64>,
@@ -191,6 +205,7 @@ impl GlobalSlam {
             last_attempt: Vec::new(),
             scans: Vec::new(),
             odom_from_node: Pose2::IDENTITY,
+            odom_from_traced: None,
             pending: Pose2::IDENTITY,
             pending_covariance: Matrix3::zeros(),
             travelled_m: 0.0,
@@ -202,10 +217,16 @@ impl GlobalSlam {
         })
     }
 
-    /// Whether the scan at `odom_from_robot` (the front end's pose) becomes a node, and so
-    /// needs its points: the first scan, and any the robot reached by moving or turning
-    /// enough since the last node (the front end's keyframe rule).
-    pub fn wants_node(&self, odom_from_robot: &Pose2) -> bool {
+    /// Whether the scan at `odom_from_robot` (the front end's pose) is wanted, as a node or
+    /// for the grid: [`Self::add_scan`] takes its ranges then, and only then needs them.
+    pub fn wants_scan(&self, odom_from_robot: &Pose2) -> bool {
+        self.wants_node(odom_from_robot) || self.wants_beams(odom_from_robot)
+    }
+
+    /// Whether the scan becomes a node, and so needs its points: the first scan, and any the
+    /// robot reached by moving or turning enough since the last node (the front end's
+    /// keyframe rule).
+    fn wants_node(&self, odom_from_robot: &Pose2) -> bool {
         if self.scans.is_empty() {
             return true;
         }
@@ -214,71 +235,118 @@ impl GlobalSlam {
             || moved.yaw.abs() >= self.config.node_angle_rad
     }
 
-    /// A node's scan from its ranges: the points closures are judged on (the front end's,
-    /// sensor frame) and the beams its submaps' grids are traced from.
-    pub fn node_scan(&self, geometry: &ScanGeometry, ranges: &[f32]) -> NodeScan {
+    /// Whether the scan's beams go into the grid ([`GRID_TURN_RAD`]).
+    fn wants_beams(&self, odom_from_robot: &Pose2) -> bool {
+        self.odom_from_traced.is_none_or(|last| {
+            let moved = last.between(odom_from_robot);
+            moved.translation_norm() >= self.config.submaps.grid.resolution_m
+                || moved.yaw.abs() >= GRID_TURN_RAD
+        })
+    }
+
+    /// A scan's beams, as the grids keep them.
+    fn beams(&self, scan: &ScanRanges) -> CompactScan {
         let grid = &self.config.submaps.grid;
-        NodeScan {
-            points: scan_match::points::extract(
-                geometry,
-                ranges,
-                self.config.closure.registration.range_sigma,
-                self.config.submaps.voxel,
-            )
-            .points,
-            beams: CompactScan::new(
-                geometry.angle_min,
-                geometry.angle_increment,
-                geometry.range_min,
-                geometry.range_max,
-                ranges,
-                grid.resolution_m,
-                grid.no_return_reach_m,
-            ),
-        }
+        let geometry = scan.geometry;
+        CompactScan::new(
+            geometry.angle_min,
+            geometry.angle_increment,
+            geometry.range_min,
+            geometry.range_max,
+            scan.ranges,
+            grid.resolution_m,
+            grid.no_return_reach_m,
+        )
+    }
+
+    /// A node's points, the ones closures are judged on (the front end's, robot frame).
+    fn points(&self, scan: &ScanRanges) -> Arc<[SurfacePoint]> {
+        scan_match::points::extract(
+            scan.geometry,
+            scan.ranges,
+            self.config.closure.registration.range_sigma,
+            self.config.submaps.voxel,
+        )
+        .points
+        .into()
     }
 
     /// Adds one scan: its front-end pose, the increment since the last scan and its
-    /// covariance, and, for a node ([`Self::wants_node`]), its scan.
+    /// covariance, and its ranges when [`Self::wants_scan`] (`None` for one it does not want,
+    /// or one lost on the way: a node waits for the next).
     pub fn add_scan(
         &mut self,
         stamp_ns: u64,
         odom_from_robot: &Pose2,
         increment: &Pose2,
         increment_covariance: &Matrix3<f64>,
-        keyframe: Option<NodeScan>,
+        scan: Option<ScanRanges>,
     ) -> Result<(), GlobalError> {
-        if self.scans.is_empty() {
+        let node_wanted = self.wants_node(odom_from_robot);
+        let beams_wanted = self.wants_beams(odom_from_robot);
+        let first = self.scans.is_empty();
+        if first {
             // The first scan is node 0, the graph's origin.
             self.odom_from_node = *odom_from_robot;
             self.record(stamp_ns, 0, Pose2::IDENTITY);
-            if let Some(scan) = keyframe {
-                self.insert(0, odom_from_robot, scan.points.into(), scan.beams)?;
-            }
-            return Ok(());
+        } else {
+            // The pending motion grows by the increment: the old part's error swings the
+            // increment's offset, the increment's own error is in the last scan's frame.
+            let a = self.pending.mount_jacobian(increment);
+            let b = self.pending.frame_jacobian();
+            self.pending_covariance = a * self.pending_covariance * a.transpose()
+                + b * increment_covariance * b.transpose();
+            self.pending = self.pending.compose(increment);
+            self.travelled_m += increment.translation_norm();
         }
-        // The pending motion grows by the increment: the old part's error swings the
-        // increment's offset, the increment's own error is in the last scan's frame.
-        let a = self.pending.mount_jacobian(increment);
-        let b = self.pending.frame_jacobian();
-        self.pending_covariance =
-            a * self.pending_covariance * a.transpose() + b * increment_covariance * b.transpose();
-        self.pending = self.pending.compose(increment);
-        self.travelled_m += increment.translation_norm();
-        let Some(scan) = keyframe else {
-            let node = self.graph.node_count() - 1;
-            self.record(stamp_ns, node, self.pending);
-            return Ok(());
-        };
+        match scan {
+            Some(scan) if first => {
+                let points = self.points(&scan);
+                self.insert(0, odom_from_robot, points, self.beams(&scan))?;
+                self.odom_from_traced = Some(*odom_from_robot);
+            }
+            Some(scan) if node_wanted => {
+                let node = self.add_node(stamp_ns, odom_from_robot)?;
+                let points = self.points(&scan);
+                self.insert(
+                    node,
+                    odom_from_robot,
+                    Arc::clone(&points),
+                    self.beams(&scan),
+                )?;
+                self.odom_from_traced = Some(*odom_from_robot);
+                self.close_loops(node, &points)?;
+            }
+            scan => {
+                if !first {
+                    self.follow(stamp_ns);
+                }
+                if let Some(scan) = scan
+                    && beams_wanted
+                {
+                    self.submaps.own(odom_from_robot, self.beams(&scan));
+                    self.odom_from_traced = Some(*odom_from_robot);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A scan that is not a node follows the last node by the motion since.
+    fn follow(&mut self, stamp_ns: u64) {
+        let node = self.graph.node_count() - 1;
+        self.record(stamp_ns, node, self.pending);
+    }
+
+    /// The graph's next node, where the front end's motion since the last one puts it.
+    fn add_node(&mut self, stamp_ns: u64, odom_from_robot: &Pose2) -> Result<usize, GlobalError> {
         let information = information_of(&self.pending_covariance);
         let node = self.graph.add_node(self.pending, information)?;
         self.pending = Pose2::IDENTITY;
         self.pending_covariance = Matrix3::zeros();
         self.odom_from_node = *odom_from_robot;
         self.record(stamp_ns, node, Pose2::IDENTITY);
-        let points: Arc<[SurfacePoint]> = scan.points.into();
-        self.insert(node, odom_from_robot, Arc::clone(&points), scan.beams)?;
-        Ok(self.close_loops(node, &points)?)
+        Ok(node)
     }
 
     fn record(&mut self, stamp_ns: u64, node: usize, node_from_robot: Pose2) {
@@ -533,7 +601,10 @@ impl GlobalSlam {
                 grids.push((submap.placed(|node| self.graph.pose(node)), grid));
             }
         }
-        let laid: Vec<(Pose2, &SubmapGrid)> = grids.iter().map(|(p, g)| (*p, g.as_ref())).collect();
+        let laid: Vec<(Pose2, &dyn global_grid::Layer)> = grids
+            .iter()
+            .map(|(p, g)| (*p, g.as_ref() as &dyn global_grid::Layer))
+            .collect();
         global_grid::render(&laid, self.config.submaps.grid.resolution_m)
     }
 

@@ -28,8 +28,8 @@ pub mod submap;
 pub mod submap_grid;
 pub mod trim;
 
+pub use global_slam::ScanRanges;
 pub use global_slam::{GlobalConfig, GlobalError, GlobalSlam, GlobalStats};
 pub use pose_graph::{
     ACCEPTED_SCALE, ClosureId, PoseGraph, PoseGraphError, PoseGraphSettings, SolveReport,
 };
-pub use submap::NodeScan;

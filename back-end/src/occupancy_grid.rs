@@ -41,6 +41,23 @@ pub const MAX_LOG_ODDS: f32 = 3.5;
 /// convention the grid is written in (see `map_yaml`).
 pub const OCCUPIED_PROBABILITY: f64 = 0.65;
 pub const FREE_PROBABILITY: f64 = 0.25;
+/// [`OCCUPIED_PROBABILITY`] as log-odds, `ln(0.65 / 0.35)`: thresholding needs no `exp`.
+const OCCUPIED_THRESHOLD_LOG_ODDS: f32 = 0.619_039_2;
+/// [`FREE_PROBABILITY`] as log-odds, `ln(0.25 / 0.75)`.
+const FREE_THRESHOLD_LOG_ODDS: f32 = -1.098_612_3;
+
+/// A cell of these log-odds thresholded: occupied above [`OCCUPIED_PROBABILITY`], free
+/// below [`FREE_PROBABILITY`], unknown in between.
+pub fn state_of(log_odds: f32) -> CellState {
+    if log_odds > OCCUPIED_THRESHOLD_LOG_ODDS {
+        CellState::Occupied
+    } else if log_odds < FREE_THRESHOLD_LOG_ODDS {
+        CellState::Free
+    } else {
+        CellState::Unknown
+    }
+}
+
 /// More cells than this are refused: at 8 bytes a cell (log-odds and a per-scan mark) this
 /// is 800 MB; such an area wants a coarser resolution.
 pub const MAX_CELLS: usize = 100_000_000;
@@ -272,6 +289,28 @@ impl OccupancyGrid {
         })
     }
 
+    /// A grid of trinary pixels ([`OCCUPIED_PIXEL`], [`FREE_PIXEL`], anything else unknown),
+    /// row by row from the lowest y, cell `(0, 0)`'s lower-left corner at `origin`: each
+    /// known cell as certain as a cell can be, so that laid over another grid
+    /// ([`crate::global_grid`]) it decides where it knows.
+    pub fn from_pixels(
+        resolution_m: f64,
+        origin: [f64; 2],
+        width: usize,
+        pixels: &[u8],
+    ) -> Result<Self, GridError> {
+        let log_odds = pixels
+            .iter()
+            .map(|&pixel| match pixel {
+                OCCUPIED_PIXEL => MAX_LOG_ODDS,
+                FREE_PIXEL => MIN_LOG_ODDS,
+                _ => 0.0,
+            })
+            .collect();
+        let min_index = origin.map(|o| (o / resolution_m).round() as i64);
+        Self::from_log_odds(resolution_m, min_index, width, log_odds)
+    }
+
     pub fn resolution_m(&self) -> f64 {
         self.resolution_m
     }
@@ -299,22 +338,20 @@ impl OccupancyGrid {
         self.min_index
     }
 
+    /// The log-odds of cell `(col, row)` (0 for a cell never seen).
+    pub fn log_odds(&self, col: usize, row: usize) -> f32 {
+        self.log_odds[row * self.width + col]
+    }
+
     /// The probability that cell `(col, row)` is occupied (0.5 for a cell never seen).
     pub fn probability(&self, col: usize, row: usize) -> f64 {
-        let l = f64::from(self.log_odds[row * self.width + col]);
+        let l = f64::from(self.log_odds(col, row));
         1.0 - 1.0 / (1.0 + l.exp())
     }
 
     /// The cell thresholded.
     pub fn state(&self, col: usize, row: usize) -> CellState {
-        let p = self.probability(col, row);
-        if p > OCCUPIED_PROBABILITY {
-            CellState::Occupied
-        } else if p < FREE_PROBABILITY {
-            CellState::Free
-        } else {
-            CellState::Unknown
-        }
+        state_of(self.log_odds(col, row))
     }
 
     /// The free and occupied cells, row by row from the lowest y (unknown ones left out).
@@ -452,6 +489,17 @@ mod tests {
     }
 
     #[test]
+    fn the_thresholds_in_log_odds_are_the_probabilities() {
+        let log_odds = |p: f64| (p / (1.0 - p)).ln() as f32;
+        assert!((OCCUPIED_THRESHOLD_LOG_ODDS - log_odds(OCCUPIED_PROBABILITY)).abs() < 1e-6);
+        assert!((FREE_THRESHOLD_LOG_ODDS - log_odds(FREE_PROBABILITY)).abs() < 1e-6);
+        assert_eq!(state_of(0.62), CellState::Occupied);
+        assert_eq!(state_of(0.61), CellState::Unknown);
+        assert_eq!(state_of(-1.09), CellState::Unknown);
+        assert_eq!(state_of(-1.1), CellState::Free);
+    }
+
+    #[test]
     fn a_grids_pixels_are_its_cells_thresholded_row_by_row_from_the_lowest_y() {
         let ranges: Vec<f32> = (0..91).map(|i| 1.0 + 0.02 * i as f32).collect();
         let scan = CompactScan::new(-1.2, 2.4 / 90.0, 0.1, 30.0, &ranges, 0.0, 5.0);
@@ -468,6 +516,12 @@ mod tests {
                 assert_eq!(pixel, trinary_pixel(grid.state(col, row)), "{col} {row}");
             }
         }
+        // Read back from its pixels, the grid is the same, cell for cell and in place.
+        let read =
+            OccupancyGrid::from_pixels(grid.resolution_m(), grid.origin(), grid.width(), &pixels)
+                .unwrap();
+        assert_eq!(read.min_index(), grid.min_index());
+        assert_eq!(read.pixels(), pixels);
     }
 
     #[test]

@@ -7,9 +7,14 @@
 //! after twice [`SubmapConfig::keyframes`] of them. A scan anywhere on the path then has a
 //! finished submap around it that it did not help build only from the middle of one.
 //!
-//! An open submap keeps its keyframes' scans. Finished, it keeps only its points thinned to
-//! one per voxel and the free space its beams crossed, a bit per cell: a submap costs
-//! memory by the area it covers. The search structures over it (the match grid and the
+//! The occupancy grid is cut the other way: each scan is owned by the submap that was newest
+//! when it came, and traced, in that submap's frame, into that submap's grid once a newer
+//! one starts ([`SubmapGrid`]). The submaps' grids then add up to every scan's evidence
+//! once, wherever the graph lays them.
+//!
+//! An open submap keeps its keyframes' points. Finished, it keeps only its points thinned to
+//! one per voxel, the free space its beams crossed (a bit per cell) and its grid: a submap
+//! costs memory by the area it covers. The search structures over it (the match grid and the
 //! local map the aligner needs) are built when a scan is searched for in it, and the caller
 //! keeps the few in use.
 //!
@@ -42,20 +47,12 @@ pub struct SubmapConfig {
     pub grid: GridConfig,
 }
 
-/// A node's scan: its surface points (robot frame) for closures, its beams for the grid.
-#[derive(Debug, Clone)]
-pub struct NodeScan {
-    pub points: Vec<SurfacePoint>,
-    pub beams: CompactScan,
-}
-
 /// A keyframe as an open submap holds it, shared with the other submap it went into.
 #[derive(Debug, Clone)]
 struct Keyframe {
     /// The keyframe's pose in the submap frame.
     pose: Pose2,
     points: Arc<[SurfacePoint]>,
-    beams: Arc<CompactScan>,
 }
 
 /// One submap.
@@ -68,12 +65,19 @@ pub struct Submap {
     /// The submap frame's pose in the front end's frame, when it was started.
     odom_from_submap: Pose2,
     voxel: f64,
-    grid: GridConfig,
+    grid_config: GridConfig,
     /// While open: its keyframes.
     keyframes: Vec<Keyframe>,
     /// Every keyframe's pose in the submap frame, nodes `anchor..=last_node` in order: where
     /// the submap lies follows from where the graph puts them (none once retired).
     poses: Vec<Pose2>,
+    /// The keyframes inserted while it was the newest: the nodes its scans follow.
+    owned_nodes: usize,
+    /// While it is the newest: the scans it owns, at their poses in the submap frame.
+    owned: Vec<(Pose2, CompactScan)>,
+    /// Once a newer one started: its owned scans, traced.
+    grid: Option<SubmapGrid>,
+    sealed: bool,
     /// What a finished submap keeps.
     finished: Option<Finished>,
     /// Retired: finished, and nothing kept.
@@ -89,8 +93,6 @@ struct Finished {
     /// The points thinned to one per voxel (the newest), submap frame.
     points: Vec<SurfacePoint>,
     free: FreeSpace,
-    /// Its occupancy; `None` when no beam was left to trace.
-    grid: Option<SubmapGrid>,
 }
 
 /// What a scan is searched for and registered against in one submap.
@@ -114,9 +116,13 @@ impl Submap {
             last_node: anchor,
             odom_from_submap,
             voxel: config.voxel,
-            grid: config.grid,
+            grid_config: config.grid,
             keyframes: Vec::new(),
             poses: Vec::new(),
+            owned_nodes: 0,
+            owned: Vec::new(),
+            grid: None,
+            sealed: false,
             finished: None,
             retired: false,
             lo: Vector2::repeat(f64::INFINITY),
@@ -127,6 +133,9 @@ impl Submap {
     /// Adds a keyframe at its front-end pose.
     fn insert(&mut self, node: usize, odom_from_robot: &Pose2, keyframe: &Keyframe) {
         let submap_from_robot = self.odom_from_submap.between(odom_from_robot);
+        if !self.sealed {
+            self.owned_nodes += 1;
+        }
         for p in keyframe.points.iter() {
             let q = submap_from_robot.transform(p.point);
             self.lo = self.lo.inf(&q);
@@ -140,8 +149,22 @@ impl Submap {
         self.last_node = node;
     }
 
+    /// Takes a scan it owns, at its front-end pose.
+    fn own(&mut self, odom_from_robot: &Pose2, beams: CompactScan) {
+        self.owned
+            .push((self.odom_from_submap.between(odom_from_robot), beams));
+    }
+
+    /// A newer submap started: the scans it owns are traced into its grid and go.
+    fn seal(&mut self) -> Result<(), GridError> {
+        self.grid = self.trace()?;
+        self.owned = Vec::new();
+        self.sealed = true;
+        Ok(())
+    }
+
     /// Ends the submap: its points are thinned as the local map thins them, the newest
-    /// point of each voxel kept, and its beams' free space is kept; the scans go.
+    /// point of each voxel kept, and its beams' free space is kept; the keyframes go.
     fn finish(&mut self) -> Result<(), GridError> {
         let mut voxels = HashMap::new();
         let mut coverage = Coverage::new(2.0 * self.voxel);
@@ -158,50 +181,49 @@ impl Submap {
                 voxels.insert(voxel, SurfacePoint { point: q, normal });
             }
         }
-        let grid = self.trace()?;
         self.keyframes = Vec::new();
         self.finished = Some(Finished {
             points: voxels.into_values().collect(),
             free: coverage.free_space(),
-            grid,
         });
         Ok(())
     }
 
-    /// The occupancy of an open submap's keyframes, traced.
+    /// The occupancy of the scans it owns, traced.
     fn trace(&self) -> Result<Option<SubmapGrid>, GridError> {
         let scans: Vec<(Pose2, &CompactScan)> = self
-            .keyframes
+            .owned
             .iter()
-            .map(|k| (k.pose, k.beams.as_ref()))
+            .map(|(pose, beams)| (*pose, beams))
             .collect();
-        SubmapGrid::trace(&self.grid, &scans)
+        SubmapGrid::trace(&self.grid_config, &scans)
     }
 
-    /// The submap's occupancy, submap frame: a finished one's as kept, an open one's traced
-    /// now.
+    /// The occupancy of the scans it owns, submap frame: a sealed one's as kept, the newest
+    /// one's traced now.
     pub fn occupancy(&self) -> Result<Option<std::borrow::Cow<'_, SubmapGrid>>, GridError> {
-        Ok(match &self.finished {
-            Some(finished) => finished.grid.as_ref().map(std::borrow::Cow::Borrowed),
-            None if self.retired => None,
-            None => self.trace()?.map(std::borrow::Cow::Owned),
+        Ok(if self.sealed {
+            self.grid.as_ref().map(std::borrow::Cow::Borrowed)
+        } else {
+            self.trace()?.map(std::borrow::Cow::Owned)
         })
     }
 
-    /// A finished, kept submap's occupancy.
+    /// A finished, kept submap's occupancy (of the scans it owns).
     pub fn kept_grid(&self) -> Option<&SubmapGrid> {
-        self.finished.as_ref().and_then(|f| f.grid.as_ref())
+        self.finished.as_ref().and(self.grid.as_ref())
     }
 
-    /// The submap's pose in the world that best fits where the graph puts its keyframes
-    /// (`world_from_node`, by node): the mean of their turns, then the translation that
-    /// lays their positions on the graph's in the least-squares sense. A submap's keyframes
-    /// are rigid in it; placed by its first one alone, the front end's drift along the
-    /// submap would pile up at its far end.
+    /// The submap's pose in the world that best fits where the graph puts the keyframes its
+    /// scans follow (`world_from_node`, by node): the mean of their turns, then the
+    /// translation that lays their positions on the graph's in the least-squares sense. A
+    /// submap's keyframes are rigid in it; placed by its first one alone, the front end's
+    /// drift along the submap would pile up at its far end.
     pub fn placed(&self, world_from_node: impl Fn(usize) -> Pose2) -> Pose2 {
         let pairs: Vec<(Pose2, Pose2)> = self
             .poses
             .iter()
+            .take(self.owned_nodes.max(1))
             .enumerate()
             .map(|(k, pose)| (*pose, world_from_node(self.anchor + k)))
             .collect();
@@ -247,6 +269,7 @@ impl Submap {
     pub fn retire(&mut self) {
         if self.finished.take().is_some() {
             self.poses = Vec::new();
+            self.grid = None;
             self.retired = true;
         }
     }
@@ -255,10 +278,9 @@ impl Submap {
     /// its neighbour, and counted by neither).
     pub fn bytes(&self) -> usize {
         self.finished.as_ref().map_or(0, |f| {
-            f.points.capacity() * std::mem::size_of::<SurfacePoint>()
-                + f.free.bytes()
-                + f.grid.as_ref().map_or(0, SubmapGrid::bytes)
-        }) + self.poses.capacity() * std::mem::size_of::<Pose2>()
+            f.points.capacity() * std::mem::size_of::<SurfacePoint>() + f.free.bytes()
+        }) + self.grid.as_ref().map_or(0, SubmapGrid::bytes)
+            + self.poses.capacity() * std::mem::size_of::<Pose2>()
     }
 
     /// Where a finished submap's beams passed freely.
@@ -320,6 +342,9 @@ impl Submaps {
     ) -> Result<Option<usize>, GridError> {
         let per = self.config.keyframes.max(1);
         if self.keyframes.is_multiple_of(per) {
+            if let Some(newest) = self.all.last_mut() {
+                newest.seal()?;
+            }
             self.all
                 .push(Submap::new(node, *odom_from_robot, &self.config));
         }
@@ -327,7 +352,6 @@ impl Submaps {
         let keyframe = Keyframe {
             pose: Pose2::IDENTITY,
             points,
-            beams: Arc::new(beams),
         };
         let mut finished = None;
         for (index, submap) in self.all.iter_mut().enumerate().rev().take(2) {
@@ -340,7 +364,16 @@ impl Submaps {
                 finished = Some(index);
             }
         }
+        self.own(odom_from_robot, beams);
         Ok(finished)
+    }
+
+    /// Gives a scan's beams (at its front-end pose) to the newest submap, whose grid they
+    /// go into.
+    pub fn own(&mut self, odom_from_robot: &Pose2, beams: CompactScan) {
+        if let Some(newest) = self.all.last_mut() {
+            newest.own(odom_from_robot, beams);
+        }
     }
 
     pub fn get(&self, index: usize) -> Option<&Submap> {

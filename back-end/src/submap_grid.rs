@@ -1,29 +1,34 @@
-//! A submap's occupancy, as the map keeps it: the occupancy grid traced from the submap's
-//! own scans in its own frame ([`OccupancyGrid`], the one grid tracer), thresholded to free,
-//! occupied or unknown at two bits a cell. The run's grid is these laid out at the submaps'
-//! solved poses ([`crate::global_grid`]): a closure that moves a submap moves its walls
-//! with it, and nothing is traced again.
+//! A submap's occupancy, as the map keeps it: the log-odds grid traced from the scans the
+//! submap owns, in its own frame ([`OccupancyGrid`], the one grid tracer), at a byte a cell
+//! and only over each row's known stretch. The run's grid is these laid out at the
+//! submaps' solved poses and added ([`crate::global_grid`]): each scan is owned by one
+//! submap, so the sum is the evidence of every scan, as one trace over the whole path would
+//! have it; a closure that moves a submap moves its walls with it, and nothing is traced
+//! again.
 
 use nalgebra::Vector2;
 use slam_geom::Pose2;
 
 use crate::compact_scan::CompactScan;
-use crate::occupancy_grid::{CellState, GridConfig, GridError, OccupancyGrid};
+use crate::global_grid::floor;
+use crate::occupancy_grid::{CellState, GridConfig, GridError, OccupancyGrid, state_of};
 
-/// Cells a byte holds.
-const PER_BYTE: usize = 4;
+/// Steps of log-odds a byte counts in: 32 a unit keeps the clamps (-2 to 3.5) within a
+/// signed byte, and a step is far finer than a hit or a pass.
+const STEPS_PER_UNIT: f32 = 32.0;
 
-/// A submap's cells, thresholded, over the box its scans reached (submap frame).
+/// A submap's log-odds over the box its scans reached (submap frame).
 #[derive(Debug, Clone)]
 pub struct SubmapGrid {
     resolution: f64,
     /// Global index (in the submap frame) of cell `(0, 0)`.
     min_index: [i64; 2],
     width: usize,
-    height: usize,
-    /// Two bits a cell, row by row from the lowest y: [`CellState`] as 0 unknown, 1 free,
-    /// 2 occupied.
-    bits: Vec<u8>,
+    /// Per row from the lowest y: its first known column and where its cells start in
+    /// `cells` (they run to the next row's start).
+    rows: Vec<(u32, u32)>,
+    /// The known stretches' log-odds, in steps of `1 / STEPS_PER_UNIT`.
+    cells: Vec<i8>,
 }
 
 impl SubmapGrid {
@@ -36,70 +41,112 @@ impl SubmapGrid {
         Ok(OccupancyGrid::build(config, scans)?.map(|grid| Self::of(&grid)))
     }
 
-    /// `grid` thresholded.
+    /// `grid`, each row kept from its first to its last cell with any evidence.
     pub fn of(grid: &OccupancyGrid) -> Self {
-        let (width, height) = (grid.width(), grid.height());
-        let mut bits = vec![0u8; (width * height).div_ceil(PER_BYTE)];
-        for row in 0..height {
-            for col in 0..width {
-                let code = match grid.state(col, row) {
-                    CellState::Unknown => 0,
-                    CellState::Free => 1,
-                    CellState::Occupied => 2,
-                };
-                let i = row * width + col;
-                bits[i / PER_BYTE] |= code << (2 * (i % PER_BYTE));
+        let step = |col, row| (grid.log_odds(col, row) * STEPS_PER_UNIT).round() as i8;
+        let mut rows = Vec::with_capacity(grid.height());
+        let mut cells = Vec::new();
+        for row in 0..grid.height() {
+            let known = |&col: &usize| step(col, row) != 0;
+            let first = (0..grid.width()).find(known).unwrap_or(0);
+            let last = (0..grid.width()).rev().find(known);
+            rows.push((first as u32, cells.len() as u32));
+            if let Some(last) = last {
+                cells.extend((first..=last).map(|col| step(col, row)));
             }
         }
         Self {
             resolution: grid.resolution_m(),
             min_index: grid.min_index(),
-            width,
-            height,
-            bits,
+            width: grid.width(),
+            rows,
+            cells,
         }
     }
 
-    /// The state of the cell holding `point` (submap frame).
+    /// The log-odds of the cell holding `point` (submap frame): 0 where nothing is known.
+    pub fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
+        let col = floor(point.x / self.resolution) - self.min_index[0];
+        let row = floor(point.y / self.resolution) - self.min_index[1];
+        self.cell(col, row)
+    }
+
+    /// What the scans it owns say of the cell holding `point` (submap frame).
     pub fn state_at(&self, point: Vector2<f64>) -> CellState {
-        let col = (point.x / self.resolution).floor() as i64 - self.min_index[0];
-        let row = (point.y / self.resolution).floor() as i64 - self.min_index[1];
-        if col < 0 || row < 0 || col >= self.width as i64 || row >= self.height as i64 {
-            return CellState::Unknown;
-        }
-        let i = row as usize * self.width + col as usize;
-        match (self.bits[i / PER_BYTE] >> (2 * (i % PER_BYTE))) & 3 {
-            1 => CellState::Free,
-            2 => CellState::Occupied,
-            _ => CellState::Unknown,
-        }
+        state_of(self.log_odds_at(point))
     }
 
-    /// The corners of the box the cells cover, submap frame.
+    /// The centres of its occupied cells (submap frame).
+    pub fn occupied_cells(&self) -> impl Iterator<Item = Vector2<f64>> + '_ {
+        self.stretches()
+            .flat_map(move |(first, count)| {
+                (0..count).map(move |k| first + Vector2::new(k as f64 * self.resolution, 0.0))
+            })
+            .filter(|&centre| self.state_at(centre) == CellState::Occupied)
+    }
+
+    /// The corners of its box (submap frame).
     pub fn corners(&self) -> [Vector2<f64>; 4] {
         let lo = Vector2::new(self.min_index[0] as f64, self.min_index[1] as f64) * self.resolution;
-        let hi = lo + Vector2::new(self.width as f64, self.height as f64) * self.resolution;
-        [lo, Vector2::new(hi.x, lo.y), hi, Vector2::new(lo.x, hi.y)]
+        let size = Vector2::new(self.width as f64, self.rows.len() as f64) * self.resolution;
+        [
+            lo,
+            lo + Vector2::new(size.x, 0.0),
+            lo + size,
+            lo + Vector2::new(0.0, size.y),
+        ]
     }
 
-    /// Every known cell: its centre (submap frame) and whether it is occupied. Whole
-    /// bytes of unknown cells are skipped at once: most of a submap's box is unknown.
-    pub fn known_cells(&self) -> impl Iterator<Item = (Vector2<f64>, bool)> + '_ {
-        self.bits
+    /// The log-odds at `out.len()` points from `from` on by steps of `step` (submap frame).
+    pub fn sample_row(&self, from: Vector2<f64>, step: Vector2<f64>, out: &mut [f32]) {
+        let x = from.x / self.resolution - self.min_index[0] as f64;
+        let y = from.y / self.resolution - self.min_index[1] as f64;
+        let (dx, dy) = (step.x / self.resolution, step.y / self.resolution);
+        for (k, value) in out.iter_mut().enumerate() {
+            let k = k as f64;
+            *value = self.cell(floor(x + k * dx), floor(y + k * dy));
+        }
+    }
+
+    /// The log-odds of cell `(col, row)` of the box: 0 where nothing is known.
+    fn cell(&self, col: i64, row: i64) -> f32 {
+        let (Ok(col), Ok(row)) = (usize::try_from(col), usize::try_from(row)) else {
+            return 0.0;
+        };
+        let Some(&(first, start)) = self.rows.get(row) else {
+            return 0.0;
+        };
+        let end = self
+            .rows
+            .get(row + 1)
+            .map_or(self.cells.len(), |&(_, next)| next as usize);
+        let Some(k) = col.checked_sub(first as usize) else {
+            return 0.0;
+        };
+        let i = start as usize + k;
+        if col >= self.width || i >= end {
+            return 0.0;
+        }
+        f32::from(self.cells[i]) / STEPS_PER_UNIT
+    }
+
+    /// Each row's known stretch: the centre of its first cell (submap frame) and its
+    /// length in cells.
+    pub fn stretches(&self) -> impl Iterator<Item = (Vector2<f64>, usize)> + '_ {
+        self.rows
             .iter()
             .enumerate()
-            .filter(|(_, byte)| **byte != 0)
-            .flat_map(move |(b, &byte)| {
-                (0..PER_BYTE).filter_map(move |k| {
-                    let code = (byte >> (2 * k)) & 3;
-                    let i = b * PER_BYTE + k;
-                    (code != 0 && i < self.width * self.height).then(|| {
-                        let col = (i % self.width) as i64 + self.min_index[0];
-                        let row = (i / self.width) as i64 + self.min_index[1];
-                        let centre =
-                            Vector2::new(col as f64 + 0.5, row as f64 + 0.5) * self.resolution;
-                        (centre, code == 2)
-                    })
+            .filter_map(|(row, &(first, start))| {
+                let end = self
+                    .rows
+                    .get(row + 1)
+                    .map_or(self.cells.len(), |&(_, next)| next as usize);
+                let count = end - start as usize;
+                let col = self.min_index[0] + i64::from(first);
+                let y = self.min_index[1] + row as i64;
+                (count > 0).then(|| {
+                    let centre = Vector2::new(col as f64 + 0.5, y as f64 + 0.5) * self.resolution;
+                    (centre, count)
                 })
             })
     }
@@ -111,7 +158,7 @@ impl SubmapGrid {
 
     /// Memory held, bytes.
     pub fn bytes(&self) -> usize {
-        self.bits.len()
+        self.cells.capacity() + self.rows.capacity() * std::mem::size_of::<(u32, u32)>()
     }
 }
 
@@ -120,12 +167,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_thresholded_cells_read_back_where_the_grid_had_them() {
+    fn the_cells_read_back_as_the_grid_had_them() {
         let ranges: Vec<f32> = (0..181).map(|_| 2.0).collect();
         let scan = CompactScan::new(-1.5, 3.0 / 180.0, 0.1, 30.0, &ranges, 0.0, 5.0);
         let config = GridConfig::default();
         let pose = Pose2::new(0.3, -0.2, 0.4);
-        // Free space is free after three passes.
         let grid = OccupancyGrid::build(&config, &[(pose, &scan); 3])
             .unwrap()
             .unwrap();
@@ -136,18 +182,21 @@ mod tests {
             for col in 0..grid.width() {
                 let centre =
                     Vector2::new(x0 + (col as f64 + 0.5) * res, y0 + (row as f64 + 0.5) * res);
-                assert_eq!(kept.state_at(centre), grid.state(col, row), "{col} {row}");
+                let error = (kept.log_odds_at(centre) - grid.log_odds(col, row)).abs();
+                assert!(error <= 0.5 / STEPS_PER_UNIT, "{col} {row}: {error}");
             }
         }
-        // Beyond the box nothing is known; inside, the beams' free space and ends are.
-        assert_eq!(kept.state_at(Vector2::new(50.0, 0.0)), CellState::Unknown);
-        assert_eq!(kept.state_at(pose.position()), CellState::Free);
+        // Beyond the box nothing is known; inside, the beams' free space and ends are, and
+        // the rows keep only their known stretch.
+        assert_eq!(kept.log_odds_at(Vector2::new(50.0, 0.0)), 0.0);
+        assert_eq!(kept.log_odds_at(Vector2::new(-50.0, 0.0)), 0.0);
+        assert!(kept.log_odds_at(pose.position()) < 0.0);
         let wall = pose.transform(Vector2::new(2.0, 0.0));
         let near_wall = (-1..=1).flat_map(|dx| (-1..=1).map(move |dy| (dx, dy)));
-        let occupied = near_wall
+        let hit = near_wall
             .map(|(dx, dy)| wall + Vector2::new(f64::from(dx), f64::from(dy)) * res)
-            .filter(|&p| kept.state_at(p) == CellState::Occupied)
-            .count();
-        assert!(occupied >= 1, "{occupied}");
+            .any(|p| kept.log_odds_at(p) > 0.0);
+        assert!(hit);
+        assert!(kept.cells.len() < grid.width() * grid.height());
     }
 }

@@ -76,10 +76,7 @@ impl Overlap {
             .map(|(pose, g)| (pose.inverse(), g))
             .collect();
         let mut overlap = Self::default();
-        for (centre, occupied) in grid.known_cells() {
-            if !occupied {
-                continue;
-            }
+        for centre in grid.occupied_cells() {
             overlap.walls += 1;
             match seen_by(&from_world, world_from_grid.transform(centre)) {
                 Seen::Wall => {}

@@ -1,7 +1,7 @@
 //! Memory by the area mapped, on a constructed building: a robot that drives a mapped loop
 //! again retires the submaps it starts there, and keeps those of a wing it has not seen.
 
-use back_end::{GlobalConfig, GlobalSlam, GlobalStats};
+use back_end::{GlobalConfig, GlobalSlam, GlobalStats, ScanRanges};
 use lidar_sim::RayCaster;
 use lidar_sim::geometry::Segment;
 use nalgebra::Matrix3;
@@ -120,15 +120,16 @@ fn feed(global: &mut GlobalSlam, caster: &RayCaster, poses: &[Pose2], last: &mut
         let stamp_ns = global.path().len() as u64 * 100_000_000;
         let increment = last.map_or(Pose2::IDENTITY, |l| l.between(pose));
         let covariance = Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-5, 1e-5, 1e-6));
-        let scan = global.wants_node(pose).then(|| {
-            let ranges: Vec<f32> = (0..541)
-                .map(|i| {
-                    caster
-                        .cast([pose.x, pose.y], pose.yaw + g.bearing(i), g.range_max)
-                        .map_or(f32::INFINITY, |r| r as f32)
-                })
-                .collect();
-            global.node_scan(&g, &ranges)
+        let ranges: Vec<f32> = (0..541)
+            .map(|i| {
+                caster
+                    .cast([pose.x, pose.y], pose.yaw + g.bearing(i), g.range_max)
+                    .map_or(f32::INFINITY, |r| r as f32)
+            })
+            .collect();
+        let scan = global.wants_scan(pose).then_some(ScanRanges {
+            geometry: &g,
+            ranges: &ranges,
         });
         global
             .add_scan(stamp_ns, pose, &increment, &covariance, scan)

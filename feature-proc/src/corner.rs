@@ -3,8 +3,25 @@
 
 use nalgebra::{Matrix4, SMatrix};
 
-use crate::config::FeatureConfig;
 use slam_geom::{MeasuredCorner, MeasuredLine, Point2, wrap_angle};
+
+/// Shortest arm of a corner, metres: the distance from the intersection to the far end of
+/// each line (and the shortest stub that stays a line of its own). A pillar's side is about
+/// this long; shorter arms are too few beams to fix a direction.
+pub const MIN_LINE_LENGTH: f64 = 0.3;
+/// Smallest opening angle of a corner, radians. Wider than the course's 60..120 degrees, with
+/// both limits clear of the common 45, 120 and 135 degree corners so that none of them
+/// flickers at a limit.
+pub const CORNER_MIN_ANGLE: f64 = 40f64.to_radians();
+/// Largest opening angle of a corner, radians (see [`CORNER_MIN_ANGLE`]); flatter than this,
+/// the two walls' intersection is too poorly fixed along them.
+pub const CORNER_MAX_ANGLE: f64 = 130f64.to_radians();
+/// Largest gap between the end of one line and the start of the next for them to form a
+/// corner, metres: wider is an opening between two walls, not a corner.
+const CORNER_MAX_GAP: f64 = 0.3;
+/// Largest distance from either line's near end to the intersection, metres: a line that
+/// stops short of the intersection ends at an occlusion or a doorway, not a corner.
+const CORNER_MAX_EXTENSION: f64 = 0.25;
 
 /// The corner where `first` meets `second` (next in scan order), if they are two walls that
 /// truly meet: the near ends close to each other and to the intersection, both arms long
@@ -12,9 +29,8 @@ use slam_geom::{MeasuredCorner, MeasuredLine, Point2, wrap_angle};
 pub(crate) fn corner_between(
     first: &MeasuredLine,
     second: &MeasuredLine,
-    config: &FeatureConfig,
 ) -> Option<MeasuredCorner> {
-    if distance(first.end, second.start.into()) > config.corner_max_gap {
+    if distance(first.end, second.start.into()) > CORNER_MAX_GAP {
         return None;
     }
     let (s1, c1) = first.theta.sin_cos();
@@ -29,14 +45,12 @@ pub(crate) fn corner_between(
         (second.rho * c1 - first.rho * c2) / det,
     ];
     // A line that stops short of the intersection ends at an occlusion, not at a corner.
-    if distance(first.end, tip) > config.corner_max_extension
-        || distance(second.start, tip) > config.corner_max_extension
+    if distance(first.end, tip) > CORNER_MAX_EXTENSION
+        || distance(second.start, tip) > CORNER_MAX_EXTENSION
     {
         return None;
     }
-    if distance(first.start, tip) < config.min_line_length
-        || distance(second.end, tip) < config.min_line_length
-    {
+    if distance(first.start, tip) < MIN_LINE_LENGTH || distance(second.end, tip) < MIN_LINE_LENGTH {
         return None;
     }
     // Arms: unit directions from the tip along each line towards its points.
@@ -45,7 +59,7 @@ pub(crate) fn corner_between(
     let phi1 = arm1[1].atan2(arm1[0]);
     let turn = wrap_angle(arm2[1].atan2(arm2[0]) - phi1);
     let angle = turn.abs();
-    if angle < config.corner_min_angle || angle > config.corner_max_angle {
+    if !(CORNER_MIN_ANGLE..=CORNER_MAX_ANGLE).contains(&angle) {
         return None;
     }
     let heading = wrap_angle((-(arm1[1] + arm2[1])).atan2(-(arm1[0] + arm2[0])));

@@ -4,7 +4,7 @@
 use std::ops::Range;
 
 use crate::config::FeatureConfig;
-use crate::corner::corner_between;
+use crate::corner::{MIN_LINE_LENGTH, corner_between};
 use crate::features::FeatureSet;
 use crate::line_fit::covariance;
 use crate::scan::{BeamDirections, ScanError, ScanInput, ScanPoint, to_points};
@@ -71,15 +71,10 @@ impl Extractor {
                 &mut self.pieces,
             );
         }
-        merge(&self.points, &self.pieces, config, &mut self.merged);
+        merge(&self.points, &self.pieces, &mut self.merged);
         refine_boundaries(&self.points, &mut self.merged, config.min_line_points);
-        let tolerance = 3.0 * config.range_sigma;
-        absorb_stubs(
-            &self.points,
-            &mut self.merged,
-            config.min_line_length,
-            tolerance,
-        );
+        let tolerance = 3.0 * config.wall_sigma();
+        absorb_stubs(&self.points, &mut self.merged, MIN_LINE_LENGTH, tolerance);
 
         for piece in &self.merged {
             let points = &self.points[piece.start..piece.end];
@@ -90,7 +85,7 @@ impl Extractor {
             self.features.lines.push(MeasuredLine {
                 rho: fit.rho,
                 theta: fit.theta(),
-                covariance: covariance(points, fit, config.range_sigma, config.bearing_sigma),
+                covariance: covariance(points, fit, config.wall_sigma(), config.bearing_sigma),
                 start: fit.project(first.x, first.y).into(),
                 end: fit.project(last.x, last.y).into(),
                 point_count: points.len(),
@@ -99,7 +94,7 @@ impl Extractor {
 
         let lines = &self.features.lines;
         for pair in lines.windows(2) {
-            if let Some(corner) = corner_between(&pair[0], &pair[1], config) {
+            if let Some(corner) = corner_between(&pair[0], &pair[1]) {
                 self.features.corners.push(corner);
             }
         }
@@ -107,7 +102,7 @@ impl Extractor {
         if geometry.cyclic
             && lines.len() > 2
             && let (Some(last), Some(first)) = (lines.last(), lines.first())
-            && let Some(corner) = corner_between(last, first, config)
+            && let Some(corner) = corner_between(last, first)
         {
             self.features.corners.push(corner);
         }

@@ -14,8 +14,9 @@
 //! 5. neighbouring lines whose ends meet at their intersection form a corner
 //!    `(x, y, heading, angle)` with a covariance propagated from both lines.
 //!
-//! Conventions (frames, corner heading and angle) are those of docs/CONVENTIONS.md; every
-//! threshold is in [`FeatureConfig`]. The process pairs each scan with the odometry at its
+//! Conventions (frames, corner heading and angle) are those of docs/CONVENTIONS.md; the
+//! scanner's settings are in [`FeatureConfig`], the thresholds that describe walls and
+//! corners are constants beside the code that uses them. The process pairs each scan with the odometry at its
 //! stamp (`stage_kit::odometry_buffer`), so the features carry it downstream.
 
 #![forbid(unsafe_code)]
@@ -30,7 +31,8 @@ mod scan;
 mod segment;
 mod split_merge;
 
-pub use config::FeatureConfig;
+pub use config::{FeatureConfig, WALL_SIGMA_FACTOR};
+pub use corner::{CORNER_MAX_ANGLE, CORNER_MIN_ANGLE, MIN_LINE_LENGTH};
 pub use extractor::Extractor;
 pub use features::FeatureSet;
 pub use motion_message::scan_motion;

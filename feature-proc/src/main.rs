@@ -49,11 +49,13 @@ fn main() -> ExitCode {
 }
 
 fn run(args: Args) -> Result<()> {
-    let config: FeatureConfig = stage_kit::settings::load(args.config.as_deref())?;
-    config.validate().context("feature configuration")?;
-    let mut extractor = Extractor::new(config);
     let front_end_config: FrontEndConfig =
         stage_kit::settings::load(args.front_end_config.as_deref())?;
+    let mut config: FeatureConfig = stage_kit::settings::load(args.config.as_deref())?;
+    // One setting of the scanner's range noise for both: the front end's.
+    config.range_sigma = front_end_config.range_sigma;
+    config.validate().context("feature configuration")?;
+    let mut extractor = Extractor::new(config);
     let mut front_end = FrontEnd::new(front_end_config).context("front-end configuration")?;
 
     let domain = Domain::new(&args.domain)?;

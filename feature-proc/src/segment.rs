@@ -77,40 +77,43 @@ fn cyclic_start(points: &[ScanPoint], count: usize, breakpoints: &Breakpoints) -
 /// beams apart, per metre of range: `sin(dphi) / sin(lambda - dphi)`, or `None` where
 /// `dphi >= lambda` and no surface can be followed. Indexed by `steps`, a handful of
 /// entries, so the hot loop needs no trigonometry.
+/// The shallowest angle between a beam and a surface that is still followed as one segment,
+/// radians: below Borges & Aldon's 10 degrees, so walls seen at a grazing angle (pillar sides
+/// far away) stay whole, while split-and-merge still cuts real jumps. Neighbouring points
+/// further apart than `r * sin(dphi) / sin(lambda - dphi) + 3 * wall sigma` start a new
+/// segment.
+const BREAKPOINT_LAMBDA: f64 = 0.1;
+/// Invalid beams bridged inside a segment: a dark patch on a wall should not cut it, and
+/// more than two missing beams in a row is more likely a gap between two surfaces.
+const MAX_INVALID_GAP: usize = 2;
+
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Breakpoints {
     factors: [Option<f64>; Self::MAX_STEPS + 1],
     margin: f64,
-    last: usize,
 }
 
 impl Breakpoints {
-    /// `max_invalid_gap` is validated to at most 100.
-    const MAX_STEPS: usize = 101;
+    /// Room for [`MAX_INVALID_GAP`] beams bridged, and the beam after them.
+    const MAX_STEPS: usize = MAX_INVALID_GAP + 1;
 
     pub fn new(geometry: BeamPattern, config: &FeatureConfig) -> Self {
-        let lambda = config.breakpoint_lambda;
         let mut factors = [None; Self::MAX_STEPS + 1];
-        let last = (config.max_invalid_gap + 1).min(Self::MAX_STEPS);
-        for (steps, factor) in factors.iter_mut().enumerate().take(last + 1).skip(1) {
+        for (steps, factor) in factors.iter_mut().enumerate().skip(1) {
             let dphi = geometry.spacing * steps as f64;
-            if dphi < lambda {
-                *factor = Some(dphi.sin() / (lambda - dphi).sin());
+            if dphi < BREAKPOINT_LAMBDA {
+                *factor = Some(dphi.sin() / (BREAKPOINT_LAMBDA - dphi).sin());
             }
         }
         Self {
             factors,
-            margin: 3.0 * config.range_sigma,
-            last,
+            margin: 3.0 * config.wall_sigma(),
         }
     }
 
     /// Whether two valid points `steps` beams apart belong to different surfaces.
     fn is_break(&self, a: &ScanPoint, b: &ScanPoint, steps: usize) -> bool {
-        if steps > self.last {
-            return true;
-        }
-        let Some(factor) = self.factors[steps] else {
+        let Some(&Some(factor)) = self.factors.get(steps) else {
             return true;
         };
         // The nearer range: a surface at the shallowest angle lambda to the beam puts its

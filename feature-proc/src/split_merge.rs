@@ -8,6 +8,17 @@ use crate::config::FeatureConfig;
 use crate::line_fit::{TlsFit, fit, max_residual};
 use crate::scan::ScanPoint;
 
+/// A run of points is split at the one farthest from its chord when it is farther than this,
+/// metres; also the largest residual a merged line may have. Five times a wall's sigma: a
+/// real bend, not noise, and small enough that a shallow corner is still cut.
+const SPLIT_THRESHOLD: f64 = 0.1;
+/// Neighbouring lines whose directions differ by less than this are merged when their union
+/// is still straight, radians: far below any corner's angle, so a merge never undoes one.
+const MERGE_ANGLE: f64 = 6f64.to_radians();
+/// Largest gap between neighbouring lines that a merge may bridge (dropouts, grazing
+/// incidence), metres: shorter than a doorway, so two walls either side of one stay two.
+const MERGE_MAX_GAP: f64 = 0.5;
+
 /// A straight run of points `points[start..end]` and its fit.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Piece {
@@ -34,7 +45,7 @@ pub(crate) fn split(
     stack.clear();
     stack.push(segment);
     while let Some(run) = stack.pop() {
-        if let Some(at) = split_point(&points[run.clone()], config.split_threshold) {
+        if let Some(at) = split_point(&points[run.clone()], SPLIT_THRESHOLD) {
             let at = run.start + at;
             // Right first so the left half is handled first and `out` stays in scan order.
             stack.push(at..run.end);
@@ -84,19 +95,14 @@ fn split_point(run: &[ScanPoint], threshold: f64) -> Option<usize> {
     (best > 0).then_some(best)
 }
 
-/// Merges neighbouring pieces that lie on one line: directions within `merge_angle`, a gap
-/// of at most `merge_max_gap` and every point of the union, including any stray points
-/// between them, within `split_threshold` of the union's fit.
-pub(crate) fn merge(
-    points: &[ScanPoint],
-    pieces: &[Piece],
-    config: &FeatureConfig,
-    out: &mut Vec<Piece>,
-) {
+/// Merges neighbouring pieces that lie on one line: directions within [`MERGE_ANGLE`], a
+/// gap of at most [`MERGE_MAX_GAP`] and every point of the union, including any stray points
+/// between them, within [`SPLIT_THRESHOLD`] of the union's fit.
+pub(crate) fn merge(points: &[ScanPoint], pieces: &[Piece], out: &mut Vec<Piece>) {
     out.clear();
     for piece in pieces {
         if let Some(last) = out.last_mut()
-            && let Some(union) = merged(points, last, piece, config)
+            && let Some(union) = merged(points, last, piece)
         {
             *last = union;
             continue;
@@ -105,19 +111,19 @@ pub(crate) fn merge(
     }
 }
 
-fn merged(points: &[ScanPoint], a: &Piece, b: &Piece, config: &FeatureConfig) -> Option<Piece> {
+fn merged(points: &[ScanPoint], a: &Piece, b: &Piece) -> Option<Piece> {
     // The sine of the angle between the normals; its magnitude ignores which way each
     // points, which the sign of rho decides.
     let (na, nb) = (a.fit.normal, b.fit.normal);
-    if (na[0] * nb[1] - na[1] * nb[0]).abs() > config.merge_angle.sin() {
+    if (na[0] * nb[1] - na[1] * nb[0]).abs() > MERGE_ANGLE.sin() {
         return None;
     }
-    if points[a.end - 1].distance(&points[b.start]) > config.merge_max_gap {
+    if points[a.end - 1].distance(&points[b.start]) > MERGE_MAX_GAP {
         return None;
     }
     let union = &points[a.start..b.end];
     let fit = fit(union)?;
-    (max_residual(union, &fit) <= config.split_threshold).then_some(Piece {
+    (max_residual(union, &fit) <= SPLIT_THRESHOLD).then_some(Piece {
         start: a.start,
         end: b.end,
         fit,

@@ -103,8 +103,10 @@ fn mean_nees<const D: usize>(
 #[test]
 fn reported_covariances_match_the_observed_spread() {
     let sigma = 0.02;
+    // The extractor's sigma about a wall is the scanner's range noise times the walls'
+    // allowance: the scanner that gives `sigma` about a wall.
     let config = FeatureConfig {
-        range_sigma: sigma,
+        range_sigma: sigma / feature_proc::WALL_SIGMA_FACTOR,
         ..FeatureConfig::default()
     };
     let world = room(10.0, 8.0);

@@ -1,15 +1,16 @@
 //! `graph-proc`: global SLAM (the `back-end` library) as a stage. It reads the front end's
 //! motion from the features topic and, where the robot moved enough for a new node, the
 //! scan's beams; it builds submaps, closes the loops the scans confirm and solves the pose
-//! graph, and publishes the graph's path and occupancy grid as they stand every few
-//! seconds and, solved once more, at the end of the stream (or when stopped).
+//! graph, and publishes the graph's path (and, for a recording, its occupancy grid) as they
+//! stand every few seconds and, solved once more, both at the end of the stream (or when
+//! stopped).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use back_end::{GlobalConfig, GlobalSlam, GlobalStats};
+use back_end::{GlobalConfig, GlobalSlam, GlobalStats, ScanRanges};
 use clap::Parser;
 use ipc_types::prelude::*;
 use nalgebra::Matrix3;
@@ -39,9 +40,9 @@ struct Args {
     /// Path subscribers to wait for before the first lockstep publish.
     #[arg(long, default_value_t = 1)]
     subscribers: usize,
-    /// Publish the grid too (for a recording; its reader subscribes before the path's).
+    /// Publish the grid every few seconds too, not only at the end (for a recording).
     #[arg(long)]
-    grid: bool,
+    interim_grids: bool,
 }
 
 fn main() -> ExitCode {
@@ -60,17 +61,8 @@ fn run(args: Args) -> Result<()> {
     // first: map-sink and the recorder wait for them.
     let mut results = Results {
         path: Outlet::create(&domain, &node, topic::GRAPH_PATH, Delivery::Lossless, 0)?,
-        grid: if args.grid {
-            Some(Outlet::create(
-                &domain,
-                &node,
-                topic::GRAPH_GRID,
-                Delivery::Lossless,
-                0,
-            )?)
-        } else {
-            None
-        },
+        grid: Outlet::create(&domain, &node, topic::GRAPH_GRID, Delivery::Lossless, 0)?,
+        interim_grids: args.interim_grids,
         path_at: Instant::now(),
         grid_at: Instant::now(),
     };
@@ -102,12 +94,12 @@ fn run(args: Args) -> Result<()> {
                 continue;
             };
             let odom_from_robot = motion.pose.into();
-            let points = if global.wants_node(&odom_from_robot) {
+            let scan = if global.wants_scan(&odom_from_robot) {
                 let scan = held.wait_for(&scans, sample.header.seq, delivery)?;
                 if scan.is_none() {
-                    counts.nodes_without_scan += 1;
+                    counts.scans_lost += 1;
                 }
-                scan.map(|s| global.node_scan(&s.geometry, &s.ranges))
+                scan
             } else {
                 None
             };
@@ -117,7 +109,10 @@ fn run(args: Args) -> Result<()> {
                     &odom_from_robot,
                     &motion.increment.into(),
                     &Matrix3::from_row_slice(&motion.increment_covariance),
-                    points,
+                    scan.map(|s| ScanRanges {
+                        geometry: &s.geometry,
+                        ranges: &s.ranges,
+                    }),
                 )
                 .context("the pose graph")?;
             last_stamp = sample.header.stamp_ns;
@@ -149,8 +144,9 @@ fn stamped(global: &GlobalSlam) -> Vec<StampedPose> {
 /// The back end's results on their topics.
 struct Results {
     path: Outlet<PathChunk>,
-    /// Only when the run is recorded.
-    grid: Option<Outlet<GridCells>>,
+    grid: Outlet<GridCells>,
+    /// Whether the grid goes out while the run goes on (for a recording).
+    interim_grids: bool,
     /// When each was last published.
     path_at: Instant,
     grid_at: Instant,
@@ -164,10 +160,8 @@ impl Results {
                 .publish_path(&stamped(global), stamp_ns, Form::Interim)?;
             self.path_at = Instant::now();
         }
-        if let Some(grid) = &self.grid
-            && self.grid_at.elapsed() >= GRID_PERIOD
-        {
-            publish_grid(grid, global, stamp_ns, Form::Interim)?;
+        if self.interim_grids && self.grid_at.elapsed() >= GRID_PERIOD {
+            publish_grid(&self.grid, global, stamp_ns, Form::Interim)?;
             self.grid_at = Instant::now();
         }
         Ok(())
@@ -178,9 +172,7 @@ impl Results {
     fn publish_final(&self, global: &mut GlobalSlam, stamp_ns: u64) -> Result<()> {
         let started = Instant::now();
         global.finish().context("the pose graph's last solve")?;
-        if let Some(grid) = &self.grid {
-            publish_grid(grid, global, stamp_ns, Form::Final)?;
-        }
+        publish_grid(&self.grid, global, stamp_ns, Form::Final)?;
         let path = stamped(global);
         self.path.publish_path(&path, stamp_ns, Form::Final)?;
         say_err(&format!(
@@ -226,8 +218,8 @@ fn publish_grid(
 struct Counts {
     /// Features without the front end's motion (a front end that did not run).
     without_motion: u64,
-    /// Nodes whose scan never came (lost in real time).
-    nodes_without_scan: u64,
+    /// Scans wanted (for a node or the grid) that never came (lost in real time).
+    scans_lost: u64,
 }
 
 impl Counts {
@@ -235,7 +227,7 @@ impl Counts {
     fn losses(&self) -> [(&'static str, u64); 2] {
         [
             ("scans_without_motion", self.without_motion),
-            ("nodes_without_scan", self.nodes_without_scan),
+            ("scans_lost", self.scans_lost),
         ]
     }
 }
@@ -272,10 +264,10 @@ fn summary(stats: &GlobalStats, counts: &Counts) -> String {
             counts.without_motion
         ));
     }
-    if counts.nodes_without_scan > 0 {
+    if counts.scans_lost > 0 {
         text.push_str(&format!(
-            "\n  {} nodes whose scan was lost waited for the next",
-            counts.nodes_without_scan
+            "\n  {} scans wanted were lost (a node waits for the next)",
+            counts.scans_lost
         ));
     }
     text

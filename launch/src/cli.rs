@@ -67,11 +67,6 @@ pub struct Args {
     /// Edge of the occupancy grid's cells (map.pgm), metres; default 0.05.
     #[arg(long, value_name = "METRES")]
     resolution: Option<f64>,
-    /// Passes refining the final path against its own grid before the map is written, the
-    /// last one aligning every scan to every wall; 0 keeps the filter's path as it is
-    /// (default: `[grid] refine_passes`, see --print-config).
-    #[arg(long, value_name = "N")]
-    refine_passes: Option<usize>,
     /// Let the simulator publish noisy wheel odometry, which slam-proc then uses as a prior.
     #[arg(long)]
     odometry: bool,
@@ -186,7 +181,7 @@ impl Args {
             .as_deref()
             .filter(|file| file.extension().is_some_and(|e| e == "mcap"))
             .map(|_| lidar_replay::LogFormat::Mcap.name().to_owned());
-        let given: [(&'static str, Option<Value>); 27] = [
+        let given: [(&'static str, Option<Value>); 26] = [
             (
                 "source",
                 value(
@@ -215,7 +210,6 @@ impl Args {
             ("stall_warning", value(self.stall_warning)?),
             ("stall_limit", value(self.stall_limit)?),
             ("grid.resolution", value(self.resolution)?),
-            ("grid.refine_passes", value(self.refine_passes)?),
             ("record.enabled", value(self.record.then_some(true))?),
             ("map", value(self.map.clone())?),
             ("localize", value(self.localize.then_some(true))?),

@@ -177,18 +177,13 @@ impl HokuyoSection {
 }
 
 /// The filter: `particles` and every other setting of slam-proc's [`slam_proc::SlamConfig`]
-/// (handed to `slam-proc --config`), with the run's seed and map rate.
+/// (handed to `slam-proc --config`), with the run's seed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 // With `flatten`, serde refuses the keys neither this struct nor the flattened one takes
 // (the flattened one alone cannot: it sees only its own).
 #[serde(default, deny_unknown_fields)]
 pub struct SlamSection {
     pub seed: u64,
-    /// Publish the map every this many scans (and at the end).
-    pub map_every: u64,
-    /// Publish the particle cloud every this many scans, when the run is recorded (each
-    /// cloud holds every particle, so it is kept rare for the recording's size).
-    pub particle_cloud_every: u64,
     #[serde(flatten)]
     pub filter: slam_proc::SlamConfig,
 }
@@ -197,8 +192,6 @@ impl Default for SlamSection {
     fn default() -> Self {
         Self {
             seed: 1,
-            map_every: 20,
-            particle_cloud_every: 40,
             filter: slam_proc::SlamConfig::default(),
         }
     }
@@ -218,29 +211,14 @@ const STALL_RANGE_S: std::ops::RangeInclusive<f64> = 0.5..=86_400.0;
 pub struct GridSection {
     /// Edge of a cell, metres (`map-sink --resolution`).
     pub resolution: f64,
-    /// Passes refining the final path against its own grid (`map-sink --refine-passes`);
-    /// 0 keeps the filter's path.
-    pub refine_passes: usize,
-    /// Seconds map-sink has, from a stop (Ctrl-C, SIGTERM), to write its results
-    /// (`map-sink --stop-budget`): the refinement stops in time to write what it reached.
-    /// At most what the launcher's grace period leaves after its margin, the default.
-    pub stop_budget: f64,
 }
 
 impl Default for GridSection {
     fn default() -> Self {
         Self {
             resolution: map_sink::GridConfig::default().resolution_m,
-            refine_passes: map_sink::PathRefinementConfig::default().passes,
-            stop_budget: max_stop_budget_s(),
         }
     }
-}
-
-/// The longest `[grid] stop_budget`: the grace period stopped stages have before they are
-/// killed, less the margin kept for noticing the stop and exiting.
-pub fn max_stop_budget_s() -> f64 {
-    (crate::supervisor::STOP_GRACE - crate::supervisor::STOP_MARGIN).as_secs_f64()
 }
 
 /// The whole run. Every section is the settings of the process that reads it, so a typo or
@@ -356,14 +334,6 @@ impl RunConfig {
         if self.slam.filter.particles == 0 {
             return Err(ConfigError::Invalid("particles must be at least 1".into()));
         }
-        if self.slam.map_every == 0 {
-            return Err(ConfigError::Invalid("map_every must be at least 1".into()));
-        }
-        if self.slam.particle_cloud_every == 0 {
-            return Err(ConfigError::Invalid(
-                "particle_cloud_every must be at least 1".into(),
-            ));
-        }
         for (key, value) in [
             ("stall_warning (--stall-warning)", self.stall_warning),
             ("stall_limit (--stall-limit)", self.stall_limit),
@@ -391,15 +361,6 @@ impl RunConfig {
         if let Err(e) = grid.validate() {
             return Err(ConfigError::Invalid(format!(
                 "[grid] resolution (--resolution): {e}"
-            )));
-        }
-        let budget = self.grid.stop_budget;
-        if !(0.0..=max_stop_budget_s()).contains(&budget) {
-            return Err(ConfigError::Invalid(format!(
-                "[grid] stop_budget must be from 0 to {} seconds (what the {} s grace \
-                 period for stopped stages leaves), not {budget}",
-                max_stop_budget_s(),
-                crate::supervisor::STOP_GRACE.as_secs()
             )));
         }
         Ok(())
@@ -473,12 +434,12 @@ mod tests {
             [sim.vehicle]
             max_accel = 2
             [features]
-            split_threshold = 0.05
+            min_line_points = 5
             [front_end]
             voxel_size = 0.1
             [slam]
             particles = 50
-            resample_threshold = 0.4
+            update_min_distance = 0.4
             [slam.localize]
             max_particles = 5000
             [hokuyo]
@@ -491,10 +452,10 @@ mod tests {
         assert_eq!(config.sim.frames, 300);
         assert_eq!(config.sim.settings.sensor.noise_sigma, 0.02);
         assert_eq!(config.sim.settings.vehicle.max_accel, 2.0);
-        assert_eq!(config.features.split_threshold, 0.05);
+        assert_eq!(config.features.min_line_points, 5);
         assert_eq!(config.front_end.voxel_size, 0.1);
         assert_eq!(config.slam.filter.particles, 50);
-        assert_eq!(config.slam.filter.resample_threshold, 0.4);
+        assert_eq!(config.slam.filter.update_min_distance, 0.4);
         assert_eq!(config.slam.filter.localize.max_particles, 5000);
         assert_eq!(
             config.hokuyo.args(),
@@ -517,7 +478,13 @@ mod tests {
             ("[slam.localize]\nmax_partcles = 10", "max_partcles"),
             ("[sim]\nrange_noise = 0.02", "range_noise"),
             ("[sim.sensor]\nrange_noise = 0.02", "range_noise"),
-            ("[features]\nsplit = 0.05", "split"),
+            ("[features]\nmin_points = 5", "min_points"),
+            // Constants now, no longer settings.
+            ("[features]\nsplit_threshold = 0.05", "split_threshold"),
+            ("[front_end]\nmax_keyframes = 50", "max_keyframes"),
+            ("[slam]\nresample_threshold = 0.4", "resample_threshold"),
+            ("[slam]\nmap_every = 20", "map_every"),
+            ("[slam.localize]\nkld_z = 2.3", "kld_z"),
             ("[front_end]\nvoxel = 0.1", "voxel"),
             ("[hokuyo]\nclustr = 2", "clustr"),
         ] {
@@ -535,13 +502,10 @@ mod tests {
     fn values_out_of_range_are_refused_with_their_section() {
         for (text, start) in [
             (
-                "[slam]\nresample_threshold = 2",
-                "[slam] resample_threshold = 2",
+                "[slam]\nupdate_min_distance = -1",
+                "[slam] update_min_distance = -1",
             ),
-            (
-                "[features]\nsplit_threshold = -1",
-                "[features] split_threshold = -1",
-            ),
+            ("[features]\nmax_range = -1", "[features] max_range = -1"),
             ("[front_end]\nvoxel_size = 0", "[front_end] voxel_size = 0"),
             ("[sim.sensor]\nbeams = 0", "[sim.sensor] beams = 0"),
             (
@@ -563,7 +527,7 @@ mod tests {
     fn a_section_goes_to_its_process_as_it_was_read() {
         let config: RunConfig = toml::from_str(
             "[slam]\nparticles = 7\nview_range = 9.5\n[slam.localize]\nmax_particles = 500\n\
-             [sim.vehicle]\nmax_accel = 2\n[front_end]\nrecovery_yaw = 0.1",
+             [sim.vehicle]\nmax_accel = 2\n[front_end]\nkeyframe_angle = 0.1",
         )
         .unwrap();
         let slam = RunConfig::section_text(&config.slam.filter)
@@ -661,24 +625,6 @@ mod tests {
             );
         }
         assert!(toml::from_str::<RunConfig>("[grid]\ncell = 0.1").is_err());
-    }
-
-    #[test]
-    fn the_stop_budget_fits_in_the_grace_period() {
-        assert_eq!(RunConfig::default().grid.stop_budget, 25.0);
-        let config: RunConfig = toml::from_str("[grid]\nstop_budget = 0.5").unwrap();
-        assert_eq!(config.grid.stop_budget, 0.5);
-        let refusal = |budget: f64| {
-            let mut config = RunConfig::default();
-            config.grid.stop_budget = budget;
-            config.validate().err().map(|e| e.to_string())
-        };
-        assert_eq!(refusal(0.5), None);
-        assert_eq!(refusal(25.0), None);
-        let expected = "[grid] stop_budget must be from 0 to 25 seconds";
-        assert!(refusal(-1.0).is_some_and(|m| m.starts_with(expected)));
-        assert!(refusal(25.5).is_some_and(|m| m.starts_with(expected)));
-        assert!(refusal(f64::NAN).is_some_and(|m| m.starts_with(expected)));
     }
 
     #[test]

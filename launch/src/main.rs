@@ -375,6 +375,11 @@ fn plan(
         .collect()
 }
 
+/// A recorded run's particle cloud every this many scans: each cloud holds every particle,
+/// so it is kept rare for the recording's size, while a cloud every few seconds of a log
+/// still shows how it spreads and collapses.
+const PARTICLE_CLOUD_EVERY: u64 = 40;
+
 /// A stage's arguments besides its topics: the settings of its config section, those the
 /// launcher interprets as options and the process's own settings as a file of their own
 /// (none when they are the defaults).
@@ -427,8 +432,6 @@ fn settings_args(
             ]);
             args.push("--status".into());
             args.push(format!("--resolution={}", config.grid.resolution));
-            args.push(format!("--refine-passes={}", config.grid.refine_passes));
-            args.push(format!("--stop-budget={}", config.grid.stop_budget));
             args.extend(switch(final_map, "--publish-final"));
             args.extend(switch(back_end, "--back-end"));
             args
@@ -440,16 +443,12 @@ fn settings_args(
                     Some(config.slam.filter.particles.to_string()),
                 ),
                 ("--seed", Some(config.slam.seed.to_string())),
-                ("--map-every", Some(config.slam.map_every.to_string())),
             ]);
             if config.localize {
                 args.push("--localize".into());
             }
             if particles {
-                args.push(format!(
-                    "--particles-every={}",
-                    config.slam.particle_cloud_every
-                ));
+                args.push(format!("--particles-every={PARTICLE_CLOUD_EVERY}"));
             }
             if let Some(pose) = &config.initial_pose {
                 args.push(format!("--initial-pose={pose}"));
@@ -461,8 +460,8 @@ fn settings_args(
         Role::Graph => {
             let front_end = text("front_end", RunConfig::section_text(&config.front_end))?;
             let mut args = section_file("front_end", front_end, "--front-end-config")?;
-            let grid = topology::published(&run, ipc_types::topic::GRAPH_GRID.name());
-            args.extend(switch(grid, "--grid"));
+            // The grid as it grows is for the recording; map-sink needs only the last.
+            args.extend(switch(run.recorded, "--interim-grids"));
             args
         }
         Role::Perception => {

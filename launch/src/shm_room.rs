@@ -79,7 +79,8 @@ mod tests {
                 "slam/pose",
                 "slam/map",
                 "slam/path",
-                "graph/path"
+                "graph/path",
+                "graph/grid"
             ]
         );
         config.source = SourceKind::Hokuyo;

@@ -18,9 +18,6 @@ use crate::status::Progress;
 const READY_TIMEOUT: Duration = Duration::from_secs(60);
 /// How long stopped stages have to finish writing before they are killed.
 pub const STOP_GRACE: Duration = Duration::from_secs(30);
-/// What is kept of [`STOP_GRACE`] beyond map-sink's own budget (`[grid] stop_budget`): the
-/// stop reaching it and it noticing, and its exit after the last file.
-pub const STOP_MARGIN: Duration = Duration::from_secs(5);
 /// How often the stages are looked at (and their memory read).
 pub const POLL: Duration = Duration::from_millis(50);
 

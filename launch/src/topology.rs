@@ -240,8 +240,9 @@ pub const STAGES: &[Stage] = &[
             reads(MAP),
             reads(POSE),
             reads(PATH),
-            // The back end's path is the final one where the run has it.
+            // The back end's path and grid are the final ones where the run has them.
             reads_if_published(GRAPH_PATH),
+            reads_if_published(GRAPH_GRID),
         ],
         waits_for: &[],
         saved_map: Some(When::Mapping),
@@ -252,8 +253,8 @@ pub const STAGES: &[Stage] = &[
         // Its graph starts at the first scan; on a saved map, map-sink moves its path into
         // the map's frame, which the filter finds.
         runs: When::Mapping,
-        // Its grid as it grows, for a recording (map-sink traces the run's own).
-        publishes: &[publishes(GRAPH_PATH), for_the_recording(GRAPH_GRID)],
+        // Its path and grid as they grow (its grid only for a recording) and at the end.
+        publishes: &[publishes(GRAPH_PATH), publishes(GRAPH_GRID)],
         reads: &[reads(FEATURES), reads(SCAN)],
         waits_for: &[waits(GRAPH_PATH)],
         saved_map: None,
@@ -593,7 +594,8 @@ mod tests {
                 (POSE, 1),
                 (MAP, 1),
                 (PATH, 1),
-                (GRAPH_PATH, 1)
+                (GRAPH_PATH, 1),
+                (GRAPH_GRID, 1)
             ]
         );
         let recorded = RunKind {
@@ -730,7 +732,7 @@ mod tests {
         };
         assert_eq!(
             services(&run).iter().map(|s| s.0).collect::<Vec<_>>(),
-            [SCAN, FEATURES, POSE, MAP, PATH, GRAPH_PATH]
+            [SCAN, FEATURES, POSE, MAP, PATH, GRAPH_PATH, GRAPH_GRID]
         );
     }
 

@@ -43,8 +43,8 @@ fn an_option_overrides_the_file_and_the_file_overrides_the_default() {
     let file = ConfigFile::new(
         "layers",
         "stall_warning = 20\n[sim]\nworld = 'hall'\nframes = 300\nseed = 4\n\
-         [sim.sensor]\nnoise_sigma = 0.02\n[slam]\nparticles = 50\nresample_threshold = 0.4\n\
-         [grid]\nrefine_passes = 5\n",
+         [sim.sensor]\nnoise_sigma = 0.02\n[slam]\nparticles = 50\nupdate_min_distance = 0.4\n\
+         [grid]\nresolution = 0.1\n",
     );
     let config = file.config(&[
         "--world",
@@ -52,26 +52,28 @@ fn an_option_overrides_the_file_and_the_file_overrides_the_default() {
         "--seed",
         "7",
         "--odometry",
-        "--refine-passes",
-        "0",
+        "--resolution",
+        "0.02",
     ]);
     // Given as options: over the file.
     assert_eq!(config.sim.world, "corridor");
     assert_eq!(config.sim.seed, 7);
     assert_eq!(config.slam.seed, 7);
     assert!(config.sim.odometry);
-    assert_eq!(config.grid.refine_passes, 0);
+    assert_eq!(config.grid.resolution, 0.02);
     // Only in the file: over the defaults, the keys the launcher passes on included.
     assert_eq!(config.sim.frames, 300);
     assert_eq!(config.slam.filter.particles, 50);
     assert_eq!(config.stall_warning, 20.0);
     assert_eq!(config.sim.settings.sensor.noise_sigma, 0.02);
-    assert_eq!(config.slam.filter.resample_threshold, 0.4);
+    assert_eq!(config.slam.filter.update_min_distance, 0.4);
     // In neither: the defaults.
     let defaults = RunConfig::default();
     assert_eq!(config.stall_limit, defaults.stall_limit);
-    assert_eq!(config.slam.map_every, defaults.slam.map_every);
-    assert_eq!(config.grid.resolution, defaults.grid.resolution);
+    assert_eq!(
+        config.slam.filter.view_range,
+        defaults.slam.filter.view_range
+    );
     assert_eq!(config.front_end, defaults.front_end);
     assert_eq!(config.source, SourceKind::Sim);
 

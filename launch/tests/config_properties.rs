@@ -162,8 +162,8 @@ const RUN_SECTIONS: &[(&str, &[&str])] = &[
         ],
     ),
     ("hokuyo", &["addr"]),
-    ("slam", &["particles", "seed", "map_every"]),
-    ("features", &["split_threshold"]),
+    ("slam", &["particles", "seed", "view_range"]),
+    ("features", &["max_range"]),
     ("front_end", &["voxel_size"]),
 ];
 

@@ -11,58 +11,16 @@ use crate::error::SinkError;
 /// file or the complete new one, never a prefix.
 /// On failure (a full disk) the temporary file is removed, so none is left half-written.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), SinkError> {
-    StagedFile::write(path, contents)?.commit()
-}
-
-/// A file written and synced under its temporary name, to be renamed into place later:
-/// several files staged first and committed one right after the other replace a set of
-/// results within the milliseconds of their renames, not within the time it takes to
-/// write them. Dropped uncommitted, the temporary file is removed.
-#[derive(Debug)]
-pub struct StagedFile {
-    path: PathBuf,
-    tmp: Option<PathBuf>,
-}
-
-impl StagedFile {
-    /// Writes `contents` to `path`'s temporary name and syncs it; `path` is left as it was.
-    pub fn write(path: &Path, contents: &[u8]) -> Result<Self, SinkError> {
-        let tmp = tmp_path(path);
-        if let Err(e) = write_synced(&tmp, contents) {
-            let _ = fs::remove_file(&tmp);
-            return Err(e);
-        }
-        Ok(Self {
-            path: path.to_path_buf(),
-            tmp: Some(tmp),
-        })
+    let tmp = tmp_path(path);
+    let written = write_synced(&tmp, contents).and_then(|()| {
+        fs::rename(&tmp, path).map_err(|e| SinkError::io("rename into place", path, e))
+    });
+    if let Err(e) = written {
+        let _ = fs::remove_file(&tmp);
+        return Err(e);
     }
-
-    /// Where the contents are until committed (a reader may read them there).
-    pub fn staged_at(&self) -> Option<&Path> {
-        self.tmp.as_deref()
-    }
-
-    /// Renames the temporary file over the file's name, as [`write_atomic`] does.
-    pub fn commit(mut self) -> Result<(), SinkError> {
-        let Some(tmp) = self.tmp.take() else {
-            return Ok(());
-        };
-        if let Err(e) = fs::rename(&tmp, &self.path) {
-            let _ = fs::remove_file(&tmp);
-            return Err(SinkError::io("rename into place", &self.path, e));
-        }
-        sync_parent(&self.path);
-        Ok(())
-    }
-}
-
-impl Drop for StagedFile {
-    fn drop(&mut self) {
-        if let Some(tmp) = self.tmp.take() {
-            let _ = fs::remove_file(tmp);
-        }
-    }
+    sync_parent(path);
+    Ok(())
 }
 
 /// Writes `contents` into a new file at `tmp` and syncs it.
@@ -102,22 +60,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_staged_file_replaces_the_old_one_only_when_committed() -> Result<(), SinkError> {
-        let dir = std::env::temp_dir().join(format!("map-sink-staged-{}", std::process::id()));
+    fn a_write_replaces_the_old_file_whole_and_leaves_nothing_behind() -> Result<(), SinkError> {
+        let dir = std::env::temp_dir().join(format!("map-sink-atomic-{}", std::process::id()));
         fs::create_dir_all(&dir).map_err(|e| SinkError::io("create", &dir, e))?;
         let path = dir.join("result.txt");
         write_atomic(&path, b"old\n")?;
-        let staged = StagedFile::write(&path, b"new\n")?;
-        let read = |p: &Path| fs::read(p).unwrap_or_default();
-        assert_eq!(read(&path), b"old\n");
-        assert_eq!(staged.staged_at().map(read), Some(b"new\n".to_vec()));
-        staged.commit()?;
-        assert_eq!(read(&path), b"new\n");
+        write_atomic(&path, b"new\n")?;
+        assert_eq!(fs::read(&path).unwrap_or_default(), b"new\n");
         assert!(!tmp_path(&path).exists());
-        // Dropped without a commit: the old file stays and nothing is left behind.
-        drop(StagedFile::write(&path, b"newer\n")?);
-        assert_eq!(read(&path), b"new\n");
-        assert!(!tmp_path(&path).exists());
+        // A file that cannot take the place of the old one (a directory stands there): the
+        // directory stays and the temporary file is gone.
+        let blocked = dir.join("blocked");
+        fs::create_dir_all(blocked.join("inside")).map_err(|e| SinkError::io("create", &dir, e))?;
+        assert!(write_atomic(&blocked, b"x\n").is_err());
+        assert!(blocked.is_dir());
+        assert!(!tmp_path(&blocked).exists());
         let _ = fs::remove_dir_all(&dir);
         Ok(())
     }

@@ -1,8 +1,13 @@
-//! The map's corners carried along when the refinement moves the path: the filter placed
-//! each corner from the poses that saw it, so where the refinement moved those poses the
-//! corner moves with them. `landmarks.json` and `map_corners.csv` then lie in the frame of
-//! the grid, which is traced from the refined path; a run mapping on the saved map starts
-//! from corners and walls that agree.
+//! The map's corners carried along when the final path differs from the filter's (the back
+//! end's): the filter placed each corner from the poses that saw it, so where the final
+//! path moved those poses the corner moves with them.
+//! `landmarks.json` and `map_corners.csv` then lie in the frame of the grid, which is laid
+//! along the final path; a run mapping on the saved map starts from corners and walls that
+//! agree.
+//!
+//! A corner is placed when first seen; seen again on a later pass, it is the filter's pose
+//! that is fitted to it, not the corner to the pose. So the poses of the first pass near
+//! it decide: a later pass may have been moved by a quite different correction.
 
 use nalgebra::Matrix4;
 use slam_geom::{MapCorner, Point2, StampedPose, wrap_angle};
@@ -11,20 +16,21 @@ use slam_geom::{MapCorner, Point2, StampedPose, wrap_angle};
 /// the range at which the front end finds corners, so mostly the poses that saw it.
 const NEAR_POSES_M: f64 = 3.0;
 
-/// `corners` (in the frame of `filter`, the filter's path) moved as the refinement moved
-/// the path to `refined` (the same stamps, in the same order). Each corner moves as the
-/// poses within [`NEAR_POSES_M`] of it moved, on average (the nearest pose when none is that
-/// near): its position and heading by their rigid motions, its covariance turned with them.
+/// `corners` (in the frame of `filter`, the filter's path) moved as the final path moved
+/// the filter's to `last` (the same stamps, in the same order). Each corner moves as the
+/// poses of the first pass within [`NEAR_POSES_M`] of it moved, on average (the nearest
+/// pose when none is that near): its position and heading by their rigid motions, its
+/// covariance turned with them.
 /// `None` when the two paths do not hold the same stamps.
-pub(crate) fn follow_refined_path(
+pub(crate) fn follow_final_path(
     corners: &[MapCorner],
     filter: &[StampedPose],
-    refined: &[StampedPose],
+    last: &[StampedPose],
 ) -> Option<Vec<MapCorner>> {
-    if filter.len() != refined.len()
+    if filter.len() != last.len()
         || filter
             .iter()
-            .zip(refined)
+            .zip(last)
             .any(|(a, b)| a.stamp_ns != b.stamp_ns)
     {
         return None;
@@ -32,16 +38,18 @@ pub(crate) fn follow_refined_path(
     Some(
         corners
             .iter()
-            .map(|corner| follow(corner, filter, refined))
+            .map(|corner| follow(corner, filter, last))
             .collect(),
     )
 }
 
-fn follow(corner: &MapCorner, filter: &[StampedPose], refined: &[StampedPose]) -> MapCorner {
+fn follow(corner: &MapCorner, filter: &[StampedPose], last: &[StampedPose]) -> MapCorner {
     let at = Point2::new(corner.x, corner.y);
     let distance2 = |p: &StampedPose| (p.pose.position() - at).norm_squared();
+    let is_near = |i: &usize| distance2(&filter[*i]) <= NEAR_POSES_M * NEAR_POSES_M;
     let near: Vec<usize> = (0..filter.len())
-        .filter(|&i| distance2(&filter[i]) <= NEAR_POSES_M * NEAR_POSES_M)
+        .skip_while(|i| !is_near(i))
+        .take_while(is_near)
         .collect();
     let near = if near.is_empty() {
         (0..filter.len())
@@ -56,7 +64,7 @@ fn follow(corner: &MapCorner, filter: &[StampedPose], refined: &[StampedPose]) -
     }
     let (mut moved, mut turn) = (Point2::zeros(), 0.0);
     for &i in &near {
-        let (before, after) = (&filter[i].pose, &refined[i].pose);
+        let (before, after) = (&filter[i].pose, &last[i].pose);
         // Where the corner is in the frame of the pose, put back at the pose's new place.
         moved += after.transform(before.inverse().transform(at));
         turn += wrap_angle(after.yaw - before.yaw);
@@ -121,7 +129,7 @@ mod tests {
     fn corners_move_as_the_poses_near_them_moved() {
         let filter = path();
         // The first half stays, the second half is moved 0.2 m sideways.
-        let refined = moved(&filter, |p| {
+        let last = moved(&filter, |p| {
             if p.x < 10.0 {
                 p
             } else {
@@ -129,7 +137,7 @@ mod tests {
             }
         });
         let corners = [corner(2.0, 1.0), corner(18.0, 1.0)];
-        let after = follow_refined_path(&corners, &filter, &refined).unwrap();
+        let after = follow_final_path(&corners, &filter, &last).unwrap();
         assert!((after[0].x - 2.0).abs() < 1e-12 && (after[0].y - 1.0).abs() < 1e-12);
         assert_eq!(after[0].covariance, corners[0].covariance);
         assert!((after[1].x - 18.0).abs() < 1e-9, "{:?}", after[1]);
@@ -138,13 +146,35 @@ mod tests {
     }
 
     #[test]
+    fn a_corner_passed_twice_moves_as_the_first_pass_moved() {
+        // Out along x to 20 m and back: the way back was corrected by 0.5 m sideways.
+        let out = path();
+        let back: Vec<StampedPose> = out
+            .iter()
+            .rev()
+            .enumerate()
+            .map(|(k, p)| StampedPose {
+                stamp_ns: 1000 + k as u64,
+                pose: Pose2::new(p.pose.x, 0.0, std::f64::consts::PI),
+            })
+            .collect();
+        let filter: Vec<StampedPose> = out.iter().chain(&back).copied().collect();
+        let last = moved(&filter, |p| match p.yaw.abs() > 1.0 {
+            true => Pose2::new(p.x, 0.5, p.yaw),
+            false => Pose2::new(p.x, 0.1, p.yaw),
+        });
+        let after = follow_final_path(&[corner(5.0, 1.0)], &filter, &last).unwrap()[0];
+        assert!((after.y - 1.1).abs() < 1e-9, "{after:?}");
+    }
+
+    #[test]
     fn a_turned_path_turns_its_corners_and_their_covariance() {
         let filter = path();
         // The whole path turned 0.1 rad about the origin.
         let turn = Pose2::new(0.0, 0.0, 0.1);
-        let refined = moved(&filter, |p| turn.compose(&p));
+        let last = moved(&filter, |p| turn.compose(&p));
         let c = corner(5.0, 1.0);
-        let after = follow_refined_path(&[c], &filter, &refined).unwrap()[0];
+        let after = follow_final_path(&[c], &filter, &last).unwrap()[0];
         let expected = turn.transform(Point2::new(5.0, 1.0));
         assert!((after.x - expected.x).abs() < 1e-9 && (after.y - expected.y).abs() < 1e-9);
         assert!((after.heading - 0.4).abs() < 1e-9);
@@ -160,8 +190,8 @@ mod tests {
     #[test]
     fn a_corner_far_from_the_path_follows_the_nearest_pose() {
         let filter = path();
-        let refined = moved(&filter, |p| Pose2::new(1.01 * p.x, 0.0, 0.0));
-        let after = follow_refined_path(&[corner(30.0, 0.0)], &filter, &refined).unwrap()[0];
+        let last = moved(&filter, |p| Pose2::new(1.01 * p.x, 0.0, 0.0));
+        let after = follow_final_path(&[corner(30.0, 0.0)], &filter, &last).unwrap()[0];
         // The last pose, at x = 20, moved 0.2 m along x.
         assert!((after.x - 30.2).abs() < 1e-9, "{after:?}");
     }
@@ -169,7 +199,7 @@ mod tests {
     #[test]
     fn paths_of_other_stamps_are_refused() {
         let filter = path();
-        let refined = &filter[1..];
-        assert!(follow_refined_path(&[corner(1.0, 1.0)], &filter, refined).is_none());
+        let last = &filter[1..];
+        assert!(follow_final_path(&[corner(1.0, 1.0)], &filter, last).is_none());
     }
 }

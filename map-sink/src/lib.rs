@@ -1,11 +1,11 @@
 //! # map-sink
 //!
-//! Records a lidar SLAM run into a directory: the estimated trajectory (the filter's final
-//! path; the online per-scan estimate beside it), the true and dead-reckoning trajectories
-//! in TUM format, the corner map as CSV, a saved map (an occupancy grid as ROS map_server
-//! reads it and the landmarks, [`SavedMap::load`] reads it back), a picture of the run as
-//! SVG and a `metrics.json` with throughput, latency and, when the truth is known, accuracy
-//! scores.
+//! Records a lidar SLAM run into a directory: the estimated trajectory (the final path, the
+//! back end's or the filter's, or the online per-scan estimate when none came; the online
+//! estimate beside it), the true and dead-reckoning trajectories in TUM format, the corner
+//! map as CSV, a saved map (an occupancy grid as ROS map_server reads it and the landmarks,
+//! [`SavedMap::load`] reads it back), a picture of the run as SVG and a `metrics.json` with
+//! throughput, latency and, when the truth is known, accuracy scores.
 //!
 //! This is the library half; the process shell receives the pipeline's messages and feeds
 //! them to a [`Recorder`] as plain values, so nothing here depends on the transport.
@@ -17,13 +17,11 @@
 //!   aligned to the truth by a least-squares rigid SE(2) fit before the absolute trajectory
 //!   error ([`slam_eval::ate`]) is taken, and the map corners are moved by the same
 //!   transform before they are scored; the summary is slam-eval's [`Metrics`].
-//! * The occupancy grid is traced at the end of the run from the final path
+//! * The occupancy grid is the back end's where it runs ([`RecorderOptions::back_end`]);
+//!   without it, it is traced at the end of the run along the final path
 //!   ([`OccupancyGrid`]), so the scans are kept until then, compactly ([`CompactScan`],
-//!   [`ScanKeeper`]). Before that, the filter's final path is refined against the grid its
-//!   own scans trace ([`refine_path`]), so that a stretch that came back off the map it
-//!   revisits does not draw its walls twice. Mapping on a saved map, the grid starts from
-//!   the saved one as prior evidence ([`prior_grid`]), whose walls the path is refined
-//!   against too, unless slam-proc found that the saved map does not explain the run's
+//!   [`ScanKeeper`]). Mapping on a saved map, the run's grid is laid over the saved one
+//!   ([`prior_grid`]) unless slam-proc found that the saved map does not explain the run's
 //!   scans ([`slam_eval::MapFit`], [`Recorder::set_map_fit`]).
 //! * Localizing on a saved map, the scores count from the first converged pose on, the
 //!   search before it scored apart ([`Recorder::record_localization`]).
@@ -55,7 +53,6 @@
 mod atomic;
 mod corner_shift;
 mod corners_csv;
-mod end_clock;
 mod error;
 mod grid_image;
 mod landmarks;
@@ -64,29 +61,22 @@ mod map_load_error;
 mod map_writer;
 mod map_yaml;
 mod path_assembly;
-mod path_refinement;
 mod pgm;
-mod pose_chain;
 mod prior_grid;
 mod recorder;
 mod saved_map;
-mod scan_alignment;
 mod scan_keeper;
 mod svg;
-#[cfg(test)]
-mod test_room;
 mod tum;
 mod tum_stream;
-mod wall_field;
 
-pub use atomic::{StagedFile, tmp_path, write_atomic};
+pub use atomic::{tmp_path, write_atomic};
 pub use back_end::compact_scan::{Beam, CompactScan};
 pub use back_end::occupancy_grid::{
     CellState, FREE_PROBABILITY, GridCell, GridConfig, GridError, OCCUPIED_PROBABILITY,
     OccupancyGrid, RESOLUTION_RANGE_M,
 };
 pub use corners_csv::{corners_csv, corners_csv_header};
-pub use end_clock::EndClock;
 pub use error::SinkError;
 pub use grid_image::{encode_png, grid_pixels};
 pub use landmarks::{
@@ -103,11 +93,7 @@ pub use map_yaml::{
     YamlError, trinary_pixel,
 };
 pub use path_assembly::{ChunkError, PathAssembly};
-pub use path_refinement::{
-    PathRefinementConfig, RefinementReport, refine_path, refine_path_within,
-};
 pub use pgm::{Pgm, PgmError, encode_pgm};
-pub use pose_chain::{PoseLink, PosePrior, solve_pose_chain};
 pub use prior_grid::{PRIOR_FREE_LOG_ODDS, PRIOR_OCCUPIED_LOG_ODDS, PriorGridError, prior_grid};
 pub use recorder::{
     FinishedRun, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions,
@@ -116,7 +102,6 @@ pub use saved_map::{
     GridMap, LANDMARKS_INPUT, MAP_IMAGE_INPUT, MAP_YAML_INPUT, MAX_MAP_COORDINATE_M,
     MapExtentError, SavedMap,
 };
-pub use scan_alignment::{ScanAlignment, ScanAlignmentConfig};
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::MapCorner;
 pub use slam_geom::Pose2;

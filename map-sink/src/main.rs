@@ -9,11 +9,10 @@ use clap::Parser;
 use ipc_types::Wakeable;
 use ipc_types::prelude::*;
 use map_sink::{
-    EndClock, FinishedRun, GridConfig, OccupancyGrid, PathAssembly, PathRefinementConfig, Recorder,
-    RecorderOptions, StampedPose,
+    FinishedRun, GridConfig, OccupancyGrid, PathAssembly, Recorder, RecorderOptions, StampedPose,
 };
-use slam_eval::{FrameCounts, METRICS_FILE, MapFit, RefinementState, RelationsFile};
-use stage_kit::{say, say_err, shutdown};
+use slam_eval::{FrameCounts, METRICS_FILE, MapFit, RelationsFile};
+use stage_kit::{say, say_err};
 
 /// Subscribes to poses, maps, scans and (from a simulator) the ground truth and writes
 /// trajectory.tum, ground_truth.tum, map_corners.csv, the saved map (map.yaml, map.pgm,
@@ -41,11 +40,6 @@ struct Args {
     /// Edge of the occupancy grid's cells, metres (0.005 to 5).
     #[arg(long, value_name = "METRES", default_value_t = GridConfig::default().resolution_m)]
     resolution: f64,
-    /// Passes refining the final path against the grid its scans trace before it is
-    /// written, the last two (the last one of two) aligning every scan to every wall; 0
-    /// keeps the filter's path as it is.
-    #[arg(long, value_name = "N", default_value_t = PathRefinementConfig::default().passes)]
-    refine_passes: usize,
     /// Once the files are written, publish the final path of trajectory.tum on `map/path`
     /// and the grid of map.pgm on `map/grid`, then an end marker on `map/grid` (for a
     /// recording).
@@ -55,28 +49,15 @@ struct Args {
     /// and this run's scans add to it.
     #[arg(long, value_name = "DIR")]
     map: Option<PathBuf>,
-    /// Once stopped (SIGINT, SIGTERM), the seconds from the stop to having written the
-    /// results: the refinement of the path stops in time to write what it reached (the
-    /// filter's path at worst, written first). Without it the end takes what it needs.
-    /// slam-launch gives what is left of its grace period after a margin.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
-    stop_budget: Option<Duration>,
-    /// The back end (graph-proc) runs: the final path is its `graph/path`, not the filter's.
-    /// The run waits for it at its end and does not refine it (--refine-passes is for the
-    /// filter's).
+    /// The back end (graph-proc) runs: the final path is its `graph/path` and the grid its
+    /// `graph/grid`, not the filter's path and a grid traced here. The run waits for them at
+    /// its end and keeps no scan.
     #[arg(long)]
     back_end: bool,
 }
 
-/// A budget in seconds, finite and not negative.
-fn parse_budget(text: &str) -> Result<Duration, String> {
-    let seconds: f64 = text.parse().map_err(|e| format!("{e}"))?;
-    Duration::try_from_secs_f64(seconds)
-        .map_err(|_| format!("{seconds} is not a number of seconds from 0 up"))
-}
-
-/// How long a stopped run waits for slam-proc's final path, which it sends as it stops:
-/// without it the online estimate would stand in and nothing could be refined.
+/// How long a stopped run waits for the final path, which slam-proc or the back end sends
+/// as it stops: without it the online estimate would stand in.
 const PATH_WAIT_ON_STOP: Duration = Duration::from_secs(2);
 /// How often that wait looks for the path (the wait on the inlets ends at once once a stop
 /// was asked for).
@@ -140,12 +121,7 @@ fn run(args: Args) -> Result<()> {
                 resolution_m: args.resolution,
                 ..GridConfig::default()
             },
-            refinement: PathRefinementConfig {
-                // The back end's path is solved against its own verified closures; the
-                // refinement is for the filter's.
-                passes: if args.back_end { 0 } else { args.refine_passes },
-                ..PathRefinementConfig::default()
-            },
+            back_end: args.back_end,
             ..RecorderOptions::default()
         },
     )?;
@@ -176,8 +152,11 @@ fn run(args: Args) -> Result<()> {
     let maps = Inlet::open(&node, topic::MAP)?;
     let poses = Inlet::open(&node, topic::POSE)?;
     let path = Inlet::open(&node, topic::PATH)?;
-    let graph_path = if args.back_end {
-        Some(Inlet::open(&node, topic::GRAPH_PATH)?)
+    let graph = if args.back_end {
+        Some(Graph {
+            path: Inlet::open(&node, topic::GRAPH_PATH)?,
+            grid: Inlet::open(&node, topic::GRAPH_GRID)?,
+        })
     } else {
         None
     };
@@ -185,8 +164,9 @@ fn run(args: Args) -> Result<()> {
     say("ready");
 
     let mut wakeables: Vec<&dyn Wakeable> = vec![&poses, &scans, &maps, &path];
-    if let Some(graph_path) = &graph_path {
-        wakeables.push(graph_path);
+    if let Some(graph) = &graph {
+        wakeables.push(&graph.path);
+        wakeables.push(&graph.grid);
     }
     if let Some(truth) = &truth {
         wakeables.push(truth);
@@ -198,9 +178,9 @@ fn run(args: Args) -> Result<()> {
     let mut progress = Progress::default();
     let mut told = 0;
     let mut assembly = PathAssembly::new();
-    let mut graph_assembly = PathAssembly::new();
     // The filter's path is final only in a run without the back end's.
-    let mut final_path = FinalPath::new(graph_path.is_some());
+    let mut final_path = FinalPath::new(graph.is_some());
+    let mut graph_pieces = GraphPieces::default();
     let mut published = None;
     let mut last_status = Instant::now();
     let mut finished = false;
@@ -208,8 +188,8 @@ fn run(args: Args) -> Result<()> {
     while !finished {
         if wait_any(&wakeables, Duration::from_millis(100))? == Wake::Shutdown {
             let stopped = *stop_seen.get_or_insert_with(Instant::now);
-            // slam-proc sends the best particle's path as it stops: take it, unless the
-            // run localizes on a saved map (no path comes) or never started.
+            // The back end (or slam-proc, without it) sends its path as it stops: take it,
+            // unless the run localizes on a saved map (no path comes) or never started.
             let mapping = progress.poses > 0 && progress.localization == PoseEstimate::MAPPING;
             if !mapping || final_path.complete || stopped.elapsed() >= PATH_WAIT_ON_STOP {
                 break;
@@ -234,14 +214,8 @@ fn run(args: Args) -> Result<()> {
             recorder.set_map(map_corners(&sample));
         }
         drain_path(&path, &mut assembly, &mut recorder, &mut final_path, false)?;
-        if let Some(graph_path) = &graph_path {
-            drain_path(
-                graph_path,
-                &mut graph_assembly,
-                &mut recorder,
-                &mut final_path,
-                true,
-            )?;
+        if let Some(graph) = &graph {
+            graph.drain(&mut graph_pieces, &mut recorder, &mut final_path)?;
         }
         while let Some(sample) = poses.receive()? {
             if sample.header.is_end_of_stream() {
@@ -287,17 +261,12 @@ fn run(args: Args) -> Result<()> {
             }
         }
         if finished
-            && let Some(graph_path) = &graph_path
+            && let Some(graph) = &graph
             && !final_path.complete
         {
             // The back end solves its graph once more at the end of the stream, then sends
-            // its path.
-            finished = wait_for_graph_path(
-                graph_path,
-                &mut graph_assembly,
-                &mut recorder,
-                &mut final_path,
-            )?;
+            // its grid and path.
+            finished = graph.wait_for_final(&mut graph_pieces, &mut recorder, &mut final_path)?;
         }
         tell_incomplete(&recorder, &mut told);
         if args.status && last_status.elapsed() >= STATUS_PERIOD {
@@ -325,12 +294,7 @@ fn run(args: Args) -> Result<()> {
             args.out.display()
         ));
     }
-    let stopped = shutdown::requested;
-    let clock = EndClock::new(args.stop_budget, &stopped);
-    if let Some(at) = stop_seen {
-        clock.stop_seen_at(at);
-    }
-    let finished = recorder.finish_run_within(&clock)?;
+    let finished = recorder.finish_run()?;
     if let Some((path_outlet, grid_outlet)) = &final_outlets {
         // The run's results are written; what cannot be passed on is said, not fatal.
         if let Err(e) = publish_final(path_outlet, grid_outlet, &finished) {
@@ -342,6 +306,7 @@ fn run(args: Args) -> Result<()> {
     let FinishedRun {
         metrics,
         report: grid,
+        corners_left_out,
         ..
     } = finished;
     say_err(&format!(
@@ -350,7 +315,19 @@ fn run(args: Args) -> Result<()> {
         metrics.map_corners,
         args.out.display()
     ));
-    if let Some(g) = grid {
+    if corners_left_out > 0 {
+        say_err(&format!(
+            "map-sink: {corners_left_out} of the filter's corners lay off the grid's walls \
+             once moved onto the final path and were left out"
+        ));
+    }
+    if let Some(g) = grid.as_ref().filter(|_| args.back_end) {
+        say_err(&format!(
+            "map-sink: occupancy grid {} x {} cells of {} m from the back end, written in {:.2} s",
+            g.width, g.height, g.resolution_m, g.build_s
+        ));
+    }
+    if let Some(g) = grid.filter(|_| !args.back_end) {
         say_err(&format!(
             "map-sink: occupancy grid {} x {} cells of {} m from {} scans ({} beams kept, {:.1} MB) in {:.2} s, {:.1} MB of log-odds",
             g.width,
@@ -367,35 +344,6 @@ fn run(args: Args) -> Result<()> {
                 "map-sink: {} scans left out of the grid: taken where kept scans had been, past the cap on the beams kept",
                 g.revisits_left_out
             ));
-        }
-        if let Some(r) = g
-            .refinement
-            .as_ref()
-            .filter(|r| !r.aligned_per_pass.is_empty())
-        {
-            let aligned: Vec<String> = r.aligned_per_pass.iter().map(|n| n.to_string()).collect();
-            say_err(&format!(
-                "map-sink: final path refined against its grid in {} passes ({} of {} scans aligned), poses moved up to {:.2} m",
-                r.aligned_per_pass.len(),
-                aligned.join(" / "),
-                r.scans,
-                r.largest_move_m
-            ));
-        }
-    }
-    if let Some(refinement) = &metrics.refinement {
-        match refinement.state {
-            RefinementState::CutShort => say_err(&format!(
-                "map-sink: the run was stopped and its time to write ran out: the refinement \
-                 of the final path was cut short after {} of {} passes; trajectory.tum and \
-                 the map hold the path after {} (metrics.json: refinement)",
-                refinement.passes_done, refinement.passes_asked, refinement.passes_done
-            )),
-            RefinementState::NotDone => say_err(
-                "map-sink: the final path was not refined; trajectory.tum and the map hold \
-                 the filter's path (metrics.json: refinement)",
-            ),
-            _ => {}
         }
     }
     if let Some(peak) = peak_memory_kb() {
@@ -524,24 +472,73 @@ fn drain_path(
 /// its last solve, bounded all the same (a back end that died must not hang the end).
 const GRAPH_PATH_WAIT: Duration = Duration::from_secs(30);
 
-/// Waits for the back end's path at the end of the stream; false when stopped first.
-fn wait_for_graph_path(
-    inlet: &Inlet<PathChunk>,
-    assembly: &mut PathAssembly,
-    recorder: &mut Recorder,
-    final_path: &mut FinalPath,
-) -> Result<bool> {
-    let since = Instant::now();
-    while !final_path.complete && since.elapsed() < GRAPH_PATH_WAIT {
-        if wait_any(&[inlet], PATH_POLL)? == Wake::Shutdown {
-            return Ok(false);
+/// The back end's results, as they come.
+struct Graph {
+    path: Inlet<PathChunk>,
+    grid: Inlet<GridCells>,
+}
+
+/// The back end's path and grid, as far as their pieces have come.
+#[derive(Default)]
+struct GraphPieces {
+    path: PathAssembly,
+    grid: GridPieces,
+}
+
+impl Graph {
+    /// Takes what has come of the back end's grid and path. The back end sends its grid
+    /// before its path: once the final path is whole, so is the grid before it.
+    fn drain(
+        &self,
+        pieces: &mut GraphPieces,
+        recorder: &mut Recorder,
+        final_path: &mut FinalPath,
+    ) -> Result<()> {
+        self.drain_grid(&mut pieces.grid, recorder)?;
+        drain_path(&self.path, &mut pieces.path, recorder, final_path, true)?;
+        self.drain_grid(&mut pieces.grid, recorder)
+    }
+
+    fn drain_grid(&self, pieces: &mut GridPieces, recorder: &mut Recorder) -> Result<()> {
+        while let Some(piece) = self.grid.receive()? {
+            let Some(whole) = pieces.add(&piece) else {
+                continue;
+            };
+            let g = whole.geometry;
+            let grid =
+                OccupancyGrid::from_pixels(g.resolution, g.origin, g.width as usize, &whole.cells)
+                    .context("the back end's grid")?;
+            recorder.set_back_end_grid(grid);
         }
-        drain_path(inlet, assembly, recorder, final_path, true)?;
+        Ok(())
     }
-    if !final_path.complete {
-        say_err("map-sink: the back end's path did not come; the filter's estimate stands in");
+
+    /// Waits for the back end's final path at the end of the stream; false when stopped
+    /// first.
+    fn wait_for_final(
+        &self,
+        pieces: &mut GraphPieces,
+        recorder: &mut Recorder,
+        final_path: &mut FinalPath,
+    ) -> Result<bool> {
+        let since = Instant::now();
+        while !final_path.complete && since.elapsed() < GRAPH_PATH_WAIT {
+            if wait_any(&[&self.path, &self.grid], PATH_POLL)? == Wake::Shutdown {
+                return Ok(false);
+            }
+            self.drain(pieces, recorder, final_path)?;
+        }
+        if !final_path.complete {
+            say_err("map-sink: the back end's path did not come; the filter's estimate stands in");
+        }
+        if pieces.grid.out_of_place > 0 {
+            say_err(&format!(
+                "map-sink: {} pieces of the back end's grid did not fit it and were dropped",
+                pieces.grid.out_of_place
+            ));
+        }
+        Ok(true)
     }
-    Ok(true)
 }
 
 fn drain_scans(

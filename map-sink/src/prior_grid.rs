@@ -15,14 +15,8 @@
 //! takes the state of the saved cells it overlaps, occupied if any of them is, else free if
 //! any is, so that a thin wall survives a coarser grid. A rotated grid (origin yaw other
 //! than 0) is refused.
-//!
-//! The saved walls are also a reference the run's final path is refined against
-//! ([`saved_walls`], [`crate::refine_path`]): where the run sees them again its scans are
-//! aligned to them as to another pass's walls, which ties the run to the saved map, so that
-//! a wall both saw is drawn once.
 
 use crate::saved_map::GridMap;
-use crate::wall_field::SeenReturn;
 use back_end::occupancy_grid::{
     CellState, GridError, HIT_LOG_ODDS, MAX_CELLS, MISS_LOG_ODDS, OccupancyGrid, RESOLUTION_RANGE_M,
 };
@@ -143,52 +137,6 @@ pub fn prior_grid(
         })
 }
 
-/// The walls of a saved grid (`prior`, from [`prior_grid`]) as returns for the path
-/// refinement to align this run's scans to: the centre of each occupied cell that has a free
-/// neighbour, seen from that side (the sum of the directions to its free neighbours; a cell
-/// with none, inside a wall or seen from nowhere, is no wall surface).
-pub(crate) fn saved_walls(prior: &OccupancyGrid) -> Vec<SeenReturn> {
-    let (width, height) = (prior.width(), prior.height());
-    let resolution = prior.resolution_m();
-    let [x0, y0] = prior.origin();
-    let free = |col: i64, row: i64| {
-        col >= 0
-            && row >= 0
-            && (col as usize) < width
-            && (row as usize) < height
-            && prior.state(col as usize, row as usize) == CellState::Free
-    };
-    let mut walls = Vec::new();
-    for row in 0..height {
-        for col in 0..width {
-            if prior.state(col, row) != CellState::Occupied {
-                continue;
-            }
-            let mut side = [0.0, 0.0];
-            for (dc, dr) in [(1_i64, 0_i64), (-1, 0), (0, 1), (0, -1)] {
-                if free(col as i64 + dc, row as i64 + dr) {
-                    side[0] += dc as f64;
-                    side[1] += dr as f64;
-                }
-            }
-            let norm = side[0].hypot(side[1]);
-            if norm == 0.0 {
-                continue;
-            }
-            let at = [
-                x0 + (col as f64 + 0.5) * resolution,
-                y0 + (row as f64 + 0.5) * resolution,
-            ];
-            walls.push(SeenReturn {
-                at,
-                // A metre out on the free side: only the side matters.
-                from: [at[0] + side[0] / norm, at[1] + side[1] / norm],
-            });
-        }
-    }
-    walls
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -291,21 +239,6 @@ mod tests {
         let error = prior_grid(&map, 0.1).expect_err("rotated");
         assert_eq!(error, PriorGridError::Rotated { yaw: 0.3 });
         assert!(error.to_string().contains("rotated"), "{error}");
-    }
-
-    #[test]
-    fn a_saved_wall_is_seen_from_its_free_side() {
-        // A wall two cells thick between free floor (west) and unknown (east).
-        let map = saved(0.1, [0.0, 0.0], &["..##?", "..##?", "..##?"]);
-        let prior = prior_grid(&map, 0.1).expect("valid").expect("cells");
-        let walls = saved_walls(&prior);
-        // Only the west face: the east cells of the wall border no free cell.
-        assert_eq!(walls.len(), 3);
-        for (row, wall) in walls.iter().enumerate() {
-            let y = 0.1 * row as f64 + 0.05;
-            assert!((wall.at[0] - 0.25).abs() < 1e-9 && (wall.at[1] - y).abs() < 1e-9);
-            assert!(wall.from[0] < wall.at[0] && (wall.from[1] - y).abs() < 1e-9);
-        }
     }
 
     /// A sensor at (0.02, 0.02) facing +x, its beams ending on a wall 1 m ahead.

@@ -4,29 +4,28 @@ use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::fs;
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use crate::atomic::{StagedFile, write_atomic};
-use crate::corner_shift::follow_refined_path;
+use crate::atomic::write_atomic;
+use crate::corner_shift::follow_final_path;
 use crate::corners_csv::corners_csv;
-use crate::end_clock::EndClock;
 use crate::error::SinkError;
 use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, map_files};
-use crate::path_refinement::{PathRefinementConfig, RefinementReport, refine_path_within};
 use crate::prior_grid::prior_grid;
 use crate::saved_map::GridMap;
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
 use back_end::compact_scan::CompactScan;
-use back_end::occupancy_grid::{GridConfig, OccupancyGrid};
+use back_end::global_grid::{self, Layer};
+use back_end::occupancy_grid::{CellState, GridConfig, OccupancyGrid};
 use slam_eval::{
     AteStats, DEAD_RECKONING_FILE, FitVerdict, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput,
-    METRICS_FILE, MapFit, Metrics, PathRefinement, RefinementState, RelationsFile,
-    RelativePoseErrors, SearchPhase, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE, ate, distance,
-    nearest_rmse, percentile, score_run, score_tum_file,
+    METRICS_FILE, MapFit, Metrics, RelationsFile, RelativePoseErrors, SearchPhase, TRAJECTORY_FILE,
+    TRAJECTORY_ONLINE_FILE, ate, distance, nearest_rmse, percentile, score_run,
 };
 use slam_geom::MapCorner;
+use slam_geom::Point2;
 use slam_geom::Pose2;
 use slam_geom::Se2Alignment;
 use slam_geom::StampedPose;
@@ -48,8 +47,10 @@ pub struct RecorderOptions {
     pub relations: Option<RelationsFile>,
     /// How far a pose's stamp may be from a relation's, nanoseconds.
     pub relations_tolerance_ns: u64,
-    /// How the filter's final path is refined against its own grid before it is written.
-    pub refinement: PathRefinementConfig,
+    /// The back end (graph-proc) runs: its path and grid are the run's
+    /// ([`Recorder::set_back_end_path`], [`Recorder::set_back_end_grid`]), so no scan is
+    /// kept and nothing is traced here.
+    pub back_end: bool,
 }
 
 impl Default for RecorderOptions {
@@ -59,7 +60,7 @@ impl Default for RecorderOptions {
             grid: GridConfig::default(),
             relations: None,
             relations_tolerance_ns: slam_eval::DEFAULT_TOLERANCE_NS,
-            refinement: PathRefinementConfig::default(),
+            back_end: false,
         }
     }
 }
@@ -81,10 +82,8 @@ pub struct GridReport {
     pub revisits_left_out: usize,
     /// Bytes of the grid's log-odds (as much again was used while tracing).
     pub grid_bytes: usize,
-    /// Refining the final path, tracing and thresholding, seconds.
+    /// Laying or tracing the grid and writing the run's results, seconds.
     pub build_s: f64,
-    /// What refining the final path did (`None` when there was no filter path to refine).
-    pub refinement: Option<RefinementReport>,
 }
 
 /// What a finished run wrote, for whoever passes it on (map-sink publishes it for a
@@ -94,12 +93,14 @@ pub struct FinishedRun {
     pub metrics: Metrics,
     /// What the occupancy grid cost.
     pub report: Option<GridReport>,
-    /// The poses of `trajectory.tum` (refined when there was a filter path to refine), or
-    /// `None` when the file was not written.
+    /// The poses of `trajectory.tum` (the final path, or the online estimate standing in),
+    /// or `None` when the file was not written.
     pub final_path: Option<Vec<StampedPose>>,
     /// The grid of `map.pgm` and `map.yaml`, or `None` when there is none or it was not
     /// written.
     pub grid: Option<OccupancyGrid>,
+    /// The filter's corners left out for lying where the back end's grid shows free space.
+    pub corners_left_out: usize,
 }
 
 /// A pose whose trajectory lines wait for its scan (or a later one, if this stage lost it):
@@ -133,8 +134,9 @@ struct Estimate {
 /// last.
 ///
 /// Poses, truth and scans are matched by sequence number (the scan's), in any arrival order.
-/// The occupancy grid is traced at the end from the final path, so scans are kept until
-/// then: compactly, and only those taken from a new viewpoint ([`ScanKeeper`]).
+/// Without the back end, the occupancy grid is traced at the end from the final path, so
+/// scans are kept until then: compactly, and only those taken from a new viewpoint
+/// ([`ScanKeeper`]). With it, the grid is the back end's.
 #[derive(Debug)]
 pub struct Recorder {
     dir: PathBuf,
@@ -151,6 +153,14 @@ pub struct Recorder {
     scans: ScanKeeper,
     /// Mapping on a saved map: its grid on this run's cells ([`Self::map_on`]).
     prior: Option<OccupancyGrid>,
+    /// The back end's latest grid, in its frame.
+    back_end_grid: Option<OccupancyGrid>,
+    /// On a saved map, the motion from the back end's frame to the map's.
+    map_from_graph: Option<Pose2>,
+    /// The back end's grid laid in the run's frame, at the end ([`Self::lay_back_end_grid`]).
+    laid_grid: Option<OccupancyGrid>,
+    /// Corners left out for lying off the walls of the grid written.
+    corners_left_out: usize,
     /// Whether the run maps on a saved map (whose frame the filter's estimate is in).
     on_saved_map: bool,
     latencies_ns: Vec<u64>,
@@ -213,6 +223,10 @@ impl Recorder {
             dir: dir.to_path_buf(),
             scans: ScanKeeper::new(resolution),
             prior: None,
+            back_end_grid: None,
+            map_from_graph: None,
+            laid_grid: None,
+            corners_left_out: 0,
             on_saved_map: false,
             options,
             online,
@@ -374,6 +388,10 @@ impl Recorder {
         self.touch();
         self.scans_seen += 1;
         self.scans_through = Some(self.scans_through.map_or(seq, |through| through.max(seq)));
+        if self.options.back_end {
+            self.write_lines(false);
+            return;
+        }
         let grid = &self.options.grid;
         let scan = CompactScan::new(
             angle_min,
@@ -389,8 +407,8 @@ impl Recorder {
         self.write_lines(false);
     }
 
-    /// Mapping on a saved map: the run's grid starts from `saved` (its scans add to it, and
-    /// the final path is refined against its walls too: [`crate::prior_grid`]).
+    /// Mapping on a saved map: the run's grid starts from `saved` (its scans add to it, or
+    /// the back end's grid is laid over it: [`crate::prior_grid`]).
     pub fn map_on(&mut self, saved: &GridMap) -> Result<(), SinkError> {
         self.prior = prior_grid(saved, self.options.grid.resolution_m)?;
         self.on_saved_map = true;
@@ -402,11 +420,11 @@ impl Recorder {
     /// map's frame, so the path is moved there whole: by the rigid motion that best lays it
     /// on that estimate (from convergence, where the run reports one).
     pub fn set_back_end_path(&mut self, path: &[StampedPose]) {
-        let path = match self
+        self.map_from_graph = self
             .on_saved_map
             .then(|| self.map_from_graph(path))
-            .flatten()
-        {
+            .flatten();
+        let path = match self.map_from_graph {
             Some(map_from_graph) => path
                 .iter()
                 .map(|p| StampedPose {
@@ -432,6 +450,46 @@ impl Recorder {
             .filter_map(|p| Some((p.pose, *online.get(&p.stamp_ns)?)))
             .collect();
         Pose2::fit(&pairs)
+    }
+
+    /// The corners, placed by the filter, moved as the back end's final path moved the
+    /// filter's estimate of the poses near them: they lie on the grid traced from that path.
+    /// A corner the robot passed more than once moves by the mean of the passes'
+    /// corrections, which need not be its own: one that lands off the walls of the grid
+    /// written is left out, lest a run on the saved map hold on to it.
+    fn corners_onto_final_path(&mut self) {
+        let Some(path) = &self.final_path else {
+            return;
+        };
+        let online: HashMap<u64, Pose2> = self
+            .estimates
+            .values()
+            .map(|e| (e.stamp_ns, e.pose))
+            .collect();
+        let (filter, last): (Vec<StampedPose>, Vec<StampedPose>) = path
+            .iter()
+            .filter_map(|p| {
+                let pose = *online.get(&p.stamp_ns)?;
+                let stamp_ns = p.stamp_ns;
+                Some((StampedPose { stamp_ns, pose }, *p))
+            })
+            .unzip();
+        if let Some(moved) = follow_final_path(&self.map, &filter, &last) {
+            self.map = moved;
+        }
+        let Some(grid) = &self.laid_grid else {
+            return;
+        };
+        let before = self.map.len();
+        self.map
+            .retain(|corner| wall_near(grid, Point2::new(corner.x, corner.y), CORNER_WALL_REACH_M));
+        self.corners_left_out = before - self.map.len();
+    }
+
+    /// The back end's grid (in its frame; the latest wins), which becomes `map.pgm`: on a
+    /// saved map laid over the saved grid where the back end's path was laid.
+    pub fn set_back_end_grid(&mut self, grid: OccupancyGrid) {
+        self.back_end_grid = Some(grid);
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).
@@ -505,99 +563,63 @@ impl Recorder {
     }
 
     /// [`finish`](Self::finish), also handing on what the occupancy grid cost, the final
-    /// path and the grid as they were written.
-    pub fn finish_run(self) -> Result<FinishedRun, SinkError> {
-        self.finish_run_within(&EndClock::unlimited())
-    }
-
-    /// [`finish_run`](Self::finish_run) within the time `clock` gives, in two steps so that
-    /// a kill at any moment leaves a whole, consistent map directory:
-    ///
-    /// 1. The results of the filter's path as it came, each file atomically:
-    ///    `trajectory.tum`, `map_corners.csv`, `landmarks.json` and `metrics.json` first
-    ///    (cheap), then the grid traced along that path (`map.pgm`, `map.png`, `map.yaml`,
-    ///    `landmarks.json` naming them), `map.svg` and `metrics.json` again, which says the
-    ///    refinement is pending.
-    /// 2. The refinement of the path, for as long as the clock leaves time to write what it
-    ///    reached; then every file the refined path changes, each written in full under its
-    ///    temporary name first and all renamed into place one right after the other, and
-    ///    `metrics.json` last, saying how many passes the files hold (all, or those done
-    ///    when time ran out).
-    ///
-    /// Without a stop the clock never runs out, and the files are the same on every run.
-    pub fn finish_run_within(mut self, clock: &EndClock) -> Result<FinishedRun, SinkError> {
+    /// path and the grid as they were written. Each file is written atomically, so a kill
+    /// at any moment leaves whole files: `trajectory.tum`, `map_corners.csv`,
+    /// `landmarks.json` and `metrics.json` first (cheap), then the grid (`map.pgm`,
+    /// `map.png`, `map.yaml`, `landmarks.json` naming them), `map.svg` and `metrics.json`
+    /// again, last.
+    pub fn finish_run(mut self) -> Result<FinishedRun, SinkError> {
         self.write_lines(true);
         for stream in [&self.online, &self.ground_truth, &self.dead_reckoning] {
             self.incomplete.extend(stream.sync());
         }
         if self.misfit() {
-            // Neither the grid's start nor the refinement's walls: another building's.
+            // Another building's grid: the run's map is its own.
             self.prior = None;
         }
         let started = Instant::now();
-        let asked = self.options.refinement.passes;
-        let (filter_path, refinement) = match &self.final_path {
-            Some(path) => (
-                path.clone(),
-                Some(PathRefinement {
-                    passes_asked: asked,
-                    passes_done: 0,
-                    state: if asked == 0 {
-                        RefinementState::Complete
-                    } else {
-                        RefinementState::Pending
-                    },
-                }),
-            ),
-            // Nothing to refine: the online estimate stands in.
-            None => (
-                self.estimates
-                    .values()
-                    .map(|e| StampedPose {
-                        stamp_ns: e.stamp_ns,
-                        pose: e.pose,
-                    })
-                    .collect(),
-                None,
-            ),
+        if self.options.back_end {
+            self.laid_grid = self.lay_back_end_grid()?;
+            self.corners_onto_final_path();
+        }
+        let path = match &self.final_path {
+            Some(path) => path.clone(),
+            // No final path came: the online estimate stands in.
+            None => self
+                .estimates
+                .values()
+                .map(|e| StampedPose {
+                    stamp_ns: e.stamp_ns,
+                    pose: e.pose,
+                })
+                .collect(),
         };
-        let first = self.write_results(&filter_path, refinement)?;
-        let first_took = started.elapsed();
-        let run = match refinement {
-            Some(refinement) if refinement.state == RefinementState::Pending => {
-                self.refine_and_rewrite(&filter_path, first, first_took, clock)?
-            }
-            _ => first.finished(None),
-        };
-        let report = run
-            .traced
-            .map(|(width, height, grid_bytes, traced)| GridReport {
-                width,
-                height,
-                resolution_m: self.options.grid.resolution_m,
-                scans_traced: traced,
-                beams_kept: self.scans.beams(),
-                scan_bytes: self.scans.bytes(),
-                revisits_left_out: self.scans.revisits(),
-                grid_bytes,
-                build_s: started.elapsed().as_secs_f64(),
-                refinement: run.refinement,
-            });
+        let written = self.write_results(&path)?;
+        let report = written.grid.as_ref().map(|(grid, traced)| GridReport {
+            width: grid.width(),
+            height: grid.height(),
+            resolution_m: self.options.grid.resolution_m,
+            scans_traced: *traced,
+            beams_kept: self.scans.beams(),
+            scan_bytes: self.scans.bytes(),
+            revisits_left_out: self.scans.revisits(),
+            grid_bytes: grid.bytes(),
+            build_s: started.elapsed().as_secs_f64(),
+        });
         Ok(FinishedRun {
-            metrics: run.metrics,
+            metrics: written.metrics,
             report,
-            final_path: run.final_path,
-            grid: run.grid,
+            final_path: written.path_written.then_some(path),
+            grid: written
+                .grid
+                .filter(|_| written.map_written)
+                .map(|(grid, _)| grid),
+            corners_left_out: self.corners_left_out,
         })
     }
 
-    /// Step 1 of [`finish_run_within`](Self::finish_run_within): every result of `path`,
-    /// each file written atomically in turn.
-    fn write_results(
-        &mut self,
-        path: &[StampedPose],
-        refinement: Option<PathRefinement>,
-    ) -> Result<Written, SinkError> {
+    /// Every result of `path`, each file written atomically in turn.
+    fn write_results(&mut self, path: &[StampedPose]) -> Result<Written, SinkError> {
         let unwritten = self.incomplete.len();
         self.write_result(TRAJECTORY_FILE, self.robot_path(path).as_bytes());
         let path_written = self.incomplete.len() == unwritten;
@@ -605,7 +627,7 @@ impl Recorder {
             .scored_relations()
             .map(|truth| score_run(&self.dir, &truth, self.options.relations_tolerance_ns))
             .transpose()?;
-        let scored = self.scored(path, relative_pose_error, refinement);
+        let scored = self.scored(path, relative_pose_error);
         self.write_result(MAP_CORNERS_FILE, corners_csv(&self.map).as_bytes());
         // The landmarks and the metrics before the grid, which takes long on a long run: a
         // run killed while tracing it keeps a landmark map (without a grid) and its numbers.
@@ -625,195 +647,10 @@ impl Recorder {
         let metrics = self.write_metrics(&scored.metrics);
         Ok(Written {
             metrics,
-            path: path.to_vec(),
             path_written,
             grid,
             map_written,
         })
-    }
-
-    /// Step 2 of [`finish_run_within`](Self::finish_run_within): refines the filter's path
-    /// as far as `clock` allows and puts the files it changes in place of `first`'s. Writing
-    /// them takes about as long as step 1 did (`first_took`): the refinement stops while
-    /// twice that is left.
-    fn refine_and_rewrite(
-        &mut self,
-        filter_path: &[StampedPose],
-        first: Written,
-        first_took: Duration,
-        clock: &EndClock,
-    ) -> Result<Finished, SinkError> {
-        let asked = self.options.refinement.passes;
-        let reserve = first_took * 2 + WRITE_MARGIN;
-        let has_time = || clock.has(reserve);
-        let refined = self.refine(filter_path, &has_time);
-        let (path, report) = match refined {
-            Ok((path, report)) if !report.aligned_per_pass.is_empty() => (path, report),
-            Ok((_, report)) => {
-                // Cut short before a pass was done: the files of step 1 are the result.
-                let state = if report.cut_short {
-                    RefinementState::CutShort
-                } else {
-                    RefinementState::Complete
-                };
-                return Ok(self.restate(first, state, 0, Some(report)));
-            }
-            // A path whose grid cannot be traced cannot be refined either; step 1 said why
-            // there is no grid.
-            Err(_) => return Ok(self.restate(first, RefinementState::NotDone, 0, None)),
-        };
-        let done = report.aligned_per_pass.len();
-        let state = if report.cut_short {
-            RefinementState::CutShort
-        } else {
-            RefinementState::Complete
-        };
-        let refinement = PathRefinement {
-            passes_asked: asked,
-            passes_done: done,
-            state,
-        };
-        // The corners were placed from the filter's path: they go where it was moved (as
-        // step 1's files had them if the refined ones are not put in place).
-        let filter_corners = self.map.clone();
-        if let Some(moved) = follow_refined_path(&self.map, filter_path, &path) {
-            self.map = moved;
-        }
-        let staged = match self.stage_results(&path, &first, refinement) {
-            Ok(staged) => staged,
-            Err(e) => {
-                self.map = filter_corners;
-                self.incomplete.push(IncompleteOutput::new(
-                    REFINED_RESULTS,
-                    "not written; the files hold the filter's path",
-                    &e,
-                ));
-                return Ok(self.restate(first, RefinementState::NotDone, 0, Some(report)));
-            }
-        };
-        if !clock.has(SWAP_TIME) {
-            // Too late to put them in place before the kill: the staged files are dropped.
-            drop(staged);
-            self.map = filter_corners;
-            return Ok(self.restate(first, RefinementState::CutShort, 0, Some(report)));
-        }
-        let Staged {
-            files,
-            mut metrics,
-            grid,
-        } = staged;
-        metrics.refinement = Some(PathRefinement {
-            state: RefinementState::Replacing,
-            ..refinement
-        });
-        self.write_metrics(&metrics);
-        let mut replaced = Vec::with_capacity(files.len());
-        for (name, file) in files {
-            match file.commit() {
-                Ok(()) => replaced.push(name),
-                Err(e) => self.incomplete.push(IncompleteOutput::new(
-                    name,
-                    "refined version not written",
-                    &e,
-                )),
-            }
-        }
-        // What step 1 could not write is whole now, if its refined version was put in place.
-        let map_replaced = MAP_NAMES.iter().all(|name| replaced.contains(name));
-        let label = map_files_label();
-        self.incomplete.retain(|o| {
-            let now_whole =
-                replaced.contains(&o.file.as_str()) || (map_replaced && o.file == label);
-            !now_whole
-        });
-        metrics.refinement = Some(refinement);
-        let metrics = self.write_metrics(&metrics);
-        let path_written = replaced.contains(&TRAJECTORY_FILE) || first.path_written;
-        let traced = grid.as_ref().map(traced_counts);
-        Ok(Finished {
-            metrics,
-            final_path: path_written.then_some(path),
-            traced,
-            grid: grid.filter(|_| map_replaced).map(|(grid, _)| grid),
-            refinement: Some(report),
-        })
-    }
-
-    /// The results of the refined `path`, each file written in full under its temporary
-    /// name (`first` gave the relative-pose errors of the other trajectories); the first
-    /// file that cannot be written drops them all.
-    fn stage_results(
-        &self,
-        path: &[StampedPose],
-        first: &Written,
-        refinement: PathRefinement,
-    ) -> Result<Staged, SinkError> {
-        let mut files = Vec::new();
-        let trajectory = StagedFile::write(
-            &self.dir.join(TRAJECTORY_FILE),
-            self.robot_path(path).as_bytes(),
-        )?;
-        let relative_pose_error =
-            match (self.scored_relations(), &first.metrics.relative_pose_error) {
-                (Some(truth), Some(before)) => Some(RelativePoseErrors {
-                    trajectory: trajectory
-                        .staged_at()
-                        .map(|at| score_tum_file(at, &truth, self.options.relations_tolerance_ns))
-                        .transpose()?
-                        .flatten(),
-                    ..before.clone()
-                }),
-                _ => None,
-            };
-        files.push((TRAJECTORY_FILE, trajectory));
-        files.push((
-            MAP_CORNERS_FILE,
-            StagedFile::write(
-                &self.dir.join(MAP_CORNERS_FILE),
-                corners_csv(&self.map).as_bytes(),
-            )?,
-        ));
-        let scored = self.scored(path, relative_pose_error, Some(refinement));
-        let grid = self.grid(path)?;
-        for (name, contents) in map_files(grid.as_ref().map(|(grid, _)| grid), &self.map)? {
-            files.push((name, StagedFile::write(&self.dir.join(name), &contents)?));
-        }
-        let svg = self.picture(
-            &scored.trajectory,
-            scored.stats,
-            &scored.metrics,
-            grid.as_ref().map(|(grid, _)| grid),
-        );
-        files.push((
-            MAP_SVG_FILE,
-            StagedFile::write(&self.dir.join(MAP_SVG_FILE), svg.as_bytes())?,
-        ));
-        Ok(Staged {
-            files,
-            metrics: scored.metrics,
-            grid,
-        })
-    }
-
-    /// Step 1's files stand: `metrics.json` is written again, saying what became of the
-    /// refinement.
-    fn restate(
-        &mut self,
-        first: Written,
-        state: RefinementState,
-        passes_done: usize,
-        report: Option<RefinementReport>,
-    ) -> Finished {
-        let mut metrics = first.metrics.clone();
-        metrics.refinement = Some(PathRefinement {
-            passes_asked: self.options.refinement.passes,
-            passes_done,
-            state,
-        });
-        let metrics = self.write_metrics(&metrics);
-        let mut finished = first.finished(report);
-        finished.metrics = metrics;
-        finished
     }
 
     /// Writes `metrics` as metrics.json, atomically, with the run's incomplete files; a
@@ -868,7 +705,6 @@ impl Recorder {
         &self,
         path: &[StampedPose],
         relative_pose_error: Option<RelativePoseErrors>,
-        refinement: Option<PathRefinement>,
     ) -> Scored {
         let trajectory: Vec<[f64; 2]> = path.iter().map(|p| p.pose.position().into()).collect();
         let stats = self.score_path(path);
@@ -886,7 +722,6 @@ impl Recorder {
         metrics.search_phase = self.search_phase(stats.as_ref());
         metrics.relative_pose_error = relative_pose_error;
         metrics.online_ate_rmse_m = online_stats.map(|s| s.rmse_m);
-        metrics.refinement = refinement;
         Scored {
             metrics,
             trajectory,
@@ -894,32 +729,36 @@ impl Recorder {
         }
     }
 
-    /// The filter's final path refined against the grid its kept scans trace, for as long
-    /// as `has_time` says there is time.
-    fn refine(
-        &self,
-        path: &[StampedPose],
-        has_time: &(dyn Fn() -> bool + Sync),
-    ) -> Result<(Vec<StampedPose>, RefinementReport), SinkError> {
-        let scans: Vec<(u64, &CompactScan)> = self
-            .scans
-            .kept()
-            .iter()
-            .map(|(stamp, scan)| (*stamp, scan))
-            .collect();
-        Ok(refine_path_within(
-            path,
-            &scans,
-            &self.options.grid,
-            &self.options.refinement,
-            self.prior.as_ref(),
-            has_time,
-        )?)
+    /// The run's grid: the back end's where it runs ([`Self::lay_back_end_grid`]), else
+    /// traced here.
+    fn grid(&self, path: &[StampedPose]) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
+        if self.options.back_end {
+            Ok(self.laid_grid.clone().map(|g| (g, 0)))
+        } else {
+            self.traced_grid(path)
+        }
+    }
+
+    /// The back end's grid in the run's frame: on a saved map, laid over the saved grid
+    /// where the back end's path was laid.
+    fn lay_back_end_grid(&self) -> Result<Option<OccupancyGrid>, SinkError> {
+        Ok(match (&self.back_end_grid, &self.prior) {
+            (Some(run), Some(prior)) => {
+                let map_from_graph = self.map_from_graph.unwrap_or(Pose2::IDENTITY);
+                let layers: [(Pose2, &dyn Layer); 2] =
+                    [(Pose2::IDENTITY, prior), (map_from_graph, run)];
+                global_grid::render(&layers, self.options.grid.resolution_m)?
+            }
+            (run, prior) => run.as_ref().or(prior.as_ref()).cloned(),
+        })
     }
 
     /// The occupancy grid of the scans kept, each traced from its pose on `path` (matched by
     /// stamp; a scan the path does not hold is left out), with the number traced.
-    fn grid(&self, path: &[StampedPose]) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
+    fn traced_grid(
+        &self,
+        path: &[StampedPose],
+    ) -> Result<Option<(OccupancyGrid, usize)>, SinkError> {
         let poses: HashMap<u64, Pose2> = path.iter().map(|p| (p.stamp_ns, p.pose)).collect();
         let scans: Vec<(Pose2, &CompactScan)> = self
             .scans
@@ -1084,7 +923,6 @@ impl Recorder {
             dead_reckoning_ate_rmse_m: dead_reckoning.map(|s| s.rmse_m),
             online_ate_rmse_m: None,
             relative_pose_error: None,
-            refinement: None,
             converged_at_scan: self.converged_at.map(|(seq, _)| seq),
             converged_at_stamp: self
                 .converged_at
@@ -1146,14 +984,6 @@ impl Recorder {
     }
 }
 
-/// Time kept free for writing, beyond twice what step 1 took: the margin of a machine
-/// under load.
-const WRITE_MARGIN: Duration = Duration::from_millis(1500);
-/// What renaming the staged files into place needs at most: the refined files are only put
-/// in place while this much is left, so that the kill does not come halfway through.
-const SWAP_TIME: Duration = Duration::from_millis(500);
-/// The refined files, as one output in the list of incomplete ones.
-const REFINED_RESULTS: &str = "refined trajectory.tum, map and map.svg";
 /// The map's files written from a grid, in their order.
 const MAP_NAMES: [&str; 4] = [MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, LANDMARKS_FILE];
 
@@ -1169,9 +999,35 @@ fn tum_text(path: &[StampedPose]) -> String {
         .collect()
 }
 
-/// The grid's size and cost, and the scans traced, for the [`GridReport`].
-fn traced_counts((grid, traced): &(OccupancyGrid, usize)) -> (usize, usize, usize, usize) {
-    (grid.width(), grid.height(), grid.bytes(), *traced)
+/// How far from a corner the back end's grid must show a wall for it to stay, metres: the
+/// cell the corner lies in and the next, whichever way the two walls' cells were cut.
+const CORNER_WALL_REACH_M: f64 = 0.1;
+
+/// Whether `grid` holds an occupied cell within `reach` of `at`.
+fn wall_near(grid: &OccupancyGrid, at: Point2, reach: f64) -> bool {
+    let res = grid.resolution_m();
+    let [x0, y0] = grid.origin();
+    let span = (reach / res).ceil() as i64;
+    let col = ((at.x - x0) / res).floor() as i64;
+    let row = ((at.y - y0) / res).floor() as i64;
+    for r in row - span..=row + span {
+        for c in col - span..=col + span {
+            let (Ok(c), Ok(r)) = (usize::try_from(c), usize::try_from(r)) else {
+                continue;
+            };
+            if c >= grid.width() || r >= grid.height() {
+                continue;
+            }
+            let centre = Point2::new(x0 + (c as f64 + 0.5) * res, y0 + (r as f64 + 0.5) * res);
+            if (centre - at).norm() > reach + 0.5 * res {
+                continue;
+            }
+            if grid.state(c, r) == CellState::Occupied {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// A path's metrics, positions and alignment to the truth.
@@ -1181,44 +1037,14 @@ struct Scored {
     stats: Option<AteStats>,
 }
 
-/// What step 1 wrote.
+/// What the end of the run wrote.
 struct Written {
     /// As written in metrics.json (with the files that could not be written).
     metrics: Metrics,
-    path: Vec<StampedPose>,
     path_written: bool,
+    /// The grid and the scans traced into it.
     grid: Option<(OccupancyGrid, usize)>,
     map_written: bool,
-}
-
-impl Written {
-    /// Step 1's results as the run's result.
-    fn finished(self, refinement: Option<RefinementReport>) -> Finished {
-        Finished {
-            metrics: self.metrics,
-            final_path: self.path_written.then_some(self.path),
-            traced: self.grid.as_ref().map(traced_counts),
-            grid: self.grid.filter(|_| self.map_written).map(|(grid, _)| grid),
-            refinement,
-        }
-    }
-}
-
-/// The refined results under their temporary names, in the order they are put in place.
-struct Staged {
-    files: Vec<(&'static str, StagedFile)>,
-    metrics: Metrics,
-    grid: Option<(OccupancyGrid, usize)>,
-}
-
-/// The run's result, before its [`GridReport`].
-struct Finished {
-    metrics: Metrics,
-    final_path: Option<Vec<StampedPose>>,
-    /// Width, height, log-odds bytes and scans traced of the grid.
-    traced: Option<(usize, usize, usize, usize)>,
-    grid: Option<OccupancyGrid>,
-    refinement: Option<RefinementReport>,
 }
 
 /// The picture's metric lines.
@@ -1289,112 +1115,6 @@ fn xy(pose: &Pose2) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_room::room_returns;
-    use std::sync::Mutex;
-
-    /// A recorder in a fresh directory holding three laps of the test room, the last one
-    /// drifting off as an open loop does, with the filter's final path of those poses.
-    fn three_laps(tag: &str) -> Result<(PathBuf, Recorder, Vec<StampedPose>), SinkError> {
-        let dir = std::env::temp_dir().join(format!("map-sink-unit-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
-        let mut path = Vec::new();
-        for i in 0..120_u64 {
-            let a = (i % 40) as f64 / 40.0 * std::f64::consts::TAU;
-            let truth = Pose2::new(1.0 + 0.8 * a.cos(), 0.8 * a.sin(), a + 1.5);
-            let drift = i.saturating_sub(79) as f64 / 40.0;
-            let pose = Pose2::new(0.06 * drift, -0.04 * drift, 0.02 * drift).compose(&truth);
-            let ranges: Vec<f32> = room_returns(truth)
-                .iter()
-                .map(|p| p[0].hypot(p[1]) as f32)
-                .collect();
-            recorder.record_pose(i, i * 25_000_000, pose, None, None)?;
-            recorder.record_scan(i, 0.0, 1_f64.to_radians(), 0.05, 30.0, &ranges);
-            path.push(StampedPose {
-                stamp_ns: i * 25_000_000,
-                pose,
-            });
-        }
-        recorder.set_final_path(&path);
-        Ok((dir, recorder, path))
-    }
-
-    fn read_metrics(dir: &Path) -> Option<Metrics> {
-        serde_json::from_str(&std::fs::read_to_string(dir.join(METRICS_FILE)).ok()?).ok()
-    }
-
-    fn refinement(passes_done: usize, state: RefinementState) -> Option<PathRefinement> {
-        Some(PathRefinement {
-            passes_asked: PathRefinementConfig::default().passes,
-            passes_done,
-            state,
-        })
-    }
-
-    #[test]
-    fn a_kill_while_refining_finds_the_filters_path_written_whole() -> Result<(), SinkError> {
-        let (dir, recorder, path) = three_laps("refining")?;
-        // The clock is first read once the refinement has begun: what the directory holds
-        // then is what a kill then would leave.
-        let seen: Mutex<Option<(Option<Metrics>, String, bool)>> = Mutex::new(None);
-        let look = || {
-            seen.lock().expect("not poisoned").get_or_insert_with(|| {
-                let trajectory =
-                    std::fs::read_to_string(dir.join(TRAJECTORY_FILE)).unwrap_or_default();
-                let map = [MAP_PGM_FILE, MAP_YAML_FILE, MAP_PNG_FILE, LANDMARKS_FILE]
-                    .iter()
-                    .all(|name| dir.join(name).is_file());
-                (read_metrics(&dir), trajectory, map)
-            });
-            false
-        };
-        let run = recorder.finish_run_within(&EndClock::new(None, &look))?;
-
-        let (metrics, trajectory, map) = seen
-            .into_inner()
-            .expect("not poisoned")
-            .expect("the clock was read");
-        let metrics = metrics.expect("metrics.json before the refinement");
-        assert_eq!(metrics.refinement, refinement(0, RefinementState::Pending));
-        assert_eq!(trajectory, tum_text(&path), "the filter's path");
-        assert!(map, "the map traced along it");
-        // Then refined, in full.
-        let written = read_metrics(&dir).expect("metrics.json");
-        let passes = PathRefinementConfig::default().passes;
-        assert_eq!(
-            written.refinement,
-            refinement(passes, RefinementState::Complete)
-        );
-        assert_eq!(run.metrics.refinement, written.refinement);
-        let refined = std::fs::read_to_string(dir.join(TRAJECTORY_FILE)).unwrap_or_default();
-        assert_ne!(refined, tum_text(&path));
-        assert_eq!(Some(refined), run.final_path.map(|p| tum_text(&p)));
-        let _ = std::fs::remove_dir_all(&dir);
-        Ok(())
-    }
-
-    #[test]
-    fn a_stop_with_its_budget_spent_keeps_the_filters_path_and_says_so() -> Result<(), SinkError> {
-        let (dir, recorder, path) = three_laps("spent")?;
-        let stopped = || true;
-        let clock = EndClock::new(Some(Duration::ZERO), &stopped);
-        let run = recorder.finish_run_within(&clock)?;
-        let written = read_metrics(&dir).expect("metrics.json");
-        assert_eq!(written.refinement, refinement(0, RefinementState::CutShort));
-        assert_eq!(
-            std::fs::read_to_string(dir.join(TRAJECTORY_FILE)).unwrap_or_default(),
-            tum_text(&path)
-        );
-        assert!(run.grid.is_some() && dir.join(MAP_PGM_FILE).is_file());
-        let left: Vec<String> = std::fs::read_dir(&dir)
-            .map_err(|e| SinkError::io("list", &dir, e))?
-            .filter_map(|e| Some(e.ok()?.file_name().to_string_lossy().into_owned()))
-            .filter(|name| name.ends_with(".tmp"))
-            .collect();
-        assert!(left.is_empty(), "{left:?}");
-        let _ = std::fs::remove_dir_all(&dir);
-        Ok(())
-    }
 
     #[test]
     fn a_restamped_scans_pose_is_written_under_the_sources_stamp() -> Result<(), SinkError> {

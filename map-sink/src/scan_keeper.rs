@@ -9,12 +9,12 @@ use slam_geom::Pose2;
 /// process dropped it) would otherwise be kept for ever; the oldest are dropped first.
 const MAX_PENDING: usize = 256;
 /// A scan is kept when the robot turned this much since the last scan kept (or moved a
-/// grid cell): turning by it moves a wall 2.5 m away by a cell of 5 cm.
-const KEEP_TURN_RAD: f64 = 0.02;
+/// grid cell): the back end's rule for the scans its submaps trace.
+const KEEP_TURN_RAD: f64 = back_end::global_slam::GRID_TURN_RAD;
 
 /// Beams kept before a scan must also come from a viewpoint where no kept scan was taken:
-/// about 16 MB of scans, and an end step (tracing, refining) that fits slam-launch's stop
-/// budget on a loaded machine. Well above a run of the benchmark logs (the office loop
+/// about 16 MB of scans, and an end step (tracing the grid) that fits slam-launch's grace
+/// period for stopped stages on a loaded machine. Well above a run of the benchmark logs (the office loop
 /// keeps 0.66 M beams), so their maps do not change; a robot that goes round the same rooms
 /// for an hour keeps a lap or two of scans and then only those of places new to it.
 const REVISIT_BEAMS: usize = 4_000_000;

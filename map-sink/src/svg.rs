@@ -209,22 +209,7 @@ fn draw_cells(svg: &mut String, view: &SvgView, input: &SvgInput<'_>) {
     }
     let factor = (MIN_CELL_PX / (input.cell_m * view.k)).ceil().max(1.0) as i64;
     let cell = input.cell_m * factor as f64;
-    let mut merged: Vec<GridCell> = Vec::with_capacity(input.cells.len());
-    for c in input.cells {
-        let index = [c.index[0].div_euclid(factor), c.index[1].div_euclid(factor)];
-        merged.push(GridCell {
-            index,
-            occupied: c.occupied,
-        });
-    }
-    merged.sort_by_key(|c| (c.index[1], c.index[0]));
-    merged.dedup_by(|next, kept| {
-        let same = next.index == kept.index;
-        if same {
-            kept.occupied |= next.occupied;
-        }
-        same
-    });
+    let merged = merge_cells(input.cells, factor);
     // Cell units map to pixels through one transform (placement, scale, y flip), so the
     // path holds small integers.
     let (sin, cos) = input.cells_placement.rotation.sin_cos();
@@ -263,6 +248,41 @@ fn draw_cells(svg: &mut String, view: &SvgView, input: &SvgInput<'_>) {
             );
         }
     }
+}
+
+/// `cells` merged `factor` by `factor` into coarser ones, occupied if any of theirs is,
+/// row by row from the lowest: a dense pass over their box, no sort.
+fn merge_cells(cells: &[GridCell], factor: i64) -> Vec<GridCell> {
+    let coarse = |c: &GridCell| [c.index[0].div_euclid(factor), c.index[1].div_euclid(factor)];
+    let (mut lo, mut hi) = ([i64::MAX; 2], [i64::MIN; 2]);
+    for c in cells {
+        let index = coarse(c);
+        for a in 0..2 {
+            lo[a] = lo[a].min(index[a]);
+            hi[a] = hi[a].max(index[a]);
+        }
+    }
+    if cells.is_empty() {
+        return Vec::new();
+    }
+    let width = (hi[0] - lo[0] + 1) as usize;
+    let height = (hi[1] - lo[1] + 1) as usize;
+    // 0 unknown, 1 free, 2 occupied: the larger wins.
+    let mut states = vec![0_u8; width * height];
+    for c in cells {
+        let [x, y] = coarse(c);
+        let state = &mut states[(y - lo[1]) as usize * width + (x - lo[0]) as usize];
+        *state = (*state).max(1 + u8::from(c.occupied));
+    }
+    states
+        .iter()
+        .enumerate()
+        .filter(|(_, state)| **state > 0)
+        .map(|(i, state)| GridCell {
+            index: [lo[0] + (i % width) as i64, lo[1] + (i / width) as i64],
+            occupied: *state == 2,
+        })
+        .collect()
 }
 
 /// A path of unit squares, cells ordered by row then column; horizontal runs become one

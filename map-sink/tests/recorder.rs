@@ -348,11 +348,11 @@ fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
 }
 
 #[test]
-fn a_path_too_wide_for_a_grid_is_written_as_the_filter_gave_it() -> TestResult {
+fn a_path_too_wide_for_a_grid_is_written_with_its_numbers_and_landmarks() -> TestResult {
     let dir = common::scratch_dir("too-wide");
     let mut recorder = Recorder::create(&dir, RecorderOptions::default())?;
-    // Two scans 4 km apart: their grid would have 80 000 x 80 000 cells of 0.05 m, so
-    // neither the refinement nor the grid can be traced.
+    // Two scans 4 km apart: their grid would have 80 000 x 80 000 cells of 0.05 m, so it
+    // cannot be traced.
     let poses = [Pose2::new(0.0, 0.0, 0.0), Pose2::new(4000.0, 4000.0, 0.5)];
     let path: Vec<StampedPose> = poses
         .iter()
@@ -366,7 +366,20 @@ fn a_path_too_wide_for_a_grid_is_written_as_the_filter_gave_it() -> TestResult {
     recorder.set_final_path(&path);
     let result = recorder.finish();
     assert!(matches!(result, Err(SinkError::Grid(_))), "{result:?}");
+    // What a run killed while its grid is made leaves too: the path, the corners, a
+    // landmark map without a grid and the numbers, each whole, and nothing half written.
     assert_trajectory_is(&dir, &poses)?;
+    let metrics: Metrics = serde_json::from_str(&fs::read_to_string(dir.join(METRICS_FILE))?)?;
+    assert_eq!(metrics.frames_processed, 2);
+    assert!(SavedMap::load(&dir)?.grid.is_none());
+    assert_eq!(
+        fs::read_to_string(dir.join(MAP_CORNERS_FILE))?
+            .lines()
+            .count(),
+        1
+    );
+    assert!(!dir.join(MAP_PNG_FILE).exists() && !dir.join(MAP_SVG_FILE).exists());
+    no_tmp_files(&dir)?;
     let _ = fs::remove_dir_all(&dir);
     Ok(())
 }

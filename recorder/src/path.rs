@@ -40,8 +40,8 @@ impl PathMessage {
     }
 }
 
-/// The final path as map-sink wrote it (`trajectory.tum`: refined against its grid when it
-/// refines), one message at the end, in the form of [`PathMessage`].
+/// The final path as map-sink wrote it (`trajectory.tum`), one message at the end, in the
+/// form of [`PathMessage`].
 #[derive(Debug, Serialize, JsonSchema)]
 #[serde(transparent)]
 pub struct MapPathMessage(pub PathMessage);

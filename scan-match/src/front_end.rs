@@ -16,8 +16,8 @@ use crate::odometry_scale::OdometryScale;
 use crate::output::{FrontEndOutput, FrontEndStats, MatchFailure, MatchStatus, OdometryStatus};
 use crate::points::{Extractor, SurfacePoint};
 use crate::prior::{
-    MAX_EXTRAPOLATION_S, OdometryRejection, Step, constant_velocity_step, odometry_step,
-    positive_definite,
+    MAX_EXTRAPOLATION_S, ODOMETRY_MIN_SIGMA_XY, ODOMETRY_MIN_SIGMA_YAW, OdometryRejection, Step,
+    constant_velocity_step, odometry_step, positive_definite,
 };
 use crate::recovery::{RecoveryWindow, rank, recover};
 use crate::registration::{Registration, RegistrationParams, register};
@@ -49,6 +49,58 @@ const WEAK_SHARE: f64 = 0.1;
 /// higher: the wide search sees many more poses, and one of them fitting a little better
 /// by chance is no reason to jump.
 const RECOVERY_MARGIN: f64 = 1.2;
+
+/// A scan with fewer usable points (valid, with a surface normal) is not matched, and a fit
+/// with fewer inliers does not overrule the odometry: a few dozen points can line up with a
+/// map in too many ways to be evidence.
+const MIN_POINTS: usize = 30;
+
+/// Widest gate between a scan point and its map neighbour, metres. Wider than any prior's
+/// plausible error between scans; matches beyond it are clutter. Registration itself
+/// starts from a seed the correlative search has placed, and gates at six voxels at most
+/// (the search's coarse radius).
+pub const MAX_CORRESPONDENCE: f64 = 0.5;
+
+/// The correlative search before registration spans the prior's 3-sigma window, but at
+/// most this far each way, metres: a robot moves less between two scans, and the search's
+/// cost grows with the window's area...
+const MAX_SEARCH_TRANSLATION: f64 = 0.5;
+/// ...and this far in yaw, radians.
+const MAX_SEARCH_YAW: f64 = 0.6;
+
+/// When the prior allows more than that window (a gap in the data) and the fit from it is
+/// weak, a wide search spans the prior's 3-sigma window up to this far each way, metres:
+/// three times the regular window, a gap's worth of motion at an indoor robot's pace, with
+/// the search's cost (its area) still bounded...
+const RECOVERY_TRANSLATION: f64 = 1.5;
+/// ...and this far in yaw, radians: a full turn, since a turn is what a gap hides most.
+const RECOVERY_YAW: f64 = std::f64::consts::PI;
+
+/// Keyframes in the local map at most; the oldest leaves first. At the keyframe spacing
+/// this is the last ten or twenty metres of path: enough to register against, and it bounds
+/// the map's memory and how old the drift is that the map carries.
+const MAX_KEYFRAMES: usize = 50;
+
+/// Without odometry, a fit that leaves a direction open adds a keyframe at least this
+/// often, seconds, however little the robot seems to have moved: what the map lacks along
+/// that direction (a door recess that came into view) may be in the scan, and the open
+/// direction's estimate (constant velocity) may be the very reason the robot seems to stand
+/// still. With odometry the wheels tell that, and keyframes by distance suffice.
+const DEGENERATE_KEYFRAME_INTERVAL_S: f64 = 0.5;
+
+/// A match is confident enough to judge the odometry only with at least this fraction of
+/// its points as inliers: below that, most of the scan is not explained by the fit, which
+/// may sit in a wrong basin.
+const MIN_INLIER_FRACTION: f64 = 0.4;
+
+/// A match overrules a contradicting odometry step only with at least this fraction of its
+/// points as inliers; a weaker one gives way to the odometry.
+const STRONG_INLIER_FRACTION: f64 = 0.6;
+
+/// Squared Mahalanobis distance between the odometry step and the match beyond which the
+/// odometry is rejected: chi-square with 3 degrees of freedom at p = 1e-6, so a consistent
+/// step is almost never rejected.
+const ODOMETRY_GATE: f64 = 30.7;
 
 /// What seeded a registration, which decides how far it may look beyond its window.
 #[derive(Debug, Clone, Copy)]
@@ -124,12 +176,9 @@ impl FrontEnd {
             params: RegistrationParams {
                 range_sigma: config.range_sigma,
                 voxel: config.voxel_size,
-                max_iterations: config.max_iterations,
-                convergence: config.convergence,
-                degeneracy_ratio: config.degeneracy_ratio,
                 weak_steps: false,
             },
-            map: LocalMap::new(config.voxel_size, config.max_keyframes),
+            map: LocalMap::new(config.voxel_size, MAX_KEYFRAMES),
             config,
             extractor: Extractor::default(),
             pose: Pose2::IDENTITY,
@@ -205,7 +254,7 @@ impl FrontEnd {
                 output.odometry = OdometryStatus::Started;
                 self.last_odometry = Some(odometry);
             }
-            if points.len() >= self.config.min_points {
+            if points.len() >= MIN_POINTS {
                 self.map.insert(self.pose, points);
                 self.keyframe_stamp_ns = scan.stamp_ns;
                 output.keyframe = true;
@@ -288,7 +337,7 @@ impl FrontEnd {
             }
             if let Ok(found) = &registration {
                 let distance = disagreement(&predict(&self.pose, &step), found);
-                if distance.is_nan() || distance > self.config.odometry_gate {
+                if distance.is_nan() || distance > ODOMETRY_GATE {
                     // The odometry's seed may have led the fit astray: the scan gets a
                     // second chance from constant velocity, and the better of the two fits
                     // is compared with the odometry.
@@ -302,7 +351,7 @@ impl FrontEnd {
                     let distance = registration
                         .as_ref()
                         .map_or(f64::NAN, |r| disagreement(&predict(&self.pose, &step), r));
-                    if distance <= self.config.odometry_gate {
+                    if distance <= ODOMETRY_GATE {
                         // The second fit agrees with the wheels.
                     } else if registration
                         .as_ref()
@@ -458,9 +507,7 @@ impl FrontEnd {
         // Only without odometry: the wheels tell a robot that moves from one that stands.
         let open = matches!(output.status, MatchStatus::Degenerate { .. })
             && !matches!(output.odometry, OdometryStatus::Used);
-        if points.len() >= self.config.min_points
-            && (lost || self.keyframe_due(scan.stamp_ns, open))
-        {
+        if points.len() >= MIN_POINTS && (lost || self.keyframe_due(scan.stamp_ns, open)) {
             self.map.insert(pose, points);
             self.keyframe_stamp_ns = scan.stamp_ns;
             output.keyframe = true;
@@ -484,7 +531,7 @@ impl FrontEnd {
             weak_steps: !matches!(seeded_by, Seed::Odometry),
             ..self.params
         };
-        if points.len() < self.config.min_points {
+        if points.len() < MIN_POINTS {
             return Err(MatchFailure::TooFewPoints);
         }
         if self.map.is_empty() {
@@ -496,7 +543,7 @@ impl FrontEnd {
             .sqrt();
         let c = &prediction.covariance;
         let gate = (3.0 * (c[(0, 0)] + c[(1, 1)]).sqrt() + 3.0 * c[(2, 2)].sqrt() * spread)
-            .min(self.config.max_correspondence);
+            .min(MAX_CORRESPONDENCE);
         // Where the prior is less certain than the scoring distance, a correlative search
         // picks the basin first (coarse, then fine around the best), so that a fast turn
         // or a no-odometry guess does not leave Gauss-Newton in the wrong one.
@@ -506,10 +553,8 @@ impl FrontEnd {
             yaw: 3.0 * c[(2, 2)].sqrt(),
         };
         let window = Window {
-            translation: prior_window
-                .translation
-                .min(self.config.max_search_translation),
-            yaw: prior_window.yaw.min(self.config.max_search_yaw),
+            translation: prior_window.translation.min(MAX_SEARCH_TRANSLATION),
+            yaw: prior_window.yaw.min(MAX_SEARCH_YAW),
         };
         let mut seed = prediction.pose;
         let sample = subsample(points);
@@ -533,8 +578,8 @@ impl FrontEnd {
         let clipped =
             prior_window.translation > window.translation || prior_window.yaw > window.yaw;
         let n = points.len() as f64;
-        let weak = (found.inliers as f64) < self.config.strong_inlier_fraction * n;
-        let failed = (found.inliers as f64) < self.config.min_inlier_fraction * n;
+        let weak = (found.inliers as f64) < STRONG_INLIER_FRACTION * n;
+        let failed = (found.inliers as f64) < MIN_INLIER_FRACTION * n;
         // Look wider where the prior allowed more than the window searched and the fit is
         // poor (a gap in the data, a fast turn without odometry), over the prior's reach.
         // Not for a merely weak fit between regular scans: a corridor's repeating doors
@@ -547,12 +592,7 @@ impl FrontEnd {
         let turned_past =
             matches!(seeded_by, Seed::ConstantVelocity) && prior_window.yaw > window.yaw;
         let wide = if clipped && (failed || (gap && weak)) {
-            Some((
-                prior_window
-                    .translation
-                    .min(self.config.recovery_translation),
-                None,
-            ))
+            Some((prior_window.translation.min(RECOVERY_TRANSLATION), None))
         } else if turned_past && weak {
             Some((window.translation, Some(window.yaw)))
         } else {
@@ -563,7 +603,7 @@ impl FrontEnd {
                 seed: prediction.pose,
                 window: Window {
                     translation,
-                    yaw: prior_window.yaw.min(self.config.recovery_yaw),
+                    yaw: prior_window.yaw.min(RECOVERY_YAW),
                 },
                 coarse_radius: 3.0 * radius,
                 fine_radius: radius,
@@ -577,8 +617,7 @@ impl FrontEnd {
             let plausible = |other: &Registration| match seeded_by {
                 Seed::SecondOpinion { wheels_turn } => {
                     let turn = wrap_angle(other.pose.yaw - self.pose.yaw);
-                    wrap_angle(turn - wheels_turn).abs()
-                        <= wheels_turn.abs().max(self.config.max_search_yaw)
+                    wrap_angle(turn - wheels_turn).abs() <= wheels_turn.abs().max(MAX_SEARCH_YAW)
                 }
                 Seed::Odometry | Seed::ConstantVelocity => true,
             };
@@ -592,7 +631,7 @@ impl FrontEnd {
                 found = other;
             }
         }
-        if (found.inliers as f64) < self.config.min_inlier_fraction * points.len() as f64 {
+        if (found.inliers as f64) < MIN_INLIER_FRACTION * points.len() as f64 {
             return Err(MatchFailure::TooFewInliers);
         }
         if found.constraint.is_void() {
@@ -602,7 +641,7 @@ impl FrontEnd {
     }
 
     /// Whether a fit that contradicts the odometry step overrules it. Never one with fewer
-    /// inliers than a scan needs points to be registered at all (`min_points`): a few dozen
+    /// inliers than a scan needs points to be registered at all ([`MIN_POINTS`]): a few dozen
     /// points (a short-range sensor's scan, most of its beams no-returns) can line up with
     /// the map tens of degrees from where the wheels put the robot, and a strong share of
     /// a small scan is still small evidence against the wheels. Otherwise a clear fit
@@ -610,10 +649,10 @@ impl FrontEnd {
     /// than at the odometry's (a stale odometry catching up, say), since a weak fit is the
     /// more likely of the two to be wrong.
     fn overrules(&self, found: &Registration, step: &Step, points: &[SurfacePoint]) -> bool {
-        if found.inliers < self.config.min_points {
+        if found.inliers < MIN_POINTS {
             return false;
         }
-        if found.inliers as f64 >= self.config.strong_inlier_fraction * points.len() as f64 {
+        if found.inliers as f64 >= STRONG_INLIER_FRACTION * points.len() as f64 {
             return true;
         }
         let sample = subsample(points);
@@ -678,7 +717,7 @@ impl FrontEnd {
             &step.increment,
             dt,
             self.config.max_linear_acceleration,
-            self.config.odometry_min_sigma_xy,
+            ODOMETRY_MIN_SIGMA_XY,
         )
     }
 
@@ -705,7 +744,7 @@ impl FrontEnd {
                 let since = stamp_ns.saturating_sub(self.keyframe_stamp_ns) as f64 * 1e-9;
                 moved.translation_norm() > self.config.keyframe_distance
                     || moved.yaw.abs() > self.config.keyframe_angle
-                    || (open && since >= self.config.degenerate_keyframe_interval)
+                    || (open && since >= DEGENERATE_KEYFRAME_INTERVAL_S)
             }
         }
     }
@@ -718,9 +757,9 @@ impl FrontEnd {
 
     fn floor_covariance(&self) -> Matrix3<f64> {
         Matrix3::from_diagonal(&Vector3::new(
-            self.config.odometry_min_sigma_xy.powi(2),
-            self.config.odometry_min_sigma_xy.powi(2),
-            self.config.odometry_min_sigma_yaw.powi(2),
+            ODOMETRY_MIN_SIGMA_XY.powi(2),
+            ODOMETRY_MIN_SIGMA_XY.powi(2),
+            ODOMETRY_MIN_SIGMA_YAW.powi(2),
         ))
     }
 

@@ -32,7 +32,8 @@
 //! The result ([`FrontEndOutput`]) is the pose in the front end's own frame (the identity
 //! at the first scan), the increment with its covariance, and what happened (matched,
 //! degenerate and along which direction, failed; odometry used or rejected; counts; time).
-//! [`FrontEnd::stats`] counts over the run. All settings are in [`FrontEndConfig`].
+//! [`FrontEnd::stats`] counts over the run. The settings a user changes are in
+//! [`FrontEndConfig`]; the rest are constants beside the code that uses them.
 
 pub mod bearings;
 mod cell_hash;

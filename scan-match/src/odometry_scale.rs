@@ -22,6 +22,14 @@ pub struct OdometryScaleConfig {
     pub max_correction: f64,
 }
 
+/// The scale's estimate forgets with this distance travelled, metres: long enough to
+/// average out the fits' noise, short enough to follow a change of floor.
+pub const ODOMETRY_SCALE_MEMORY_M: f64 = 50.0;
+
+/// Distance the fits must have measured before the scale is used, metres: a few metres of
+/// fits average their noise below a per cent.
+pub const ODOMETRY_SCALE_MIN_EVIDENCE_M: f64 = 5.0;
+
 /// Wheel steps shorter than this teach nothing about the scale, metres: the fit's noise
 /// would swamp them.
 const MIN_STEP_M: f64 = 0.01;

@@ -26,13 +26,13 @@ pub enum MatchStatus {
 /// Why a scan could not be registered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MatchFailure {
-    /// Fewer usable points than `min_points`.
+    /// Fewer usable points than a scan needs to be matched (30).
     TooFewPoints,
-    /// Too few points found the map within the gate (`min_inlier_fraction`).
+    /// Too few points found the map within the gate (under 40 % of its points).
     TooFewInliers,
     /// The scan constrains no direction at all.
     Unconstrained,
-    /// A weak fit (below `strong_inlier_fraction`) far from a believable odometry step:
+    /// A weak fit (under 60 % of its points as inliers) far from a believable odometry step:
     /// the odometry is taken instead.
     Contradicted,
 }

@@ -10,6 +10,13 @@ use crate::input::OdometryInput;
 /// Constant velocity is extrapolated over at most this long a step, seconds.
 pub const MAX_EXTRAPOLATION_S: f64 = 1.0;
 
+/// Floor of the odometry step's standard deviation, metres: encoder quantisation and the
+/// timing between the odometry and the scan, which a stopped robot's zero growth of
+/// covariance would hide: millimetres, for any wheeled robot.
+pub const ODOMETRY_MIN_SIGMA_XY: f64 = 0.005;
+/// The same floor for yaw, radians.
+pub const ODOMETRY_MIN_SIGMA_YAW: f64 = 0.005;
+
 /// An increment in the previous robot frame and its covariance over `(x, y, yaw)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Step {
@@ -69,9 +76,9 @@ pub fn odometry_step(
         .copy_from(&rotation.transpose());
     let growth = to_robot * growth * to_robot.transpose();
     let floors = Vector3::new(
-        config.odometry_min_sigma_xy.powi(2),
-        config.odometry_min_sigma_xy.powi(2),
-        config.odometry_min_sigma_yaw.powi(2),
+        ODOMETRY_MIN_SIGMA_XY.powi(2),
+        ODOMETRY_MIN_SIGMA_XY.powi(2),
+        ODOMETRY_MIN_SIGMA_YAW.powi(2),
     );
     Ok(Step {
         increment,
@@ -90,8 +97,8 @@ pub fn constant_velocity_step(velocity: &Vector3<f64>, dt: f64, config: &FrontEn
         velocity.y * moving,
         slam_geom::wrap_angle(velocity.z * moving),
     );
-    let linear = (config.velocity_sigma_linear * dt).max(config.odometry_min_sigma_xy);
-    let angular = (config.velocity_sigma_angular * dt).max(config.odometry_min_sigma_yaw);
+    let linear = (config.velocity_sigma_linear * dt).max(ODOMETRY_MIN_SIGMA_XY);
+    let angular = (config.velocity_sigma_angular * dt).max(ODOMETRY_MIN_SIGMA_YAW);
     Step {
         increment,
         covariance: Matrix3::from_diagonal(&Vector3::new(

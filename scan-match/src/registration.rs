@@ -19,14 +19,25 @@ const COARSE_POINTS: usize = 128;
 /// Residuals the robust spread is taken from at most.
 const MEDIAN_SAMPLE: usize = 128;
 
+/// Gauss-Newton iterations at most per scan (over both stages): a fit from a seed the
+/// correlative search placed converges in a few; more means it oscillates.
+pub const MAX_ITERATIONS: usize = 30;
+
+/// The iteration stops once a step moves every point by less than this, metres: a tenth of
+/// a scanner's range noise, below which further steps change nothing measurable.
+pub const CONVERGENCE_M: f64 = 1e-3;
+
+/// A direction (translation, or yaw scaled by the scan's spread) whose information is
+/// below this fraction of the strongest direction's is degenerate: left to the prior. Small,
+/// so that a door frame or two along a corridor, against hundreds of wall points, still
+/// fixes its length.
+pub const DEGENERACY_RATIO: f64 = 0.02;
+
 /// The settings registration needs, taken from [`crate::FrontEndConfig`].
 #[derive(Debug, Clone, Copy)]
 pub struct RegistrationParams {
     pub range_sigma: f64,
     pub voxel: f64,
-    pub max_iterations: usize,
-    pub convergence: f64,
-    pub degeneracy_ratio: f64,
     /// Whether degenerate directions take damped steps (see [`Constraint::step`]): where
     /// the prior is only a velocity guess; an odometry prior decides them better.
     pub weak_steps: bool,
@@ -79,10 +90,10 @@ pub fn register(
         if points.is_empty() {
             continue;
         }
-        for _ in 0..params.max_iterations {
+        for _ in 0..MAX_ITERATIONS {
             iterations += 1;
             last = accumulate(map, points, &pose, gate, scale);
-            let constraint = Constraint::new(&last.hessian, length, params.degeneracy_ratio);
+            let constraint = Constraint::new(&last.hessian, length, DEGENERACY_RATIO);
             if last.matched < 3 || constraint.is_void() {
                 break;
             }
@@ -98,7 +109,7 @@ pub fn register(
             scale = (2.0 * spread).min(scale);
             gate = (params.voxel + 3.0 * spread).clamp(min_gate, gate);
             let moved = step.xy().norm() + step.z.abs() * length;
-            if moved < params.convergence {
+            if moved < CONVERGENCE_M {
                 break;
             }
         }
@@ -112,7 +123,7 @@ pub fn register(
         .max(params.range_sigma * params.range_sigma);
     Registration {
         pose,
-        constraint: Constraint::new(&last.hessian, length, params.degeneracy_ratio),
+        constraint: Constraint::new(&last.hessian, length, DEGENERACY_RATIO),
         variance,
         inliers: last.inliers,
         iterations,

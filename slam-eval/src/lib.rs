@@ -38,7 +38,6 @@ mod gap;
 mod incomplete_output;
 mod map_fit;
 mod metrics;
-mod path_refinement;
 mod percentile;
 mod pose;
 mod pose_errors;
@@ -59,7 +58,6 @@ pub use map_fit::{
     MapFitSummary,
 };
 pub use metrics::{FrameCounts, Metrics, SearchPhase};
-pub use path_refinement::{PathRefinement, RefinementState};
 pub use percentile::percentile;
 pub use run_files::{
     DEAD_RECKONING_FILE, GROUND_TRUTH_FILE, METRICS_FILE, TRAJECTORY_FILE, TRAJECTORY_ONLINE_FILE,

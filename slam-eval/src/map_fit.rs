@@ -22,8 +22,8 @@
 use serde::{Deserialize, Serialize};
 
 /// A beam is explained when it ends this close to a mapped wall's cell, metres: the
-/// localizer calls a cloud converged once it is within 0.15 m (`converged_sigma_xy`), and a
-/// map's walls are blurred by a cell (0.05 m by default). What a right map misses beyond it
+/// localizer calls a cloud converged once it is within 0.15 m (slam-proc's
+/// `CONVERGED_SIGMA_XY`), and a map's walls are blurred by a cell (0.05 m by default). What a right map misses beyond it
 /// is not in the map (people, clutter, glass), not error.
 pub const MAP_FIT_WITHIN_M: f64 = 0.2;
 

@@ -5,7 +5,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::incomplete_output::IncompleteOutput;
 use crate::map_fit::MapFitSummary;
-use crate::path_refinement::PathRefinement;
 use crate::run_score::RelativePoseErrors;
 
 /// How many scans the pipeline published, processed and dropped.
@@ -57,10 +56,6 @@ pub struct Metrics {
     /// The trajectories scored against ground-truth relations, when there were any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative_pose_error: Option<RelativePoseErrors>,
-    /// How far the final path's refinement got, which `trajectory.tum` and the grid show;
-    /// absent when there was no filter path to refine (the online estimate stands in).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub refinement: Option<PathRefinement>,
     /// Localizing on a saved map: the first scan (sequence number) whose pose had
     /// converged, and its stamp (seconds, as in the TUM files); absent when it never did
     /// or the run mapped. The scores above (ATE, final error, map corners, relative-pose

@@ -19,7 +19,8 @@
 //! Maps are persistent (copy-on-write) trees: a resampled particle shares its parent's
 //! map and copies only what it changes. Particles are updated in parallel with rayon; each
 //! draws from its own random stream, so a seed gives the same result on any thread count.
-//! Every parameter is in [`SlamConfig`]. The first pose is the map frame.
+//! The settings a user changes are in [`SlamConfig`]; the other thresholds are constants
+//! beside the code that uses them. The first pose is the map frame.
 //!
 //! ```
 //! use nalgebra::Matrix4;

@@ -169,12 +169,12 @@ fn run(args: Args) -> Result<()> {
             lines.clear();
             lines.extend(sample.lines().iter().map(|&l| MeasuredLine::from(l)));
             let stamp = sample.header.stamp_ns;
-            // feature-proc's front end measured the motion; without it (or with
-            // `use_measured_motion = false`) the filter estimates it from the corners and
-            // lines, on the odometry feature-proc paired with the scan.
+            // feature-proc's front end measured the motion; without it the filter estimates
+            // it from the corners and lines, on the odometry feature-proc paired with the
+            // scan.
             let front_end = sample.motion();
             let estimate = match &front_end {
-                Some(motion) if slam.config().use_measured_motion => slam.process_measured(
+                Some(motion) => slam.process_measured(
                     stamp,
                     &observations,
                     &lines,

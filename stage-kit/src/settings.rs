@@ -156,7 +156,7 @@ pub fn refused_field<T: Default>(
 
 /// The named fields of a config as `[(name, value), ...]`, for [`check_positive`],
 /// [`check_non_negative`] (`f64` fields) and [`check_counts`] (`usize` fields): each field is written once and its name is its spelling, with a
-/// prefix for a nested section's (`named_fields!(self, "localize."; kld_z)`).
+/// prefix for a nested section's (`named_fields!(self, "localize."; sigma_hit)`).
 #[macro_export]
 macro_rules! named_fields {
     ($config:expr, $prefix:literal; $($field:ident),+ $(,)?) => {

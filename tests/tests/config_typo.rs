@@ -33,7 +33,7 @@ fn a_typo_in_a_process_s_section_is_refused_before_starting() {
     for (text, key) in [
         ("[slam]\nparticles = 20\npartcles = 10\n", "partcles"),
         ("[slam.localize]\nmax_partcles = 10\n", "max_partcles"),
-        ("[features]\nsplit = 0.05\n", "split"),
+        ("[features]\nmax_rnge = 15\n", "max_rnge"),
         ("[front_end]\nvoxel = 0.1\n", "voxel"),
         ("[sim.vehicle]\nmax_acel = 1\n", "max_acel"),
     ] {

@@ -89,20 +89,9 @@ fn a_fifo_or_link_planted_in_dev_shm_neither_holds_up_nor_misleads_a_run() {
     as_other("mkfifo", &["-m", "666", fifo_text]);
     as_other("ln", &["-s", "/dev/zero", link_text]);
 
-    // A run in a fresh domain sweeps past both, says so, and starts; at a sensor's pace, with
-    // nothing left to refine once stopped, so that Ctrl-C ends it at once.
-    let dir = scratch("planted");
-    let config = dir.join("run.toml");
-    std::fs::write(&config, "[grid]\nstop_budget = 0\nrefine_passes = 0\n").expect("run.toml");
-    let out = dir.join("run");
-    let args = [
-        "--world",
-        "office",
-        "--rate",
-        "40",
-        "--config",
-        config.to_str().expect("UTF-8"),
-    ];
+    // A run in a fresh domain sweeps past both, says so, and starts, at a sensor's pace.
+    let out = scratch("planted").join("run");
+    let args = ["--world", "office", "--rate", "40"];
     let mut launcher = launch_command(&domain("planted-run"), &out, &args)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -239,9 +228,12 @@ fn settings_that_would_exhaust_the_machine_are_refused_with_their_range() {
     let dir = scratch("absurd-settings");
     for (text, key) in [
         ("[front_end]\nvoxel_size = 1e-9\n", "voxel_size"),
-        ("[slam]\nsearch_radius = 1e9\n", "search_radius"),
-        ("[slam]\nduplicate_radius = 1e9\n", "duplicate_radius"),
-        ("[slam]\ngrid_cell_size = 1e-9\n", "grid_cell_size"),
+        ("[front_end]\nvoxel_size = 1e9\n", "voxel_size"),
+        ("[slam]\nview_range = 1e9\n", "view_range"),
+        (
+            "[slam.localize]\nmax_particles = 1000000000\n",
+            "max_particles",
+        ),
         (
             "[slam]\nmeasured_xy_variance_per_metre = 1e9\n",
             "measured_xy_variance_per_metre",

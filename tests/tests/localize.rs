@@ -414,10 +414,9 @@ fn aces_is_localized_from_an_unknown_start_at_three_points_of_the_log() {
         );
         assert!(converged <= 300, "converged at scan {converged}");
         // Converged in the right place (a wrong one is metres off) and then following the
-        // mapping run's path. Where that path's loops stayed open by more than its
-        // refinement could pull together, the map disagrees with its own path and the two
-        // paths part by a decimetre or two for a while (docs/localization.md), which the RMSE allows for;
-        // never by a third of a metre.
+        // mapping run's path. Where the map disagrees with its own path, the two paths part
+        // by a decimetre or two for a while (docs/localization.md), which the RMSE allows
+        // for; never by a third of a metre.
         assert!(gaps.rmse_m <= 0.06, "{gaps:?}");
         assert!(gaps.stats.mean <= 0.045, "{gaps:?}");
         assert!(gaps.stats.max <= 0.3, "{gaps:?}");

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use tests::*;
 
 const FRAMES: u64 = 200;
-/// `[slam] particle_cloud_every`'s default: a recorded run's particle cloud every this many
+/// slam-launch's `PARTICLE_CLOUD_EVERY`: a recorded run's particle cloud every this many
 /// scans.
 const CLOUD_EVERY: u64 = 40;
 
@@ -24,8 +24,7 @@ struct TopicRead {
 #[test]
 fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
     let frames = FRAMES.to_string();
-    // With odometry, so that every topic is recorded; trajectory.tum kept as the filter's
-    // path, which is what the recording holds.
+    // With odometry, so that every topic is recorded.
     let args = [
         "--world",
         "office",
@@ -34,8 +33,6 @@ fn a_recorded_office_run_reads_back_with_every_topic_and_count() {
         "--rate",
         "0",
         "--odometry",
-        "--refine-passes",
-        "0",
     ];
     let out = scratch("record");
     let output = launch(
@@ -280,8 +277,7 @@ fn yaml_value(yaml: &str, key: &str) -> String {
 }
 
 #[test]
-fn a_recording_holds_the_grid_and_refined_path_map_sink_wrote_and_the_particle_clouds() {
-    // The final path refined (the default), so map-sink's path is not the filter's.
+fn a_recording_holds_the_grid_and_final_path_map_sink_wrote_and_the_particle_clouds() {
     let out = scratch("record-grid");
     let frames = FRAMES.to_string();
     let args = [
@@ -321,8 +317,7 @@ fn a_recording_holds_the_grid_and_refined_path_map_sink_wrote_and_the_particle_c
     }
 
     // map-sink's path is trajectory.tum's, pose for pose (to the last bit or two: this
-    // crate's JSON parser may be an ulp off). (A run this short comes back nowhere, so
-    // the refinement leaves the filter's path as it was: both paths are the same here.)
+    // crate's JSON parser may be an ulp off).
     let trajectory = read_tum(&out.join("trajectory.tum"));
     let paths = messages_on(&bytes, "/map/path");
     assert_eq!(paths.len(), 1);

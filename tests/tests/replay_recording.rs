@@ -177,7 +177,7 @@ fn check_recording_of(out: &Path, odometry: bool) {
         expected.push(("/robot/odometry", "slam.Odometry"));
     }
     // map-sink's path, its grid when it traced one, and a particle cloud every 40 scans
-    // (`[slam] particle_cloud_every`'s default).
+    // (slam-launch's `PARTICLE_CLOUD_EVERY`).
     let metrics = metrics(out);
     let processed = metrics.frames_processed;
     let grid = out.join("map.pgm").exists();

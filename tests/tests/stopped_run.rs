@@ -1,7 +1,6 @@
 //! Issue 15, maps that outlive the run: a live run stopped with Ctrl-C keeps its map however
-//! long it was. The back end (graph-proc) publishes its path as it stops, map-sink writes it
-//! and the grid traced along it, with no budget for anything else (`[grid] stop_budget =
-//! 0`): the back end's path is final as it is, refinement or not.
+//! long it was. The back end (graph-proc) publishes its path and grid as it stops, and
+//! map-sink writes them, each file whole.
 
 use std::path::Path;
 use std::process::Stdio;
@@ -18,20 +17,8 @@ const POSES: usize = 500;
 #[test]
 fn a_stopped_live_run_keeps_the_back_ends_path_as_a_whole_map() {
     let (mut emulator, addr) = start_hokuyo_emulator_with(&test_data::seed_hall_csv(), &["--loop"]);
-    let dir = scratch("stopped-run");
-    let config = dir.join("run.toml");
-    // Refinement passes asked for: the back end's path is not the filter's, and is not
-    // refined.
-    std::fs::write(&config, "[grid]\nstop_budget = 0\nrefine_passes = 3\n").expect("run.toml");
-    let out = dir.join("run");
-    let args = [
-        "--source",
-        "hokuyo",
-        "--addr",
-        &addr,
-        "--config",
-        config.to_str().expect("a UTF-8 path"),
-    ];
+    let out = scratch("stopped-run").join("run");
+    let args = ["--source", "hokuyo", "--addr", &addr];
     let mut launcher = spawn_launch(&domain("stopped-run"), &out, &args, Stdio::piped());
     let console = read_console(&mut launcher);
     wait_for_poses(&mut launcher, &out, POSES, LIMIT);
@@ -50,11 +37,6 @@ fn a_stopped_live_run_keeps_the_back_ends_path_as_a_whole_map() {
     assert!(log.contains("solved and published"), "{log}");
 
     let metrics = metrics(&out);
-    assert!(
-        metrics.refinement.is_none_or(|r| r.passes_done == 0),
-        "{:?}",
-        metrics.refinement
-    );
     // The back end's path, which graph-proc sends as it stops, not the online estimate
     // standing in for it.
     let trajectory = read_tum(&out.join("trajectory.tum"));

@@ -330,27 +330,13 @@ pub const HOKUYO: Section = Section {
 
 pub const GRID: Section = Section {
     table: "grid",
-    about: "map-sink: the occupancy grid and the final path's refinement.",
-    settings: &[
-        set(
-            "resolution",
-            "m",
-            Range::closed(0.005, 5.0),
-            "Edge of a grid cell (--resolution).",
-        ),
-        set(
-            "refine_passes",
-            "",
-            Range::ANY,
-            "Passes refining the final path against its own grid; 0 keeps the filter's path (--refine-passes).",
-        ),
-        set(
-            "stop_budget",
-            "s",
-            Range::closed(0.0, 25.0),
-            "Time map-sink has after a stop (Ctrl-C) to write its results; the refinement stops in time.",
-        ),
-    ],
+    about: "map-sink: the occupancy grid.",
+    settings: &[set(
+        "resolution",
+        "m",
+        Range::closed(0.005, 5.0),
+        "Edge of a grid cell (--resolution).",
+    )],
 };
 
 pub const RECORD: Section = Section {

@@ -100,7 +100,7 @@ fn every_default_lies_in_its_stated_range() {
         );
         checked += 1;
     }
-    assert!(checked > 100, "{checked}");
+    assert!(checked > 60, "{checked}");
 }
 
 /// A configuration that runs every check: a replay, so the replay's settings are checked.
@@ -181,7 +181,7 @@ fn a_value_past_a_stated_limit_is_refused_naming_its_key() {
             probed += 1;
         }
     }
-    assert!(probed > 150, "{probed}");
+    assert!(probed > 120, "{probed}");
 }
 
 #[test]
@@ -191,7 +191,7 @@ fn the_toml_file_reads_back_as_the_configuration() {
         ..RunConfig::default()
     };
     config.slam.filter.particles = 7;
-    config.slam.filter.localize.kld_bin_yaw = 0.25;
+    config.slam.filter.localize.initial_sigma_yaw = 0.25;
     for config in [RunConfig::default(), config] {
         let text = toml_file(&config).unwrap();
         assert_eq!(

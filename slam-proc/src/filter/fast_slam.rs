@@ -13,12 +13,14 @@ use crate::update::jcbb::PoseUncertainty;
 use slam_geom::{MapCorner, MeasuredCorner, MeasuredLine};
 
 use crate::filter::observation::{MeasuredMotion, OdometryInput, Prepared};
-use crate::filter::particle::{Particle, ScanContext, Scratch};
+use crate::filter::particle::{
+    CONFIRM_OBSERVATIONS, Particle, SEARCH_RADIUS, ScanContext, Scratch,
+};
 use crate::filter::resample::{
     effective_sample_size, heaviest, log_sum_exp, normalise, systematic,
 };
 use crate::filter::rng::Streams;
-use crate::filter::saved_grid::{SavedGrid, drift_off_grid};
+use crate::filter::saved_grid::{self, SavedGrid, drift_off_grid};
 use crate::localize::localizer::ScanRanges;
 use crate::map::corner_map::{CornerMap, CornerState};
 use crate::motion::estimator::{Motion, MotionEstimator, MotionSource};
@@ -125,6 +127,28 @@ enum StepMotion<'a> {
     Measured(&'a MeasuredMotion),
 }
 
+/// Resample when the effective number of particles falls below this fraction of the
+/// particle count: resampling only then keeps the diversity that constant resampling loses,
+/// and half is the usual threshold (Doucet et al.).
+const RESAMPLE_THRESHOLD: f64 = 0.5;
+
+/// Added in quadrature to each observation's position standard deviation, metres: covers
+/// what the extractor's propagated covariance leaves out (wall roughness, timing, a moving
+/// sensor), about a centimetre.
+const OBSERVATION_EXTRA_SIGMA_XY: f64 = 0.01;
+/// Added in quadrature to each observation's heading and angle standard deviations,
+/// radians, for the same reasons.
+const OBSERVATION_EXTRA_SIGMA_ANGLE: f64 = 0.01;
+
+/// Gate probability of the individual (4 dof) and joint (4k dof) chi-square tests of data
+/// association: a true pairing is rejected one time in a thousand.
+pub(crate) const ASSOCIATION_PROBABILITY: f64 = 0.999;
+
+/// Cell size of each map's spatial hash grid, metres: twice the search radius keeps a
+/// corner lookup to four cells.
+const GRID_CELL_SIZE: f64 = 3.0;
+const _: () = assert!(GRID_CELL_SIZE >= 2.0 * SEARCH_RADIUS);
+
 /// Particles per parallel task of the update: enough that a task outweighs its
 /// scheduling, few enough that two cores share 100 particles evenly.
 const PARTICLES_PER_TASK: usize = 8;
@@ -155,13 +179,13 @@ impl FastSlam {
         start: Pose2,
     ) -> Result<Self, SettingError> {
         config.validate()?;
-        let mut map = CornerMap::new(config.grid_cell_size);
+        let mut map = CornerMap::new(GRID_CELL_SIZE);
         let mut saved_corners = 0;
         for corner in corners {
             let state = CornerState {
                 mean: nalgebra::Vector4::new(corner.x, corner.y, corner.heading, corner.angle),
                 covariance: corner.covariance,
-                observations: corner.observations.max(config.confirm_observations),
+                observations: corner.observations.max(CONFIRM_OBSERVATIONS),
             };
             if state
                 .mean
@@ -169,7 +193,7 @@ impl FastSlam {
                 .chain(state.covariance.iter())
                 .all(|v| v.is_finite())
             {
-                map.insert(state, config.confirm_observations);
+                map.insert(state, CONFIRM_OBSERVATIONS);
                 saved_corners += 1;
             }
         }
@@ -183,14 +207,14 @@ impl FastSlam {
                 };
                 config.particles
             ],
-            motion: MotionEstimator::new(&config),
+            motion: MotionEstimator::new(),
             measured_track: OdometryInput {
                 pose: Pose2::IDENTITY,
                 covariance: nalgebra::Matrix3::zeros(),
             },
             dead_reckoning: Pose2::IDENTITY,
             best: 0,
-            gates: Gates::new(config.association_probability),
+            gates: Gates::new(ASSOCIATION_PROBABILITY),
             log_weights: Vec::new(),
             weights: Vec::new(),
             parents: Vec::new(),
@@ -211,8 +235,10 @@ impl FastSlam {
     }
 
     /// The filter fitting its particles to the saved map's occupancy grid at every corner
-    /// update (`saved_grid_refine`, `saved_grid_weight`), with the beams given by
-    /// [`FastSlam::set_scan`]: mapping on top of a saved map stays in its frame.
+    /// update (each particle climbs the scan's likelihood on it, the localizer's faced field
+    /// and beam model, `[slam.localize]`'s `sigma_hit`), with the beams given by
+    /// [`FastSlam::set_scan`]: mapping on top of a saved map stays in its frame between
+    /// corner sightings instead of drifting with the front end.
     ///
     /// The grid also judges how well the saved map explains the scans ([`MapFit`], from the
     /// best particle at each update). Once the verdict is that it does not, the saved map
@@ -220,7 +246,7 @@ impl FastSlam {
     /// corners leave every particle's map, so that the run maps on its own rather than
     /// merging this building's corners with another's.
     pub fn with_saved_grid(mut self, grid: &map_sink::GridMap) -> Self {
-        self.saved_grid = Some(SavedGrid::new(grid, &self.config));
+        self.saved_grid = Some(SavedGrid::new(grid, &self.config.localize));
         self
     }
 
@@ -228,9 +254,8 @@ impl FastSlam {
     /// [`FastSlam::process_measured`] brings (`None`: they did not arrive); only a filter
     /// with a saved grid reads them.
     pub fn set_scan(&mut self, scan: Option<&ScanRanges<'_>>) {
-        let beams = self.config.saved_grid_beams;
         if let Some(grid) = &mut self.saved_grid {
-            grid.set_scan(scan, beams);
+            grid.set_scan(scan, saved_grid::BEAMS);
         }
     }
 
@@ -286,7 +311,7 @@ impl FastSlam {
     pub fn best_map(&self) -> Vec<MapCorner> {
         self.particles
             .get(self.best)
-            .map(|p| p.map.confirmed(self.config.confirm_observations))
+            .map(|p| p.map.confirmed(CONFIRM_OBSERVATIONS))
             .unwrap_or_default()
     }
 
@@ -313,8 +338,7 @@ impl FastSlam {
     /// Updates the filter with one scan whose motion a front end measured (scan matching
     /// fused with odometry, [`MeasuredMotion`]): the particles move by it, spread by the
     /// front end's drift, and the corners then weight them and correct their poses. A motion
-    /// that is not usable (not finite), or `use_measured_motion = false`, falls back to
-    /// the filter's own corner and line fit.
+    /// that is not usable (not finite) falls back to the filter's own corner and line fit.
     pub fn process_measured(
         &mut self,
         stamp_ns: u64,
@@ -322,7 +346,7 @@ impl FastSlam {
         lines: &[MeasuredLine],
         motion: &MeasuredMotion,
     ) -> Estimate {
-        let step = if self.config.use_measured_motion && motion.is_usable() {
+        let step = if motion.is_usable() {
             StepMotion::Measured(motion)
         } else {
             StepMotion::Estimate(None)
@@ -342,11 +366,7 @@ impl FastSlam {
         let prepared: Vec<Prepared> = observations
             .iter()
             .filter_map(|o| {
-                Prepared::new(
-                    o,
-                    config.observation_extra_sigma_xy,
-                    config.observation_extra_sigma_angle,
-                )
+                Prepared::new(o, OBSERVATION_EXTRA_SIGMA_XY, OBSERVATION_EXTRA_SIGMA_ANGLE)
             })
             .collect();
         self.lines.clear();
@@ -355,7 +375,7 @@ impl FastSlam {
         let motion = match step {
             StepMotion::Estimate(odometry) => {
                 self.motion
-                    .estimate(stamp_ns, &prepared, &self.lines, odometry, config)
+                    .estimate(stamp_ns, &prepared, &self.lines, odometry)
             }
             StepMotion::Measured(measured) => {
                 // The front end's track, as odometry for the corner fit: the covariance
@@ -373,13 +393,8 @@ impl FastSlam {
                 // every beam against its keyframes (and, without odometry, learned the
                 // motion along a corridor from what came into view), which a fit of a
                 // few corners and lines only makes noisier.
-                self.motion.estimate(
-                    stamp_ns,
-                    &prepared,
-                    &self.lines,
-                    Some(&self.measured_track),
-                    config,
-                );
+                self.motion
+                    .estimate(stamp_ns, &prepared, &self.lines, Some(&self.measured_track));
                 Motion {
                     delta: measured.increment,
                     covariance: measured.covariance,
@@ -436,15 +451,15 @@ impl FastSlam {
         // The grid judges the scan only where the saved map has seen what the beams hit.
         let best_pose = self.particles.get(self.best).map(|p| p.pose);
         let judged = match (&mut self.saved_grid, best_pose) {
-            (Some(grid), Some(pose)) => grid.select_known(&pose, config.saved_grid_min_known),
+            (Some(grid), Some(pose)) => grid.select_known(&pose, saved_grid::MIN_KNOWN),
             _ => false,
         };
         let saved_grid = self.saved_grid.as_ref().filter(|_| judged);
-        // Back on the grid after a stretch off it (`saved_grid_search_after`), the
+        // Back on the grid after a stretch off it (`saved_grid::SEARCH_AFTER_M`), the
         // particles climb once from the search's wider steps.
         let off_grid = self.path_length - self.on_grid_at;
-        let returned = judged && off_grid >= config.saved_grid_search_after;
-        let drift = drift_off_grid(off_grid, config);
+        let returned = judged && off_grid >= saved_grid::SEARCH_AFTER_M;
+        let drift = drift_off_grid(off_grid);
         if judged {
             self.on_grid_at = self.path_length;
         }
@@ -458,15 +473,10 @@ impl FastSlam {
             gates: &self.gates,
             config,
             // The first pose is the map frame: nothing to draw.
-            draw_pose: config.observation_proposal && self.scans > 0,
+            draw_pose: self.scans > 0,
             cos_half_fov: (0.5 * config.view_fov).cos(),
         };
         let (streams, scan) = (&self.streams, self.scans);
-        let (refine, pull, grid_weight) = (
-            config.saved_grid_refine,
-            config.saved_grid_pull,
-            config.saved_grid_weight,
-        );
         // Fixed chunks, each with its own scratch kept across scans: the buffers grow once,
         // not at every split of the work.
         let chunks = self.particles.len().div_ceil(PARTICLES_PER_TASK);
@@ -475,16 +485,11 @@ impl FastSlam {
             for (k, particle) in particles.iter_mut().enumerate() {
                 let mut rng = streams.proposal(scan, chunk * PARTICLES_PER_TASK + k);
                 if let Some(grid) = saved_grid {
-                    if refine {
-                        particle.pose = if returned {
-                            grid.search(particle.pose, &drift, pull)
-                        } else {
-                            grid.refine(particle.pose, pull)
-                        };
-                    }
-                    if grid_weight > 0.0 {
-                        particle.log_weight += grid_weight * grid.log_likelihood(&particle.pose);
-                    }
+                    particle.pose = if returned {
+                        grid.search(particle.pose, &drift, saved_grid::PULL)
+                    } else {
+                        grid.refine(particle.pose, saved_grid::PULL)
+                    };
                 }
                 particle.log_weight += particle.update(&context, scratch, &mut rng);
                 particle.path.push(StampedPose {
@@ -553,10 +558,9 @@ impl FastSlam {
     fn set_aside_saved_map(&mut self) {
         self.saved_grid = None;
         self.set_aside_at = Some(self.scans);
-        let confirm_at = self.config.confirm_observations;
         for particle in &mut self.particles {
             for id in 0..self.saved_corners {
-                particle.map.remove(id, confirm_at);
+                particle.map.remove(id, CONFIRM_OBSERVATIONS);
             }
         }
     }
@@ -582,7 +586,7 @@ impl FastSlam {
         self.motion.set_last_motion(increment);
 
         let n = self.particles.len();
-        if effective < self.config.resample_threshold * n as f64 {
+        if effective < RESAMPLE_THRESHOLD * n as f64 {
             let u = self.streams.resample(self.scans).random::<f64>();
             systematic(&self.weights, u, &mut self.parents);
             self.resamplings += 1;
@@ -639,7 +643,6 @@ mod tests {
     fn a_measured_motion_moves_the_particles_and_the_best_path_follows() {
         let config = SlamConfig {
             particles: 20,
-            use_measured_motion: true,
             ..SlamConfig::default()
         };
         let mut slam = FastSlam::new(config, 5).unwrap();
@@ -670,22 +673,6 @@ mod tests {
             (end.x - truth.x).hypot(end.y - truth.y) < 0.01,
             "{end:?} vs {truth:?}"
         );
-
-        // Switched off, the same input leaves the particles to the filter's own estimate,
-        // which without features is constant velocity from standstill: nowhere near the
-        // 0.4 m the steps measured.
-        let off = SlamConfig {
-            particles: 20,
-            use_measured_motion: false,
-            ..SlamConfig::default()
-        };
-        let mut slam = FastSlam::new(off, 5).unwrap();
-        let mut last = None;
-        for k in 0..5 {
-            last = Some(slam.process_measured(k * 25_000_000, &[], &[], &step));
-        }
-        let moved = last.unwrap().dead_reckoning.translation_norm();
-        assert!(moved < 0.05, "moved {moved} m");
     }
 
     #[test]

@@ -20,6 +20,32 @@ use crate::update::kalman;
 use slam_geom::Pose2;
 use slam_geom::wrap_angle;
 
+/// Map corners farther than this from an observation's predicted position are not
+/// considered for it, metres: it must cover the gate, the pose's and the corner's
+/// uncertainty at range.
+pub(crate) const SEARCH_RADIUS: f64 = 1.5;
+/// Search nodes JCBB may visit per particle and scan before it settles for the best
+/// hypothesis found so far: bounds the time of pathological scans.
+const JCBB_MAX_NODES: usize = 10_000;
+/// Log density of an observation that no map corner explains (a new or spurious corner),
+/// over `(x, y, heading, angle)`: roughly `-ln(visible area * 2 pi * pi)` for the few
+/// hundred square metres a scanner sees indoors.
+const NEW_CORNER_LOG_LIKELIHOOD: f64 = -9.0;
+/// Observations after which a corner is confirmed; before that it is tentative, left out of
+/// the published map and dropped when it is not seen again. Two: one sighting may be
+/// clutter, a second from another viewpoint is a corner.
+pub(crate) const CONFIRM_OBSERVATIONS: u32 = 2;
+/// A tentative corner is dropped after this many scans in which it was in view and not
+/// observed: a few, so that a corner occluded for a moment survives.
+const TENTATIVE_MAX_MISSES: u32 = 3;
+/// An unexplained observation within this distance of a map corner of similar heading
+/// starts no new corner (it is that corner, seen badly), metres: wider than a badly seen
+/// corner's error, and two real corners of one heading are seldom closer.
+const DUPLICATE_RADIUS: f64 = 0.5;
+/// Headings closer than this are similar for the duplicate test, radians: a corner's
+/// extracted heading moves a little with the viewpoint it is seen from.
+const DUPLICATE_HEADING: f64 = 30f64.to_radians();
+
 #[derive(Debug, Clone)]
 pub(crate) struct Particle {
     pub pose: Pose2,
@@ -102,7 +128,7 @@ impl Particle {
         let association = self.associate(context, scratch);
         let unexplained = scratch.world.len() - association.pairings;
         let log_likelihood =
-            association.log_likelihood + unexplained as f64 * config.new_corner_log_likelihood;
+            association.log_likelihood + unexplained as f64 * NEW_CORNER_LOG_LIKELIHOOD;
         if context.draw_pose
             && association.pairings > 0
             && let Some(corrected) = self.corrected_pose(&context.pose, &association, rng)
@@ -140,7 +166,7 @@ impl Particle {
                     // correction `R` has turned by a fraction of a degree. The Joseph form
                     // gives the right covariance for any gain, so it stays consistent.
                     self.map
-                        .update(pairing.corner, config.confirm_observations, |corner| {
+                        .update(pairing.corner, CONFIRM_OBSERVATIONS, |corner| {
                             kalman::update_with_inverse(
                                 &corner.mean,
                                 &corner.covariance,
@@ -150,14 +176,14 @@ impl Particle {
                             )
                         });
                     let near = &scratch.near[scratch.near_lists[i].clone()];
-                    self.drop_duplicate_of(pairing.corner, near, config);
+                    self.drop_duplicate_of(pairing.corner, near);
                 }
                 // An observation that passed some corner's individual gate but fits no
                 // joint hypothesis is ambiguous: it starts no corner, or the map would
                 // fill with near-duplicates of corners already in it.
                 None if !scratch.lists[i].is_empty() => {}
                 None => {
-                    if !self.has_similar_corner(observation, config, &mut scratch.ids) {
+                    if !self.has_similar_corner(observation, &mut scratch.ids) {
                         let state = CornerState {
                             mean: observation.z,
                             covariance: observation.covariance,
@@ -165,7 +191,7 @@ impl Particle {
                         };
                         scratch
                             .observed
-                            .push(self.map.insert(state, config.confirm_observations));
+                            .push(self.map.insert(state, CONFIRM_OBSERVATIONS));
                     }
                 }
             }
@@ -180,7 +206,7 @@ impl Particle {
             r2 <= range * range && x >= r2.sqrt() * cos_half_fov
         };
         self.map
-            .age_tentative(&scratch.observed, in_view, config.tentative_max_misses);
+            .age_tentative(&scratch.observed, in_view, TENTATIVE_MAX_MISSES);
         log_likelihood
     }
 
@@ -189,11 +215,7 @@ impl Particle {
     /// uncertainty, and solves for the joint hypothesis (JCBB). Leaves the candidate lists
     /// in `scratch` for the update.
     fn associate(&self, context: &ScanContext<'_>, scratch: &mut Scratch) -> Association {
-        let (gate, pose, radius) = (
-            context.gates.individual(),
-            &context.pose,
-            context.config.search_radius,
-        );
+        let (gate, pose, radius) = (context.gates.individual(), &context.pose, SEARCH_RADIUS);
         scratch.pairings.clear();
         scratch.lists.clear();
         scratch.near.clear();
@@ -235,7 +257,7 @@ impl Particle {
             &scratch.lists,
             pose,
             context.gates.joint(),
-            context.config.jcbb_max_nodes,
+            JCBB_MAX_NODES,
         )
     }
 
@@ -265,22 +287,13 @@ impl Particle {
     }
 
     /// Whether the map has a corner within the duplicate radius with a similar heading.
-    fn has_similar_corner(
-        &self,
-        observation: &WorldObservation,
-        config: &SlamConfig,
-        ids: &mut Vec<u32>,
-    ) -> bool {
+    fn has_similar_corner(&self, observation: &WorldObservation, ids: &mut Vec<u32>) -> bool {
         ids.clear();
-        self.map.near(
-            observation.z.x,
-            observation.z.y,
-            config.duplicate_radius,
-            ids,
-        );
+        self.map
+            .near(observation.z.x, observation.z.y, DUPLICATE_RADIUS, ids);
         ids.iter()
             .filter_map(|&id| self.map.get(id))
-            .any(|corner| similar(&corner.mean, &observation.z, config))
+            .any(|corner| similar(&corner.mean, &observation.z))
     }
 
     /// Keeps the map free of duplicates after corner `id` moved: a similar corner among
@@ -288,7 +301,7 @@ impl Particle {
     /// radius around it) is one place mapped twice, e.g. a corner whose extracted heading
     /// depends on the viewpoint, or one remapped before a loop closed. The one seen fewer
     /// times goes (the younger among equals).
-    fn drop_duplicate_of(&mut self, id: u32, near: &[u32], config: &SlamConfig) {
+    fn drop_duplicate_of(&mut self, id: u32, near: &[u32]) {
         let Some((mean, observations)) = self.map.get(id).map(|c| (c.mean, c.observations)) else {
             return;
         };
@@ -296,13 +309,13 @@ impl Particle {
             let Some(neighbour) = self.map.get(other) else {
                 continue;
             };
-            if other == id || !similar(&mean, &neighbour.mean, config) {
+            if other == id || !similar(&mean, &neighbour.mean) {
                 continue;
             }
             let neighbour_weaker = neighbour.observations < observations
                 || (neighbour.observations == observations && other > id);
             let weaker = if neighbour_weaker { other } else { id };
-            self.map.remove(weaker, config.confirm_observations);
+            self.map.remove(weaker, CONFIRM_OBSERVATIONS);
             if weaker == id {
                 return;
             }
@@ -312,10 +325,10 @@ impl Particle {
 
 /// Whether two corners `(x, y, heading, angle)` are one for the map: within the duplicate
 /// radius, headings within the duplicate angle.
-fn similar(a: &Vector4<f64>, b: &Vector4<f64>, config: &SlamConfig) -> bool {
-    let radius = config.duplicate_radius;
+fn similar(a: &Vector4<f64>, b: &Vector4<f64>) -> bool {
+    let radius = DUPLICATE_RADIUS;
     (a.x - b.x).powi(2) + (a.y - b.y).powi(2) <= radius * radius
-        && wrap_angle(a.z - b.z).abs() <= config.duplicate_heading
+        && wrap_angle(a.z - b.z).abs() <= DUPLICATE_HEADING
 }
 
 #[cfg(test)]
@@ -377,7 +390,7 @@ mod tests {
         (sigma_xy, sigma_yaw): (f64, f64),
     ) -> Particle {
         let config = &SlamConfig::default();
-        let mut gates = Gates::new(config.association_probability);
+        let mut gates = Gates::new(crate::filter::fast_slam::ASSOCIATION_PROBABILITY);
         gates.ensure(observations.len());
         let context = ScanContext {
             observations,

@@ -5,12 +5,12 @@
 //! scanner fits best a little ahead of its pose, and along a corridor, where the walls fix
 //! little else, fit after fit carries the run down it.
 
-use crate::config::SlamConfig;
 use crate::localize::cell_frame::SeenCells;
 use crate::localize::hill_climb::HillClimb;
 use crate::localize::localizer::{ScanRanges, sample_beam_ends};
 use crate::localize::map_fit::FitField;
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
+use crate::localize_config::LocalizeConfig;
 use map_sink::GridMap;
 use nalgebra::{Matrix3, Vector3};
 use slam_eval::MapFit;
@@ -26,13 +26,42 @@ const TRACKING: HillClimb = HillClimb {
     ..HillClimb::SEARCH
 };
 
+/// The particle moves this fraction of the way to the grid's best fit at each update: less
+/// than all of it smooths the fit's own jitter out of the path, and half still closes most
+/// of a gap within a few updates.
+pub(crate) const PULL: f64 = 0.5;
+/// Beams of a scan that fit the particles to the saved grid, spread evenly over its valid
+/// beams: as many as the localizer weights a particle by, enough to fix a pose in a room.
+pub(crate) const BEAMS: usize = 120;
+/// Only the beams that end in the saved grid's seen cells count (from the best particle's
+/// pose: the same beams for every particle); with fewer than this fraction of them the grid
+/// is left out of the scan. High: at the saved map's edge the grid holds walls seen from
+/// afar, and a climb on a few of them pulls the run off its own.
+pub(crate) const MIN_KNOWN: f64 = 0.8;
+/// Back on the saved grid after this much path off it, metres, the particles may have
+/// drifted beyond the tracking climb's reach: they climb once from the localizer's wider
+/// search steps, and take the fit if it lies within three standard deviations of what the
+/// front end can have drifted over the path off the grid. Ten metres: 0.2 m of drift at the
+/// rate below, more than the tracking climb's small steps are made for.
+pub(crate) const SEARCH_AFTER_M: f64 = 10.0;
+/// That drift: translation standard deviation per metre of path off the grid, m/m (a
+/// scan-matching front end's drift is a per cent or two of the path) ...
+const DRIFT_XY_PER_METRE: f64 = 0.02;
+/// ... rotation standard deviation per metre, rad/m ...
+const DRIFT_YAW_PER_METRE: f64 = 0.002;
+/// ... up to this translation standard deviation, metres: the cap keeps a long stretch off
+/// the grid from admitting any fit at all ...
+const MAX_DRIFT_XY: f64 = 3.0;
+/// ... and this rotation standard deviation, radians.
+const MAX_DRIFT_YAW: f64 = 0.2;
+
 /// The pose covariance the front end can have drifted by over `length` metres of path off
-/// the saved grid: standard deviations that grow with the path, up to the configured
-/// largest (`saved_grid_*drift*`).
-pub(crate) fn drift_off_grid(length: f64, config: &SlamConfig) -> Matrix3<f64> {
+/// the saved grid: standard deviations that grow with the path, up to the largest
+/// ([`MAX_DRIFT_XY`], [`MAX_DRIFT_YAW`]).
+pub(crate) fn drift_off_grid(length: f64) -> Matrix3<f64> {
     let length = length.max(0.0);
-    let xy = (config.saved_grid_drift_xy_per_metre * length).min(config.saved_grid_max_drift_xy);
-    let yaw = (config.saved_grid_drift_yaw_per_metre * length).min(config.saved_grid_max_drift_yaw);
+    let xy = (DRIFT_XY_PER_METRE * length).min(MAX_DRIFT_XY);
+    let yaw = (DRIFT_YAW_PER_METRE * length).min(MAX_DRIFT_YAW);
     Matrix3::from_diagonal(&Vector3::new(xy * xy, xy * xy, yaw * yaw))
 }
 
@@ -56,11 +85,11 @@ pub(crate) struct SavedGrid {
 }
 
 impl SavedGrid {
-    /// The field of `grid` under the localizer's beam model (`config.localize`).
-    pub fn new(grid: &GridMap, config: &SlamConfig) -> Self {
+    /// The field of `grid` under the localizer's beam model (`localize`).
+    pub fn new(grid: &GridMap, localize: &LocalizeConfig) -> Self {
         Self {
             seen: SeenCells::of(grid),
-            tracking: TrackingField::new(grid, &config.localize),
+            tracking: TrackingField::new(grid, localize),
             beams: Vec::new(),
             known: Vec::new(),
             bearings: Vec::new(),
@@ -153,7 +182,7 @@ impl SavedGrid {
 
 #[cfg(test)]
 mod tests {
-    use super::{SavedGrid, drift_off_grid};
+    use super::{BEAMS, MIN_KNOWN, PULL, SavedGrid, drift_off_grid};
     use crate::config::SlamConfig;
     use crate::filter::fast_slam::{FastSlam, FilterStats};
     use crate::filter::observation::MeasuredMotion;
@@ -284,21 +313,15 @@ mod tests {
 
     #[test]
     fn the_drift_off_the_grid_grows_with_the_path_up_to_its_cap() {
-        let config = SlamConfig {
-            saved_grid_drift_xy_per_metre: 0.02,
-            saved_grid_drift_yaw_per_metre: 0.002,
-            saved_grid_max_drift_xy: 3.0,
-            saved_grid_max_drift_yaw: 0.2,
-            ..SlamConfig::default()
-        };
-        let p = drift_off_grid(50.0, &config);
+        // 0.02 m and 0.002 rad per metre, up to 3 m and 0.2 rad.
+        let p = drift_off_grid(50.0);
         assert!((p[(0, 0)].sqrt() - 1.0).abs() < 1e-12);
         assert_eq!(p[(0, 0)], p[(1, 1)]);
         assert!((p[(2, 2)].sqrt() - 0.1).abs() < 1e-12);
-        let far = drift_off_grid(1000.0, &config);
+        let far = drift_off_grid(1000.0);
         assert!((far[(0, 0)].sqrt() - 3.0).abs() < 1e-12);
         assert!((far[(2, 2)].sqrt() - 0.2).abs() < 1e-12);
-        assert_eq!(drift_off_grid(-1.0, &config), Matrix3::zeros());
+        assert_eq!(drift_off_grid(-1.0), Matrix3::zeros());
     }
 
     #[test]
@@ -307,23 +330,23 @@ mod tests {
         // climb finds the true pose, which takes it after 50 m off the grid (a metre and
         // 0.1 rad of drift allowed) and not after 10 m (0.2 m and 0.02 rad).
         let config = SlamConfig::default();
-        let mut grid = SavedGrid::new(&room_grid(), &config);
+        let mut grid = SavedGrid::new(&room_grid(), &config.localize);
         let truth = Pose2::new(4.0, 0.5, 0.0);
         let ranges = scan_from(&truth);
         let scan = room_scan(&ranges);
-        grid.set_scan(Some(&scan), config.saved_grid_beams);
-        assert!(grid.select_known(&truth, config.saved_grid_min_known));
+        grid.set_scan(Some(&scan), BEAMS);
+        assert!(grid.select_known(&truth, MIN_KNOWN));
         let off = Pose2::new(4.2, 0.72, 0.25);
-        let pull = config.saved_grid_pull;
+        let pull = PULL;
 
-        let found = grid.search(off, &drift_off_grid(50.0, &config), pull);
+        let found = grid.search(off, &drift_off_grid(50.0), pull);
         assert!(
             (found.x - truth.x).hypot(found.y - truth.y) < 0.05,
             "{found:?}"
         );
         assert!(found.yaw.abs() < 0.02, "{found:?}");
 
-        let kept = grid.search(off, &drift_off_grid(10.0, &config), pull);
+        let kept = grid.search(off, &drift_off_grid(10.0), pull);
         assert_eq!(kept, grid.refine(off, pull));
         assert!(kept.yaw > 0.15, "{kept:?}");
     }
@@ -334,13 +357,12 @@ mod tests {
         // scanner ahead along a corridor, where ends sunk into a wall would score as well.
         let config = SlamConfig::default();
         let saved = room_grid();
-        let mut grid = SavedGrid::new(&saved, &config);
+        let mut grid = SavedGrid::new(&saved, &config.localize);
         let truth = Pose2::new(4.0, 0.5, 0.3);
         let ranges = scan_from(&truth);
-        grid.set_scan(Some(&room_scan(&ranges)), config.saved_grid_beams);
-        assert!(grid.select_known(&truth, config.saved_grid_min_known));
+        grid.set_scan(Some(&room_scan(&ranges)), BEAMS);
+        assert!(grid.select_known(&truth, MIN_KNOWN));
         let localizer = TrackingField::new(&saved, &config.localize);
-        assert!(matches!(localizer, TrackingField::Faced(_)));
         let mut bearings = Vec::new();
         beam_bearings(&grid.known, &mut bearings);
         for pose in [

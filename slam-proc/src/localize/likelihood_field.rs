@@ -6,6 +6,14 @@ use map_sink::{CellState, GridMap};
 
 use crate::localize::cell_frame::{CellFrame, SeenCells};
 
+/// A beam end far from every wall still scores this (relative to one on a wall at 1):
+/// unmapped things and people in the way cost a bounded amount, as AMCL's `z_rand` does.
+pub(crate) const BEAM_FLOOR: f64 = 0.1;
+
+/// Distance at which the field stops growing, metres: beyond a metre from every wall a
+/// beam end is equally wrong, and the floor above scores it anyway.
+pub(crate) const MAX_DISTANCE_M: f64 = 1.0;
+
 /// A beam end's likelihood by its distance `d` to the nearest wall: a Gaussian hit plus a
 /// floor for what the map does not hold, `exp(-d^2 / (2 sigma^2)) + floor`, scaled so that
 /// a beam on a wall scores 1.

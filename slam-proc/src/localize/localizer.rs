@@ -20,7 +20,7 @@ use crate::filter::resample::{effective_sample_size, heaviest, normalise};
 use crate::filter::rng::Streams;
 use crate::localize::hill_climb::{HillClimb, scan_score};
 use crate::localize::kld::{Bins, kld_count};
-use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
+use crate::localize::likelihood_field::{BEAM_FLOOR, BeamModel, LikelihoodField, MAX_DISTANCE_M};
 use crate::localize::map_fit::FitField;
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use crate::localize_config::LocalizeConfig;
@@ -30,7 +30,46 @@ use slam_eval::MapFit;
 use slam_geom::Pose2;
 use stage_kit::SettingError;
 
-/// Bisection steps of the tempering exponent: 2^-12 of `beam_exponent` is fine enough.
+/// KLD-sampling's bound on the divergence between the particles and the posterior: smaller
+/// asks for more particles everywhere, and 5 % keeps a converged cloud near
+/// `min_particles`.
+const KLD_EPSILON: f64 = 0.05;
+/// Upper standard normal quantile of KLD-sampling's confidence: 2.326 is 99 %.
+const KLD_Z: f64 = 2.326;
+/// KLD-sampling's histogram bins: edge in x and y, metres, and in yaw, radians. Coarser
+/// than the converged spread, so that a converged cloud fills a few bins and KLD keeps few
+/// particles; fine enough that a spread cloud fills many.
+const KLD_BIN_XY: f64 = 0.5;
+const KLD_BIN_YAW: f64 = 10f64.to_radians();
+/// Standard deviation of a beam end's distance to the nearest wall while the particles
+/// search, metres: four times the converged figure, a smooth field on which a particle some
+/// way off the true pose still scores well.
+const SEARCH_SIGMA_HIT: f64 = 0.2;
+/// Each beam's log-likelihood is multiplied by this: beams of one scan are not independent
+/// (AMCL cubes and sums for the same reason), and a cloud that believes every beam
+/// collapses before the robot has moved enough to tell places apart.
+const BEAM_EXPONENT: f64 = 0.3;
+/// A scan's likelihood is tempered (its exponent lowered) so that at least this fraction
+/// of the particles stays effective: no single scan collapses a spread cloud.
+const MIN_EFFECTIVE_FRACTION: f64 = 0.1;
+/// While the particles search, each climbs the scan's likelihood on every this many of the
+/// weighting beams: the climb runs on every particle dozens of times, and a quarter of the
+/// beams still places it.
+const REFINE_BEAM_STRIDE: usize = 4;
+/// Converged: the weighted particles' position spread (the larger standard deviation of
+/// their x-y covariance) under this, metres, ...
+const CONVERGED_SIGMA_XY: f64 = 0.15;
+/// ... and their yaw spread under this, radians: a spread of a hand's width and a few
+/// degrees is one place, not several.
+const CONVERGED_SIGMA_YAW: f64 = 0.05;
+/// Once converged, the particles count as lost only when their spread exceeds this many
+/// times [`CONVERGED_SIGMA_XY`] or [`CONVERGED_SIGMA_YAW`]: a cloud that widens for a moment
+/// (the front end's step was off, a corridor says little along itself) keeps tracking on
+/// the sharp field instead of falling back to the global search, whose smooth field and
+/// wide hill-climbing steps can carry it to another place.
+const LOST_SIGMA_FACTOR: f64 = 2.0;
+
+/// Bisection steps of the tempering exponent: 2^-12 of [`BEAM_EXPONENT`] is fine enough.
 const TEMPERING_STEPS: usize = 12;
 
 /// Particles per parallel task of the hill-climb.
@@ -88,8 +127,8 @@ pub struct ScanRanges<'a> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Localization {
     pub estimate: Estimate,
-    /// The weighted particles' spread is under `converged_sigma_xy` and
-    /// `converged_sigma_yaw` (once converged, under `lost_sigma_factor` times them).
+    /// The weighted particles' spread is under 0.15 m and 0.05 rad (once converged, under
+    /// twice that).
     pub converged: bool,
 }
 
@@ -173,13 +212,12 @@ impl Localizer {
         map_corners: usize,
     ) -> Result<Self, LocalizeError> {
         config.validate()?;
-        let model = |sigma_hit| BeamModel {
-            sigma_hit,
-            floor: config.beam_floor,
-        };
         let field = TrackingField::new(grid, &config);
-        let search_field =
-            LikelihoodField::new(grid, config.max_distance, model(config.search_sigma_hit));
+        let search_model = BeamModel {
+            sigma_hit: SEARCH_SIGMA_HIT,
+            floor: BEAM_FLOOR,
+        };
+        let search_field = LikelihoodField::new(grid, MAX_DISTANCE_M, search_model);
         let fit_field = FitField::new(grid, slam_eval::MAP_FIT_WITHIN_M);
         let streams = Streams::new(seed);
         let mut rng = streams.resample(u64::MAX);
@@ -382,15 +420,19 @@ impl Localizer {
             }
         } else {
             let field = &self.search_field;
-            if self.config.refine_while_searching {
-                let points = &self.points;
-                let stride = self.config.refine_beam_stride.max(1);
-                let coarse: Vec<[f64; 2]> = points.iter().step_by(stride).copied().collect();
-                self.poses
-                    .par_iter_mut()
-                    .with_min_len(CLIMB_PARTICLES_PER_TASK)
-                    .for_each(|pose| *pose = HillClimb::SEARCH.climb(field, &coarse, *pose));
-            }
+            // Each particle moves uphill on the scan's likelihood before it is weighted (a
+            // few steps of halving size): a global start then needs far fewer particles
+            // than would have to fall on the true pose by chance.
+            let coarse: Vec<[f64; 2]> = self
+                .points
+                .iter()
+                .step_by(REFINE_BEAM_STRIDE)
+                .copied()
+                .collect();
+            self.poses
+                .par_iter_mut()
+                .with_min_len(CLIMB_PARTICLES_PER_TASK)
+                .for_each(|pose| *pose = HillClimb::SEARCH.climb(field, &coarse, *pose));
             for pose in &self.poses {
                 self.scan_log_likelihoods
                     .push(scan_score(field, &self.points, pose));
@@ -404,19 +446,20 @@ impl Localizer {
         true
     }
 
-    /// The exponent of this scan's likelihood: `beam_exponent`, or, while the particles
-    /// have not converged, less when that would leave fewer than `min_effective_fraction` of the particles effective. One scan
+    /// The exponent of this scan's likelihood: [`BEAM_EXPONENT`], or, while the particles
+    /// have not converged, less when that would leave fewer than
+    /// [`MIN_EFFECTIVE_FRACTION`] of the particles effective. One scan
     /// then cannot collapse a spread cloud onto whichever wrong place happens to match it
     /// best: the cloud narrows over several scans, as the robot moves and places that
     /// looked alike stop looking alike.
     fn tempering(&mut self) -> f64 {
-        let full = self.config.beam_exponent;
+        let full = BEAM_EXPONENT;
         // Converged, the cloud is one place: every scan counts in full, or the estimate
         // would lag behind the front end's drift.
         if self.converged {
             return full;
         }
-        let target = self.config.min_effective_fraction * self.poses.len() as f64;
+        let target = MIN_EFFECTIVE_FRACTION * self.poses.len() as f64;
         let effective = |beta: f64, work: &mut Vec<f64>, weights: &mut Vec<f64>| {
             work.clear();
             work.extend(
@@ -487,9 +530,8 @@ impl Localizer {
             drawn.push(pose);
             let bins = self
                 .bins
-                .insert(pose.x, pose.y, pose.yaw, c.kld_bin_xy, c.kld_bin_yaw);
-            if drawn.len() >= c.min_particles
-                && drawn.len() >= kld_count(bins, c.kld_epsilon, c.kld_z)
+                .insert(pose.x, pose.y, pose.yaw, KLD_BIN_XY, KLD_BIN_YAW);
+            if drawn.len() >= c.min_particles && drawn.len() >= kld_count(bins, KLD_EPSILON, KLD_Z)
             {
                 break;
             }
@@ -502,20 +544,18 @@ impl Localizer {
     }
 
     /// Whether the cloud `covariance` describes has converged: its spread under the
-    /// configured thresholds, or, if it had converged already, under `lost_sigma_factor`
-    /// times them.
+    /// thresholds, or, if it had converged already, under [`LOST_SIGMA_FACTOR`] times them.
     fn is_converged(&self, covariance: &Matrix3<f64>) -> bool {
-        let c = &self.config;
         let scale = if self.converged {
-            c.lost_sigma_factor
+            LOST_SIGMA_FACTOR
         } else {
             1.0
         };
         let (a, b, d) = (covariance[(0, 0)], covariance[(0, 1)], covariance[(1, 1)]);
         // The larger eigenvalue of the x-y block.
         let largest = 0.5 * (a + d) + (0.25 * (a - d).powi(2) + b * b).sqrt();
-        largest.sqrt() < scale * c.converged_sigma_xy
-            && covariance[(2, 2)].sqrt() < scale * c.converged_sigma_yaw
+        largest.sqrt() < scale * CONVERGED_SIGMA_XY
+            && covariance[(2, 2)].sqrt() < scale * CONVERGED_SIGMA_YAW
     }
 }
 
@@ -680,7 +720,8 @@ mod tests {
     #[test]
     fn a_cloud_that_widens_for_a_moment_keeps_tracking() {
         // Drift eight times the default: between weightings the cloud widens past the
-        // converged thresholds now and then.
+        // converged thresholds now and then (with the thresholds alone, without
+        // `LOST_SIGMA_FACTOR`, it is lost now and then over the drive).
         let noisy = LocalizeConfig {
             xy_variance_per_metre: 0.04,
             xy_variance_per_radian: 0.04,
@@ -688,14 +729,6 @@ mod tests {
             yaw_variance_per_radian: 0.08,
             ..LocalizeConfig::default()
         };
-        let (losses, _) = losses_while_driving(
-            LocalizeConfig {
-                lost_sigma_factor: 1.0,
-                ..noisy.clone()
-            },
-            400,
-        );
-        assert!(losses > 0, "the thresholds alone never lose this cloud");
         let (losses, worst) = losses_while_driving(noisy, 400);
         assert_eq!(losses, 0);
         assert!(worst < 0.2, "{worst}");

@@ -1,45 +1,34 @@
 //! The field a converged localizer weighs its particles on: by the wall faces a beam can
-//! end on ([`FacedField`]), or, with `faced_walls` off, every occupied cell
-//! ([`LikelihoodField`]). Tools that judge a map as the localizer sees it use the same.
+//! end on ([`FacedField`]), not every occupied cell: ends that sink into a thick wall would
+//! otherwise score as well as ends on its face, and a forward-looking scanner would be
+//! drawn ahead of its pose. Tools that judge a map as the localizer sees it use the same.
 
 use map_sink::GridMap;
 use slam_geom::Pose2;
 
 use crate::localize::faced_field::{FacedField, faced_scan_score};
-use crate::localize::hill_climb::scan_score;
-use crate::localize::likelihood_field::{BeamModel, LikelihoodField};
+use crate::localize::likelihood_field::{BEAM_FLOOR, BeamModel, MAX_DISTANCE_M};
 use crate::localize_config::LocalizeConfig;
 
-/// The converged localizer's field.
+/// The converged localizer's field: a beam end counts against the faces a beam going its
+/// way can end on.
 #[derive(Debug, Clone)]
-pub enum TrackingField {
-    /// Every occupied cell is a wall, seen from any side.
-    Plain(LikelihoodField),
-    /// A beam end counts against the faces a beam going its way can end on.
-    Faced(FacedField),
-}
+pub struct TrackingField(FacedField);
 
 impl TrackingField {
-    /// The field `config` asks for over `grid`, with its sharp beam model (`sigma_hit`).
+    /// The field over `grid`, with `config`'s sharp beam model (`sigma_hit`).
     pub fn new(grid: &GridMap, config: &LocalizeConfig) -> Self {
         let model = BeamModel {
             sigma_hit: config.sigma_hit,
-            floor: config.beam_floor,
+            floor: BEAM_FLOOR,
         };
-        if config.faced_walls {
-            Self::Faced(FacedField::new(grid, config.max_distance, model))
-        } else {
-            Self::Plain(LikelihoodField::new(grid, config.max_distance, model))
-        }
+        Self(FacedField::new(grid, MAX_DISTANCE_M, model))
     }
 
     /// The log-likelihood of beam ends `points` (sensor frame), whose beams left the sensor
-    /// at `bearings` (sensor frame, radians; only the faced field reads them), from `pose`.
+    /// at `bearings` (sensor frame, radians), from `pose`.
     pub fn scan_score(&self, points: &[[f64; 2]], bearings: &[f64], pose: &Pose2) -> f64 {
-        match self {
-            Self::Plain(field) => scan_score(field, points, pose),
-            Self::Faced(field) => faced_scan_score(field, points, bearings, pose),
-        }
+        faced_scan_score(&self.0, points, bearings, pose)
     }
 }
 

@@ -18,7 +18,6 @@
 
 use nalgebra::{Cholesky, Matrix3, Matrix4, Matrix4x3, Vector2, Vector3, Vector4};
 
-use crate::config::SlamConfig;
 use crate::filter::observation::{OdometryInput, Prepared};
 use crate::math::chi2::quantile_even;
 use crate::motion::line_motion;
@@ -27,6 +26,37 @@ use slam_geom::MeasuredLine;
 use slam_geom::Pose2;
 use slam_geom::align_se2;
 use slam_geom::wrap_angle;
+
+/// Largest believable translation between consecutive scans, metres: a ground robot or a
+/// UAV steps up to about 0.2 m between scans at 10-40 Hz, so a corner fit beyond this is a
+/// wrong match and the prior is used instead.
+const MAX_TRANSLATION: f64 = 0.5;
+/// Largest believable rotation between consecutive scans, radians (as above, for turns).
+const MAX_ROTATION: f64 = 0.5;
+/// Standard deviation of the constant-velocity prior's translation, metres. Generous: it
+/// only has to keep the true matches inside the gate.
+const PRIOR_SIGMA_XY: f64 = 0.25;
+/// Standard deviation of the constant-velocity prior's rotation, radians (as generous).
+const PRIOR_SIGMA_YAW: f64 = 0.25;
+/// Standard deviation of the prior's translation when wall lines are matched between
+/// consecutive scans, metres (at most the prior's own). Lines match on two numbers, not four
+/// like corners, and parallel walls alias: they need a tighter prior.
+const LINE_PRIOR_SIGMA_XY: f64 = 0.05;
+/// Standard deviation of the prior's rotation for line matching, radians.
+const LINE_PRIOR_SIGMA_YAW: f64 = 0.05;
+/// Gate probability for candidate matches between consecutive scans under the prior: wide,
+/// since a true match missed costs a fit and a false one is voted out by RANSAC.
+const GATE_PROBABILITY: f64 = 0.999;
+/// Gate probability for the inliers of a motion hypothesis (no prior uncertainty left).
+const INLIER_PROBABILITY: f64 = 0.99;
+/// Candidate matches kept per corner of the current scan, best first: bounds the robust
+/// fit's hypotheses (every pair of candidates), which grow with its square.
+const CANDIDATES_PER_CORNER: usize = 4;
+/// Smallest standard deviation of an odometry increment's translation, metres: a reported
+/// covariance that does not grow would otherwise make the prior absolute.
+const ODOMETRY_MIN_SIGMA_XY: f64 = 0.005;
+/// Smallest standard deviation of an odometry increment's rotation, radians.
+const ODOMETRY_MIN_SIGMA_YAW: f64 = 0.002;
 
 /// The motion from the previous scan to this one (`previous_from_current`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +111,7 @@ pub(crate) struct MotionEstimator {
 }
 
 impl MotionEstimator {
-    pub fn new(config: &SlamConfig) -> Self {
+    pub fn new() -> Self {
         Self {
             previous: None,
             previous_lines: Vec::new(),
@@ -89,9 +119,9 @@ impl MotionEstimator {
             last_stamp: None,
             last_interval: None,
             last_odometry: None,
-            gate: quantile_even(config.motion_gate_probability, 4),
-            line_gate: quantile_even(config.motion_gate_probability, 2),
-            inlier_gate: quantile_even(config.motion_inlier_probability, 4),
+            gate: quantile_even(GATE_PROBABILITY, 4),
+            line_gate: quantile_even(GATE_PROBABILITY, 2),
+            inlier_gate: quantile_even(INLIER_PROBABILITY, 4),
         }
     }
 
@@ -104,18 +134,15 @@ impl MotionEstimator {
         observations: &[Prepared],
         lines: &[MeasuredLine],
         odometry: Option<&OdometryInput>,
-        config: &SlamConfig,
     ) -> Motion {
         let interval = self
             .last_stamp
             .and_then(|last| stamp_ns.checked_sub(last))
             .filter(|&d| d > 0);
         let (prior, prior_source) = match (odometry, &self.last_odometry) {
-            (Some(now), Some(before)) => {
-                (odometry_prior(before, now, config), MotionSource::Odometry)
-            }
+            (Some(now), Some(before)) => (odometry_prior(before, now), MotionSource::Odometry),
             _ => (
-                self.constant_velocity_prior(interval, config),
+                self.constant_velocity_prior(interval),
                 MotionSource::ConstantVelocity,
             ),
         };
@@ -127,8 +154,8 @@ impl MotionEstimator {
                 inliers: 0,
             },
             Some(previous) => self
-                .fit(previous, observations, lines, &prior, config)
-                .or_else(|| self.fit_lines(lines, &prior, prior_source, config))
+                .fit(previous, observations, lines, &prior)
+                .or_else(|| self.fit_lines(lines, &prior, prior_source))
                 .unwrap_or(Motion {
                     delta: prior.delta,
                     covariance: prior.covariance,
@@ -154,14 +181,14 @@ impl MotionEstimator {
     }
 
     /// The last motion, scaled to this scan's interval when both intervals are known.
-    fn constant_velocity_prior(&self, interval: Option<u64>, config: &SlamConfig) -> Prior {
+    fn constant_velocity_prior(&self, interval: Option<u64>) -> Prior {
         let scale = match (interval, self.last_interval) {
             // Scans can be dropped or arrive late; a velocity, not a step, is constant.
             (Some(now), Some(before)) => (now as f64 / before as f64).clamp(0.0, 4.0),
             _ => 1.0,
         };
         let d = self.last_delta;
-        let (xy, yaw) = (config.motion_prior_sigma_xy, config.motion_prior_sigma_yaw);
+        let (xy, yaw) = (PRIOR_SIGMA_XY, PRIOR_SIGMA_YAW);
         Prior {
             delta: Pose2::new(d.x * scale, d.y * scale, wrap_angle(d.yaw * scale)),
             covariance: Matrix3::from_diagonal(&Vector3::new(xy * xy, xy * xy, yaw * yaw)),
@@ -176,13 +203,12 @@ impl MotionEstimator {
         pairs: &[(&Prepared, &Prepared)],
         lines: &[MeasuredLine],
         prior: &Prior,
-        config: &SlamConfig,
     ) -> Option<(Pose2, Matrix3<f64>)> {
         if lines.is_empty() || self.previous_lines.is_empty() {
             return None;
         }
         let prior_information = Cholesky::new(prior.covariance)?.inverse();
-        let around = line_prior(estimate, &prior.covariance, config);
+        let around = line_prior(estimate, &prior.covariance);
         let (refined, covariance, _) = line_motion::refine(
             &self.previous_lines,
             lines,
@@ -200,9 +226,8 @@ impl MotionEstimator {
         lines: &[MeasuredLine],
         prior: &Prior,
         prior_source: MotionSource,
-        config: &SlamConfig,
     ) -> Option<Motion> {
-        let tight = line_prior(prior.delta, &prior.covariance, config);
+        let tight = line_prior(prior.delta, &prior.covariance);
         let (delta, covariance, matched) = line_motion::fit(
             &self.previous_lines,
             lines,
@@ -210,7 +235,7 @@ impl MotionEstimator {
             self.line_gate,
             self.gate,
         )?;
-        within_limits(&delta, config).then_some(Motion {
+        within_limits(&delta).then_some(Motion {
             delta,
             covariance,
             source: MotionSource::Lines {
@@ -226,9 +251,8 @@ impl MotionEstimator {
         current: &[Prepared],
         lines: &[MeasuredLine],
         prior: &Prior,
-        config: &SlamConfig,
     ) -> Option<Motion> {
-        let candidates = self.candidates(previous, current, prior, config);
+        let candidates = self.candidates(previous, current, prior);
         let mut best: Option<(usize, f64, Pose2)> = None;
         let mut matched = Vec::new();
         for (i, a) in candidates.iter().enumerate() {
@@ -243,7 +267,7 @@ impl MotionEstimator {
                 let Some(hypothesis) = align_se2(&points).map(|fit| fit.to_pose()) else {
                     continue;
                 };
-                if !within_limits(&hypothesis, config) {
+                if !within_limits(&hypothesis) {
                     continue;
                 }
                 let cost = self.inliers(&hypothesis, previous, current, &candidates, &mut matched);
@@ -295,12 +319,12 @@ impl MotionEstimator {
             // In both rounds: the second round's inliers are then chosen under the
             // estimate the walls have steadied.
             if let Some((refined, refined_covariance)) =
-                self.with_lines(estimate, &pairs, lines, prior, config)
+                self.with_lines(estimate, &pairs, lines, prior)
             {
                 (estimate, covariance) = (refined, refined_covariance);
             }
         }
-        within_limits(&estimate, config).then_some(Motion {
+        within_limits(&estimate).then_some(Motion {
             delta: estimate,
             covariance,
             source: MotionSource::Corners,
@@ -309,13 +333,12 @@ impl MotionEstimator {
     }
 
     /// Candidate matches under the prior, grouped by current corner, best first, at most
-    /// `motion_candidates` each.
+    /// [`CANDIDATES_PER_CORNER`] each.
     fn candidates(
         &self,
         previous: &[Prepared],
         current: &[Prepared],
         prior: &Prior,
-        config: &SlamConfig,
     ) -> Vec<Candidate> {
         let u = prior.delta;
         let (s, c) = u.yaw.sin_cos();
@@ -361,7 +384,7 @@ impl MotionEstimator {
                 });
             }
             group.sort_by(|a, b| a.distance.total_cmp(&b.distance));
-            candidates.extend(group.iter().take(config.motion_candidates));
+            candidates.extend(group.iter().take(CANDIDATES_PER_CORNER));
         }
         candidates
     }
@@ -434,8 +457,8 @@ fn mahalanobis(nu: &Vector4<f64>, covariance: &Matrix4<f64>) -> Option<f64> {
 /// A belief centred on `delta` for matching lines: `covariance`, but no wider than the
 /// line prior. Lines match on two numbers, not four like corners, and parallel walls alias:
 /// they need a tighter prior than corners.
-fn line_prior(delta: Pose2, covariance: &Matrix3<f64>, config: &SlamConfig) -> Prior {
-    let (xy, yaw) = (config.line_prior_sigma_xy, config.line_prior_sigma_yaw);
+fn line_prior(delta: Pose2, covariance: &Matrix3<f64>) -> Prior {
+    let (xy, yaw) = (LINE_PRIOR_SIGMA_XY, LINE_PRIOR_SIGMA_YAW);
     let widest = Vector3::new(xy * xy, xy * xy, yaw * yaw);
     Prior {
         delta,
@@ -446,21 +469,20 @@ fn line_prior(delta: Pose2, covariance: &Matrix3<f64>, config: &SlamConfig) -> P
     }
 }
 
-fn within_limits(delta: &Pose2, config: &SlamConfig) -> bool {
-    delta.translation_norm() <= config.motion_max_translation
-        && delta.yaw.abs() <= config.motion_max_rotation
+fn within_limits(delta: &Pose2) -> bool {
+    delta.translation_norm() <= MAX_TRANSLATION && delta.yaw.abs() <= MAX_ROTATION
 }
 
 /// The odometry increment between two readings, in the earlier robot frame. Its covariance
 /// is the growth of the reported covariance over the step, rotated into that frame, its
 /// diagonal floored (a covariance that does not grow would claim a perfect increment).
-fn odometry_prior(before: &OdometryInput, now: &OdometryInput, config: &SlamConfig) -> Prior {
+fn odometry_prior(before: &OdometryInput, now: &OdometryInput) -> Prior {
     let delta = before.pose.between(&now.pose);
     let growth = now.covariance - before.covariance;
     let (s, c) = before.pose.yaw.sin_cos();
     let to_robot = Matrix3::new(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);
     let local = to_robot * growth * to_robot.transpose();
-    let (xy, yaw) = (config.odometry_min_sigma_xy, config.odometry_min_sigma_yaw);
+    let (xy, yaw) = (ODOMETRY_MIN_SIGMA_XY, ODOMETRY_MIN_SIGMA_YAW);
     let floor = Vector3::new(xy * xy, xy * xy, yaw * yaw);
     let diagonal = Vector3::from_fn(|i, _| {
         let v = local[(i, i)].abs();
@@ -500,10 +522,10 @@ mod tests {
     }
 
     /// An estimator that has seen [`scene`] as its first scan, and that scene.
-    fn after_scene(config: &SlamConfig) -> (MotionEstimator, Vec<Prepared>) {
-        let mut estimator = MotionEstimator::new(config);
+    fn after_scene() -> (MotionEstimator, Vec<Prepared>) {
+        let mut estimator = MotionEstimator::new();
         let previous = scene();
-        estimator.estimate(0, &previous, &[], None, config);
+        estimator.estimate(0, &previous, &[], None);
         (estimator, previous)
     }
 
@@ -535,8 +557,7 @@ mod tests {
 
     #[test]
     fn walls_carry_the_motion_where_corners_do_not() {
-        let config = SlamConfig::default();
-        let mut estimator = MotionEstimator::new(&config);
+        let mut estimator = MotionEstimator::new();
         // A corridor: two walls 1.2 m either side, one corner in view.
         let walls = [
             (1.2, std::f64::consts::FRAC_PI_2),
@@ -549,13 +570,12 @@ mod tests {
             &previous_corner,
             &lines_seen_from(&identity, &walls),
             None,
-            &config,
         );
         // A straight step at constant velocity, then one that drifts 2 cm across and turns
         // 0.02 rad, which constant velocity cannot know and the walls see.
         let step = Pose2::new(0.1, 0.0, 0.0);
         let current = seen_from(&step, &previous_corner);
-        estimator.estimate(25, &current, &lines_seen_from(&step, &walls), None, &config);
+        estimator.estimate(25, &current, &lines_seen_from(&step, &walls), None);
         // The filter tells the estimator the step it made (the walls alone cannot say how
         // far along them it went).
         estimator.set_last_motion(step);
@@ -566,7 +586,6 @@ mod tests {
             &seen_from(&after, &previous_corner),
             &lines_seen_from(&after, &walls),
             None,
-            &config,
         );
         assert_eq!(motion.source, MotionSource::Lines { on_odometry: false });
         assert!(
@@ -585,8 +604,7 @@ mod tests {
 
     #[test]
     fn recovers_a_step_from_corners_despite_a_wrong_match() {
-        let config = SlamConfig::default();
-        let (mut estimator, previous) = after_scene(&config);
+        let (mut estimator, previous) = after_scene();
         let truth = Pose2::new(0.12, 0.03, 0.15);
         let mut current = seen_from(&truth, &previous);
         // An outlier: a corner whose descriptor matches corner 0 but sits 0.4 m off.
@@ -596,7 +614,7 @@ mod tests {
             current[0].z.z,
             current[0].z.w,
         );
-        let motion = estimator.estimate(25_000_000, &current, &[], None, &config);
+        let motion = estimator.estimate(25_000_000, &current, &[], None);
         assert_eq!(motion.source, MotionSource::Corners);
         assert_eq!(motion.inliers, 4);
         assert!(
@@ -610,34 +628,32 @@ mod tests {
 
     #[test]
     fn falls_back_to_constant_velocity_without_matches() {
-        let config = SlamConfig::default();
-        let (mut estimator, previous) = after_scene(&config);
+        let (mut estimator, previous) = after_scene();
         let step = Pose2::new(0.1, 0.0, 0.05);
         let current = seen_from(&step, &previous);
-        estimator.estimate(10, &current, &[], None, &config);
+        estimator.estimate(10, &current, &[], None);
         // Same interval, a single corner: the last step again.
-        let motion = estimator.estimate(20, &current[..1], &[], None, &config);
+        let motion = estimator.estimate(20, &current[..1], &[], None);
         assert_eq!(motion.source, MotionSource::ConstantVelocity);
         assert!((motion.delta.x - 0.1).abs() < 1e-3 && (motion.delta.yaw - 0.05).abs() < 1e-3);
         // Twice the interval: twice the step.
-        let motion = estimator.estimate(40, &[], &[], None, &config);
+        let motion = estimator.estimate(40, &[], &[], None);
         assert!((motion.delta.x - 0.2).abs() < 2e-3);
     }
 
     #[test]
     fn odometry_is_the_prior_and_corners_correct_it() {
-        let config = SlamConfig::default();
-        let mut estimator = MotionEstimator::new(&config);
+        let mut estimator = MotionEstimator::new();
         let previous = scene();
         let odom = |x: f64, yaw: f64, var: f64| OdometryInput {
             pose: Pose2::new(x, 1.0, yaw),
             covariance: Matrix3::identity() * var,
         };
-        estimator.estimate(0, &previous, &[], Some(&odom(5.0, 0.0, 0.0)), &config);
+        estimator.estimate(0, &previous, &[], Some(&odom(5.0, 0.0, 0.0)));
         let truth = Pose2::new(0.1, 0.0, 0.02);
         // Odometry says 0.15 m +- 0.1 m; the corners say 0.1 m +- 1 cm and win.
         let current = seen_from(&truth, &previous);
-        let motion = estimator.estimate(10, &current, &[], Some(&odom(5.15, 0.02, 1e-2)), &config);
+        let motion = estimator.estimate(10, &current, &[], Some(&odom(5.15, 0.02, 1e-2)));
         assert_eq!(motion.source, MotionSource::Corners);
         assert!(
             (motion.delta.x - truth.x).abs() < 5e-3,
@@ -645,8 +661,7 @@ mod tests {
             motion.delta
         );
         // Without corners the odometry increment is the motion.
-        let motion =
-            estimator.estimate(20, &[], &[], Some(&odom(5.35, 0.02, 1e-2 + 1e-4)), &config);
+        let motion = estimator.estimate(20, &[], &[], Some(&odom(5.35, 0.02, 1e-2 + 1e-4)));
         assert_eq!(motion.source, MotionSource::Odometry);
         let expected = Pose2::new(5.15, 1.0, 0.02).between(&Pose2::new(5.35, 1.0, 0.02));
         assert!(

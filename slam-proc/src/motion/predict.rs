@@ -9,6 +9,31 @@ use crate::config::SlamConfig;
 use crate::motion::estimator::{Motion, MotionSource};
 use slam_geom::Pose2;
 
+/// Particle translation noise per step at most (the course's model, which bounds a fitted
+/// step's noise): `sigma = base + per_metre * |t| + per_radian * |dyaw|`, metres. The base
+/// keeps the particles diverse when the robot stands; the terms grow with the step as
+/// wheel slip and a fit's error do.
+const NOISE_XY_BASE: f64 = 0.01;
+const NOISE_XY_PER_METRE: f64 = 0.05;
+const NOISE_XY_PER_RADIAN: f64 = 0.02;
+/// Particle rotation noise per step at most: `sigma = base + per_radian * |dyaw| +
+/// per_metre * |t|`, radians (the same model, for the heading).
+const NOISE_YAW_BASE: f64 = 0.004;
+const NOISE_YAW_PER_RADIAN: f64 = 0.05;
+const NOISE_YAW_PER_METRE: f64 = 0.01;
+/// A corner-fitted step spreads the particles by this multiple of the fit's own standard
+/// deviations (within the model above): the fit knows how well it did, but its covariance
+/// takes the corners for independent, which they are not quite.
+const NOISE_FIT_SCALE: f64 = 2.0;
+/// Smallest translation noise of a fitted step, metres: the particles must stay diverse
+/// however sure the fit is.
+const NOISE_XY_FLOOR: f64 = 0.002;
+/// Smallest rotation noise of a fitted step, radians.
+const NOISE_YAW_FLOOR: f64 = 0.0005;
+/// Noise multiplier for a step at constant velocity (no fit, no odometry): the motion is a
+/// guess, so the particles must spread wider than the model says for a measured step.
+const FALLBACK_NOISE_SCALE: f64 = 3.0;
+
 /// Standard deviations of one step's noise, in the particle's frame before the step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct MotionNoise {
@@ -19,20 +44,16 @@ pub(crate) struct MotionNoise {
 impl MotionNoise {
     /// The noise of a step. The course model (a floor plus terms proportional to the
     /// translation and rotation) bounds it; within that, a corner fit spreads the
-    /// particles by its own uncertainty (times `noise_fit_scale`, floored), a line fit
+    /// particles by its own uncertainty (times [`NOISE_FIT_SCALE`], floored), a line fit
     /// likewise in heading; odometry alone by the odometry's reported uncertainty (floored
     /// by the motion estimate), since the model's per-step floor would random-walk the
     /// particles far faster than good odometry drifts; constant velocity, which only
-    /// guesses, by the model times `fallback_noise_scale`.
+    /// guesses, by the model times [`FALLBACK_NOISE_SCALE`].
     pub fn for_step(motion: &Motion, config: &SlamConfig) -> Self {
         let (t, r) = (motion.delta.translation_norm(), motion.delta.yaw.abs());
         let model = Self {
-            sigma_xy: config.noise_xy_base
-                + config.noise_xy_per_metre * t
-                + config.noise_xy_per_radian * r,
-            sigma_yaw: config.noise_yaw_base
-                + config.noise_yaw_per_radian * r
-                + config.noise_yaw_per_metre * t,
+            sigma_xy: NOISE_XY_BASE + NOISE_XY_PER_METRE * t + NOISE_XY_PER_RADIAN * r,
+            sigma_yaw: NOISE_YAW_BASE + NOISE_YAW_PER_RADIAN * r + NOISE_YAW_PER_METRE * t,
         };
         match motion.source {
             // A fit knows how well it did: the particles spread by a multiple of its own
@@ -41,8 +62,8 @@ impl MotionNoise {
             MotionSource::Corners => {
                 let (xy, yaw) = fit_sigmas(&motion.covariance);
                 Self {
-                    sigma_xy: fitted(xy, config.noise_xy_floor, model.sigma_xy, config),
-                    sigma_yaw: fitted(yaw, config.noise_yaw_floor, model.sigma_yaw, config),
+                    sigma_xy: fitted(xy, NOISE_XY_FLOOR, model.sigma_xy),
+                    sigma_yaw: fitted(yaw, NOISE_YAW_FLOOR, model.sigma_yaw),
                 }
             }
             // Walls fix a line step's heading as well as the fit says (scaled and floored
@@ -53,7 +74,7 @@ impl MotionNoise {
                 let (xy, yaw) = fit_sigmas(&motion.covariance);
                 Self {
                     sigma_xy: if on_odometry {
-                        fitted(xy, config.noise_xy_floor, model.sigma_xy, config)
+                        fitted(xy, NOISE_XY_FLOOR, model.sigma_xy)
                     } else {
                         model.sigma_xy
                     },
@@ -79,8 +100,8 @@ impl MotionNoise {
                     .sqrt(),
             },
             MotionSource::ConstantVelocity => Self {
-                sigma_xy: config.fallback_noise_scale * model.sigma_xy,
-                sigma_yaw: config.fallback_noise_scale * model.sigma_yaw,
+                sigma_xy: FALLBACK_NOISE_SCALE * model.sigma_xy,
+                sigma_yaw: FALLBACK_NOISE_SCALE * model.sigma_yaw,
             },
         }
     }
@@ -109,11 +130,9 @@ fn fit_sigmas(covariance: &Matrix3<f64>) -> (f64, f64) {
     (xy, covariance[(2, 2)].max(0.0).sqrt())
 }
 
-/// `noise_fit_scale` times a fit's standard deviation, between `floor` and `model`.
-fn fitted(sigma: f64, floor: f64, model: f64, config: &SlamConfig) -> f64 {
-    (config.noise_fit_scale * sigma)
-        .max(floor)
-        .min(model.max(floor))
+/// [`NOISE_FIT_SCALE`] times a fit's standard deviation, between `floor` and `model`.
+fn fitted(sigma: f64, floor: f64, model: f64) -> f64 {
+    (NOISE_FIT_SCALE * sigma).max(floor).min(model.max(floor))
 }
 
 /// The noisy increment `delta + noise` a particle moves by, in its own frame.
@@ -151,10 +170,10 @@ mod tests {
         assert!(small.sigma_xy < large.sigma_xy && small.sigma_yaw < large.sigma_yaw);
         // A good fit by its own uncertainty, scaled, but no tighter than the floors.
         let good = noise(motion(0.3, 0.2, MotionSource::Corners, 1e-6));
-        assert!((good.sigma_xy - config.noise_fit_scale * 1e-3).abs() < 1e-15);
+        assert!((good.sigma_xy - NOISE_FIT_SCALE * 1e-3).abs() < 1e-15);
         let perfect = noise(motion(0.3, 0.2, MotionSource::Corners, 0.0));
-        assert_eq!(perfect.sigma_xy, config.noise_xy_floor);
-        assert_eq!(perfect.sigma_yaw, config.noise_yaw_floor);
+        assert_eq!(perfect.sigma_xy, NOISE_XY_FLOOR);
+        assert_eq!(perfect.sigma_yaw, NOISE_YAW_FLOOR);
         // Lines: heading from the fit as it is; translation from the model at constant
         // velocity, from the fit (odometry along the walls) on odometry.
         let walls =
@@ -163,7 +182,7 @@ mod tests {
         assert!((walls(false).sigma_yaw - 1e-3).abs() < 1e-15);
         assert_eq!(walls(true).sigma_xy, good.sigma_xy);
         let guess = noise(motion(0.3, 0.2, MotionSource::ConstantVelocity, 0.0));
-        assert!((guess.sigma_xy - config.fallback_noise_scale * large.sigma_xy).abs() < 1e-15);
+        assert!((guess.sigma_xy - FALLBACK_NOISE_SCALE * large.sigma_xy).abs() < 1e-15);
         // Odometry spreads the particles as widely as it says it errs (the motion estimate
         // has already floored that), however tight.
         let odometry = noise(motion(0.3, 0.2, MotionSource::Odometry, 1e-6));

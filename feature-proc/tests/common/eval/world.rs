@@ -52,10 +52,10 @@ impl View {
         Self {
             geometry,
             max_range: max_range.min(config.max_range),
-            min_arm_length: config.min_line_length,
+            min_arm_length: feature_proc::MIN_LINE_LENGTH,
             min_arm_beams: config.min_line_points as f64,
-            min_angle: config.corner_min_angle,
-            max_angle: config.corner_max_angle,
+            min_angle: feature_proc::CORNER_MIN_ANGLE,
+            max_angle: feature_proc::CORNER_MAX_ANGLE,
         }
     }
 }
