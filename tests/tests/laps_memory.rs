@@ -47,9 +47,6 @@ fn peaks(out: &Path) -> BTreeMap<String, u64> {
 }
 
 #[test]
-#[ignore = "map-sink keeps every scan's poses and kept beams (about 5 MB a lap): the \
-            office driven three times peaks at 1.25 times once there; every other process \
-            is within 10 % + 2 MiB"]
 fn the_office_driven_three_times_peaks_within_10_percent_of_once_per_process() {
     let (once_metrics, once) = office(1);
     let (thrice_metrics, thrice) = office(3);
