@@ -164,6 +164,12 @@ pub struct FreeSpace {
 }
 
 impl FreeSpace {
+    /// Memory held, bytes (the index's entries counted at their size, not the table's).
+    pub fn bytes(&self) -> usize {
+        self.tiles.capacity() * std::mem::size_of::<[u64; BIT_WORDS]>()
+            + self.index.capacity() * std::mem::size_of::<((i32, i32), usize)>()
+    }
+
     /// What the submap says about `point`, as [`Coverage::seen`] said it.
     pub fn seen(&self, point: Vector2<f64>) -> Seen {
         let (x, y) = (

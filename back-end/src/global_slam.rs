@@ -14,7 +14,7 @@
 //! floor for the front end's own noise), so a robot that keeps seeing its old map searches
 //! narrow windows, cheaply, and one back from a long loop searches wide.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 
 use nalgebra::Matrix3;
@@ -29,6 +29,8 @@ use crate::global_grid;
 use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
 use crate::pose_graph::{PoseGraph, PoseGraphError};
 use crate::submap::{SearchMaps, SubmapConfig, Submaps};
+use crate::submap_grid::SubmapGrid;
+use crate::trim::{Overlap, localized_all_along};
 
 /// Memory the search maps of the submaps searched last may hold, bytes: those around the
 /// robot are searched again and again, and a submap of a large hall costs megabytes.
@@ -155,6 +157,8 @@ pub struct GlobalStats {
     pub unconstrained: usize,
     pub optimizations: usize,
     pub grids_built: usize,
+    /// Submaps retired because they repeated older ones ([`crate::trim`]).
+    pub retired: usize,
 }
 
 /// The back end's state over a run.
@@ -164,6 +168,8 @@ pub struct GlobalSlam {
     submaps: Submaps,
     /// Search maps of the submaps searched last, the latest first.
     search_maps: VecDeque<(usize, SearchMaps)>,
+    /// The most memory one submap's search maps took, bytes: room made before a build.
+    largest_search_maps: usize,
     /// The node each submap was last searched for.
     last_attempt: Vec<Option<usize>>,
     scans: Vec<ScanPlace>,
@@ -179,6 +185,10 @@ pub struct GlobalSlam {
     node_travelled_m: Vec<f64>,
     /// Per submap, the path driven when a closure last tied the robot to it.
     tied_at_m: Vec<f64>,
+    /// The nodes a closure tied to an older submap (the submap, and where the node is in
+    /// it), from the oldest open submap's first on: whether a submap was localized all
+    /// along, and where, is judged on them when it finishes.
+    tied_nodes: BTreeMap<usize, (usize, Pose2)>,
     /// Jumps waiting for confirmation.
     held: Confirmations,
     stats: GlobalStats,
@@ -191,6 +201,7 @@ impl GlobalSlam {
             graph: PoseGraph::new(Pose2::IDENTITY)?,
             submaps: Submaps::new(config.submaps),
             search_maps: VecDeque::new(),
+            largest_search_maps: 0,
             last_attempt: Vec::new(),
             scans: Vec::new(),
             odom_from_node: Pose2::IDENTITY,
@@ -200,6 +211,7 @@ impl GlobalSlam {
             travelled_m: 0.0,
             node_travelled_m: Vec::new(),
             tied_at_m: Vec::new(),
+            tied_nodes: BTreeMap::new(),
             held: Confirmations::default(),
             stats: GlobalStats::default(),
         })
@@ -354,9 +366,58 @@ impl GlobalSlam {
     ) -> Result<(), GridError> {
         self.stats.nodes += 1;
         self.node_travelled_m.resize(node + 1, self.travelled_m);
-        self.submaps.insert(node, odom_from_robot, points, beams)?;
+        if let Some(finished) = self.submaps.insert(node, odom_from_robot, points, beams)? {
+            self.trim(finished);
+            if let Some(first) = self.submaps.open_from() {
+                self.tied_nodes = self.tied_nodes.split_off(&first);
+            }
+        }
         self.stats.submaps = self.submaps.len();
         Ok(())
+    }
+
+    /// Retires submap `index`, just finished, if it repeats the map: its nodes were tied to
+    /// older submaps all along, and those know its walls ([`crate::trim`]). It is laid
+    /// over them where its closures put its nodes, not where the graph has them: closures
+    /// the graph already agrees with wait for the next solve, and the front end's drift
+    /// since the last would show as walls out of place.
+    fn trim(&mut self, index: usize) {
+        let Some(submap) = self.submaps.get(index) else {
+            return;
+        };
+        let tied: Vec<(usize, usize, Pose2)> = self
+            .tied_nodes
+            .range(submap.anchor..=submap.last_node)
+            .map(|(&node, &(older, seen))| (node, older, seen))
+            .collect();
+        let localized =
+            localized_all_along(tied.iter().map(|t| t.0), submap.anchor, submap.last_node);
+        let Some(grid) = submap.kept_grid().filter(|_| localized) else {
+            return;
+        };
+        let world_from_node = |node: usize| self.graph.pose(node);
+        let older: Vec<(usize, Pose2, &SubmapGrid)> = self
+            .submaps
+            .iter()
+            .filter(|(i, _)| *i != index)
+            .filter_map(|(i, s)| s.kept_grid().map(|g| (i, s.placed(world_from_node), g)))
+            .collect();
+        // Where each closure puts its node: the older submap as laid out, and the node
+        // where the scan matched in it.
+        let implied = tied.iter().filter_map(|&(node, of, seen)| {
+            let at = older.iter().find(|o| o.0 == of)?;
+            Some((node, at.1.compose(&seen)))
+        });
+        let Some(world_from_submap) = submap.fitted(implied) else {
+            return;
+        };
+        let laid: Vec<(Pose2, &SubmapGrid)> = older.iter().map(|o| (o.1, o.2)).collect();
+        let overlap = Overlap::of(grid, &world_from_submap, &laid);
+        if overlap.repeats() {
+            self.submaps.retire(index);
+            self.search_maps.retain(|(i, _)| *i != index);
+            self.stats.retired += 1;
+        }
     }
 
     /// Searches the finished submaps the node may be in; adds what the scans confirm.
@@ -368,7 +429,7 @@ impl GlobalSlam {
             .submaps
             .iter()
             .filter(|(index, s)| {
-                s.is_finished()
+                s.is_kept()
                     && s.last_node + recent < node
                     && self
                         .last_attempt
@@ -395,9 +456,8 @@ impl GlobalSlam {
             }
             self.last_attempt[index] = Some(node);
             self.cache_search_maps(index);
-            let (Some(submap), Some((_, maps))) =
-                (self.submaps.get(index), self.search_maps.front())
-            else {
+            let cached = self.search_maps.front().filter(|(i, _)| *i == index);
+            let (Some(submap), Some((_, maps))) = (self.submaps.get(index), cached) else {
                 continue;
             };
             let Some(free) = submap.free_space() else {
@@ -451,6 +511,7 @@ impl GlobalSlam {
         self.graph
             .add_closure(tie.anchor, tie.node, tie.seen, tie.information)?;
         self.stats.closures += 1;
+        self.tied_nodes.insert(tie.node, (tie.submap, tie.seen));
         if self.tied_at_m.len() <= tie.submap {
             self.tied_at_m.resize(tie.submap + 1, f64::NAN);
         }
@@ -492,31 +553,37 @@ impl GlobalSlam {
         }
     }
 
-    /// Puts the match grid of submap `index` first in the cache, built on first use and
-    /// kept while it is recent.
+    /// Puts the search maps of submap `index` first in the cache, built on first use and
+    /// kept while they are recent. Room for them is made before they are built, as much as
+    /// the largest built so far takes: the cache then stays within its budget while they
+    /// are built, and they take the memory the evicted maps freed, of the same shapes,
+    /// before anything else is put there (built first, the cache would reach for new memory
+    /// at every miss, and leave the evicted maps' as holes).
     fn cache_search_maps(&mut self, index: usize) {
         if let Some(at) = self.search_maps.iter().position(|(i, _)| *i == index) {
             if let Some(entry) = self.search_maps.remove(at) {
                 self.search_maps.push_front(entry);
             }
-        } else if let Some(maps) = self
-            .submaps
-            .get(index)
-            .and_then(|submap| submap.search_maps(self.config.resolution, self.config.max_window_m))
-        {
+            return;
+        }
+        let Some(submap) = self.submaps.get(index) else {
+            return;
+        };
+        let room = SEARCH_MAPS_BYTES.saturating_sub(self.largest_search_maps);
+        let mut kept = 0;
+        let within = self
+            .search_maps
+            .iter()
+            .take_while(|(_, maps)| {
+                kept += maps.bytes();
+                kept <= room
+            })
+            .count();
+        self.search_maps.truncate(within);
+        if let Some(maps) = submap.search_maps(self.config.resolution, self.config.max_window_m) {
             self.stats.grids_built += 1;
+            self.largest_search_maps = self.largest_search_maps.max(maps.bytes());
             self.search_maps.push_front((index, maps));
-            let mut kept = 0;
-            let within = self
-                .search_maps
-                .iter()
-                .take_while(|(_, maps)| {
-                    kept += maps.bytes();
-                    kept <= SEARCH_MAPS_BYTES
-                })
-                .count();
-            // The newest stays whatever it costs: the search needs it.
-            self.search_maps.truncate(within.max(1));
         }
     }
 

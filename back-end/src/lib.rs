@@ -26,6 +26,7 @@ pub mod occupancy_grid;
 pub mod pose_graph;
 pub mod submap;
 pub mod submap_grid;
+pub mod trim;
 
 pub use global_slam::ScanRanges;
 pub use global_slam::{GlobalConfig, GlobalError, GlobalSlam, GlobalStats};

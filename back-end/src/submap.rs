@@ -17,6 +17,10 @@
 //! costs memory by the area it covers. The search structures over it (the match grid and the
 //! local map the aligner needs) are built when a scan is searched for in it, and the caller
 //! keeps the few in use.
+//!
+//! A finished submap that only repeats what older ones hold can be retired
+//! ([`Submap::retire`], decided in [`crate::trim`]): it keeps its place in the list and its
+//! nodes, which are the graph's, and drops everything else.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -65,7 +69,7 @@ pub struct Submap {
     /// While open: its keyframes.
     keyframes: Vec<Keyframe>,
     /// Every keyframe's pose in the submap frame, nodes `anchor..=last_node` in order: where
-    /// the submap lies follows from where the graph puts them.
+    /// the submap lies follows from where the graph puts them (none once retired).
     poses: Vec<Pose2>,
     /// The keyframes inserted while it was the newest: the nodes its scans follow.
     owned_nodes: usize,
@@ -76,6 +80,8 @@ pub struct Submap {
     sealed: bool,
     /// What a finished submap keeps.
     finished: Option<Finished>,
+    /// Retired: finished, and nothing kept.
+    retired: bool,
     /// Lowest and highest point, submap frame.
     lo: Vector2<f64>,
     hi: Vector2<f64>,
@@ -118,6 +124,7 @@ impl Submap {
             grid: None,
             sealed: false,
             finished: None,
+            retired: false,
             lo: Vector2::repeat(f64::INFINITY),
             hi: Vector2::repeat(f64::NEG_INFINITY),
         }
@@ -202,6 +209,11 @@ impl Submap {
         })
     }
 
+    /// A finished, kept submap's occupancy (of the scans it owns).
+    pub fn kept_grid(&self) -> Option<&SubmapGrid> {
+        self.finished.as_ref().and(self.grid.as_ref())
+    }
+
     /// The submap's pose in the world that best fits where the graph puts the keyframes its
     /// scans follow (`world_from_node`, by node): the mean of their turns, then the
     /// translation that lays their positions on the graph's in the least-squares sense. A
@@ -218,9 +230,57 @@ impl Submap {
         Pose2::fit(&pairs).unwrap_or_else(|| world_from_node(self.anchor))
     }
 
-    /// Whether no more keyframes go in.
+    /// The submap's pose in the world that best fits `world_from_node` (node, its pose) for
+    /// some of its keyframes, as [`Self::placed`] fits all; `None` without one of them.
+    pub fn fitted(
+        &self,
+        world_from_node: impl IntoIterator<Item = (usize, Pose2)>,
+    ) -> Option<Pose2> {
+        let pairs: Vec<(Pose2, Pose2)> = world_from_node
+            .into_iter()
+            .filter_map(|(node, pose)| {
+                let k = node.checked_sub(self.anchor)?;
+                self.poses
+                    .get(k)
+                    .map(|submap_from_node| (*submap_from_node, pose))
+            })
+            .collect();
+        Pose2::fit(&pairs)
+    }
+
+    /// Whether no more keyframes go in (retired too).
     pub fn is_finished(&self) -> bool {
+        self.finished.is_some() || self.retired
+    }
+
+    /// Whether the submap was retired: it is neither searched nor laid out.
+    pub fn is_retired(&self) -> bool {
+        self.retired
+    }
+
+    /// Whether the submap is finished and kept: what closures are searched in and the grid
+    /// is laid out from.
+    pub fn is_kept(&self) -> bool {
         self.finished.is_some()
+    }
+
+    /// Drops a finished submap's contents: its points, free space, occupancy and keyframe
+    /// poses. Its nodes stay in the graph; an open submap is left as it is.
+    pub fn retire(&mut self) {
+        if self.finished.take().is_some() {
+            self.poses = Vec::new();
+            self.grid = None;
+            self.retired = true;
+        }
+    }
+
+    /// Memory a finished submap's contents hold, bytes (an open one's scans are shared with
+    /// its neighbour, and counted by neither).
+    pub fn bytes(&self) -> usize {
+        self.finished.as_ref().map_or(0, |f| {
+            f.points.capacity() * std::mem::size_of::<SurfacePoint>() + f.free.bytes()
+        }) + self.grid.as_ref().map_or(0, SubmapGrid::bytes)
+            + self.poses.capacity() * std::mem::size_of::<Pose2>()
     }
 
     /// Where a finished submap's beams passed freely.
@@ -320,6 +380,24 @@ impl Submaps {
         self.all.get(index)
     }
 
+    /// Retires submap `index` if it is finished ([`Submap::retire`]).
+    pub fn retire(&mut self, index: usize) {
+        if let Some(submap) = self.all.get_mut(index) {
+            submap.retire();
+        }
+    }
+
+    /// The first node of the oldest open submap: no keyframe before it goes in anywhere.
+    pub fn open_from(&self) -> Option<usize> {
+        self.all
+            .iter()
+            .rev()
+            .take(2)
+            .filter(|s| !s.is_finished())
+            .map(|s| s.anchor)
+            .min()
+    }
+
     pub fn len(&self) -> usize {
         self.all.len()
     }
@@ -336,6 +414,48 @@ impl Submaps {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_retired_submap_keeps_its_nodes_and_nothing_else() {
+        let mut submaps = Submaps::new(SubmapConfig {
+            keyframes: 2,
+            voxel: 0.05,
+            grid: GridConfig::default(),
+        });
+        let ranges = [2.0_f32; 31];
+        let beams = CompactScan::new(-0.5, 1.0 / 30.0, 0.1, 10.0, &ranges, 0.05, 5.0);
+        let points: Arc<[SurfacePoint]> = (0..31)
+            .map(|i| SurfacePoint {
+                point: Vector2::new(2.0, -0.5 + f64::from(i) / 30.0),
+                normal: Vector2::new(-1.0, 0.0),
+            })
+            .collect();
+        let mut finished = Vec::new();
+        for node in 0..4 {
+            let pose = Pose2::new(0.1 * node as f64, 0.0, 0.0);
+            finished.extend(
+                submaps
+                    .insert(node, &pose, Arc::clone(&points), beams.clone())
+                    .unwrap(),
+            );
+        }
+        assert_eq!(finished, [0]);
+        // Retiring an open submap does nothing.
+        submaps.retire(1);
+        assert!(!submaps.get(1).unwrap().is_finished());
+        assert_eq!(submaps.open_from(), Some(2));
+        let submap = submaps.get(0).unwrap();
+        assert!(submap.is_kept() && submap.bytes() > 0);
+        assert!(submap.occupancy().unwrap().is_some());
+        submaps.retire(0);
+        let submap = submaps.get(0).unwrap();
+        assert!(submap.is_finished() && submap.is_retired() && !submap.is_kept());
+        assert_eq!((submap.anchor, submap.last_node), (0, 3));
+        assert_eq!(submap.bytes(), 0);
+        assert!(submap.occupancy().unwrap().is_none());
+        assert!(submap.free_space().is_none() && submap.kept_grid().is_none());
+        assert!(submap.search_maps(0.05, 1.0).is_none());
+    }
 
     #[test]
     fn a_submap_is_placed_where_the_graph_puts_its_keyframes() {

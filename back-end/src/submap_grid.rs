@@ -11,7 +11,7 @@ use slam_geom::Pose2;
 
 use crate::compact_scan::CompactScan;
 use crate::global_grid::floor;
-use crate::occupancy_grid::{GridConfig, GridError, OccupancyGrid};
+use crate::occupancy_grid::{CellState, GridConfig, GridError, OccupancyGrid, state_of};
 
 /// Steps of log-odds a byte counts in: 32 a unit keeps the clamps (-2 to 3.5) within a
 /// signed byte, and a step is far finer than a hit or a pass.
@@ -65,11 +65,36 @@ impl SubmapGrid {
     }
 
     /// The log-odds of the cell holding `point` (submap frame): 0 where nothing is known.
-    #[cfg(test)]
-    fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
+    pub fn log_odds_at(&self, point: Vector2<f64>) -> f32 {
         let col = floor(point.x / self.resolution) - self.min_index[0];
         let row = floor(point.y / self.resolution) - self.min_index[1];
         self.cell(col, row)
+    }
+
+    /// What the scans it owns say of the cell holding `point` (submap frame).
+    pub fn state_at(&self, point: Vector2<f64>) -> CellState {
+        state_of(self.log_odds_at(point))
+    }
+
+    /// The centres of its occupied cells (submap frame).
+    pub fn occupied_cells(&self) -> impl Iterator<Item = Vector2<f64>> + '_ {
+        self.stretches()
+            .flat_map(move |(first, count)| {
+                (0..count).map(move |k| first + Vector2::new(k as f64 * self.resolution, 0.0))
+            })
+            .filter(|&centre| self.state_at(centre) == CellState::Occupied)
+    }
+
+    /// The corners of its box (submap frame).
+    pub fn corners(&self) -> [Vector2<f64>; 4] {
+        let lo = Vector2::new(self.min_index[0] as f64, self.min_index[1] as f64) * self.resolution;
+        let size = Vector2::new(self.width as f64, self.rows.len() as f64) * self.resolution;
+        [
+            lo,
+            lo + Vector2::new(size.x, 0.0),
+            lo + size,
+            lo + Vector2::new(0.0, size.y),
+        ]
     }
 
     /// The log-odds at `out.len()` points from `from` on by steps of `step` (submap frame).

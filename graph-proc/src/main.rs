@@ -241,12 +241,13 @@ fn summary(stats: &GlobalStats, counts: &Counts) -> String {
         + stats.unconstrained;
     let mut text = format!(
         "graph-proc: summary of the back end\n  \
-         nodes:           {} in {} submaps\n  \
+         nodes:           {} in {} submaps ({} retired: they repeated older ones)\n  \
          loop closures:   {} verified by the scans, of {} searched ({} refused: {} not found, \
          {} overlapping too little, {} contradicted, {} ambiguous, {} unconstrained)\n  \
          solves:          {}",
         stats.nodes,
         stats.submaps,
+        stats.retired,
         stats.closures,
         stats.attempts,
         refused,

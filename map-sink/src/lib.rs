@@ -38,7 +38,7 @@
 //! for seq in 0..10_u64 {
 //!     let stamp_ns = seq * 100_000_000;
 //!     let truth = Pose2::new(0.1 * seq as f64, 0.0, 0.0);
-//!     recorder.record_truth(seq, stamp_ns, truth)?;
+//!     recorder.record_truth(stamp_ns, truth)?;
 //!     recorder.record_scan(seq, -1.0, 0.5, 0.1, 30.0, &[2.0, 2.1, f32::NAN, 2.3, 2.2]);
 //!     recorder.record_pose(seq, stamp_ns, truth, None, Some(3_000_000))?;
 //! }

@@ -205,7 +205,7 @@ fn run(args: Args) -> Result<()> {
             while let Some(sample) = truth.receive()? {
                 if !sample.header.is_end_of_stream() {
                     let p = sample.pose;
-                    recorder.record_truth(sample.header.seq, sample.header.stamp_ns, p.into())?;
+                    recorder.record_truth(sample.header.stamp_ns, p.into())?;
                 }
             }
         }
@@ -433,7 +433,8 @@ impl FinalPath {
 }
 
 /// Takes a path's chunks; a complete path goes to the recorder when it is the one the run
-/// keeps (`from_graph` says whose it is), and the path is done once the final form came. A chunk that does not fit is reported and the path left
+/// keeps (`from_graph` says whose it is; the other is not assembled), and the path is done
+/// once the final form came. A chunk that does not fit is reported and the path left
 /// incomplete (the online estimate stands in).
 fn drain_path(
     inlet: &Inlet<PathChunk>,
@@ -443,6 +444,9 @@ fn drain_path(
     from_graph: bool,
 ) -> Result<()> {
     while let Some(chunk) = inlet.receive()? {
+        if from_graph != final_path.from_graph {
+            continue;
+        }
         let poses: Vec<StampedPose> = chunk
             .poses()
             .iter()
@@ -452,9 +456,7 @@ fn drain_path(
             say_err(&format!("map-sink: {e}; the final path is incomplete"));
             continue;
         }
-        if let Some(path) = assembly.complete()
-            && from_graph == final_path.from_graph
-        {
+        if let Some(path) = assembly.take_complete() {
             // A path as it stands is kept too: a run stopped before the last one came
             // still has it.
             if from_graph {

@@ -50,9 +50,12 @@ impl PathAssembly {
         Ok(())
     }
 
-    /// The whole path, once every chunk has come.
-    pub fn complete(&self) -> Option<&[StampedPose]> {
-        (self.poses.len() as u64 == self.total && self.total > 0).then_some(&self.poses)
+    /// The whole path, once every chunk has come: handed over, and the next path starts.
+    pub fn take_complete(&mut self) -> Option<Vec<StampedPose>> {
+        (self.poses.len() as u64 == self.total && self.total > 0).then(|| {
+            self.total = 0;
+            std::mem::take(&mut self.poses)
+        })
     }
 }
 
@@ -73,13 +76,15 @@ mod tests {
     #[test]
     fn chunks_in_order_make_the_path_and_a_new_start_replaces_it() {
         let mut path = PathAssembly::new();
-        assert!(path.complete().is_none());
+        assert!(path.take_complete().is_none());
         path.add(0, 5, &poses(0..3)).unwrap();
-        assert!(path.complete().is_none());
+        assert!(path.take_complete().is_none());
         path.add(3, 5, &poses(3..5)).unwrap();
-        assert_eq!(path.complete().map(<[_]>::len), Some(5));
+        assert_eq!(path.take_complete().map(|p| p.len()), Some(5));
+        // Handed over once.
+        assert!(path.take_complete().is_none());
         path.add(0, 2, &poses(10..12)).unwrap();
-        assert_eq!(path.complete().unwrap()[1].stamp_ns, 11);
+        assert_eq!(path.take_complete().unwrap()[1].stamp_ns, 11);
     }
 
     #[test]
@@ -101,6 +106,6 @@ mod tests {
             path.add(2, 5, &poses(2..6)),
             Err(ChunkError::TooLong { end: 6, total: 5 })
         );
-        assert!(path.complete().is_none());
+        assert!(path.take_complete().is_none());
     }
 }

@@ -146,9 +146,8 @@ pub struct Recorder {
     dead_reckoning: TumStream,
     incomplete: Vec<IncompleteOutput>,
     estimates: BTreeMap<u64, Estimate>,
+    /// The simulator's true poses by stamp: the final path carries stamps only.
     truth: BTreeMap<u64, Pose2>,
-    /// The truth again by stamp, to score the final path (which carries stamps only).
-    truth_by_stamp: BTreeMap<u64, Pose2>,
     final_path: Option<Vec<StampedPose>>,
     scans: ScanKeeper,
     /// Mapping on a saved map: its grid on this run's cells ([`Self::map_on`]).
@@ -235,7 +234,6 @@ impl Recorder {
             incomplete: Vec::new(),
             estimates: BTreeMap::new(),
             truth: BTreeMap::new(),
-            truth_by_stamp: BTreeMap::new(),
             final_path: None,
             latencies_ns: Vec::new(),
             map: Vec::new(),
@@ -364,13 +362,12 @@ impl Recorder {
         tum_text(&robot)
     }
 
-    /// Records the simulator's true pose for scan `seq`.
-    pub fn record_truth(&mut self, seq: u64, stamp_ns: u64, pose: Pose2) -> Result<(), SinkError> {
+    /// Records the simulator's true pose at `stamp_ns` (its scan's).
+    pub fn record_truth(&mut self, stamp_ns: u64, pose: Pose2) -> Result<(), SinkError> {
         self.touch();
         self.incomplete
             .extend(self.ground_truth.append(stamp_ns, pose));
-        self.truth.insert(seq, pose);
-        self.truth_by_stamp.insert(stamp_ns, pose);
+        self.truth.insert(stamp_ns, pose);
         Ok(())
     }
 
@@ -419,20 +416,20 @@ impl Recorder {
     /// graph starts at the run's first scan; on a saved map the filter's estimate is in the
     /// map's frame, so the path is moved there whole: by the rigid motion that best lays it
     /// on that estimate (from convergence, where the run reports one).
-    pub fn set_back_end_path(&mut self, path: &[StampedPose]) {
+    pub fn set_back_end_path(&mut self, path: Vec<StampedPose>) {
         self.map_from_graph = self
             .on_saved_map
-            .then(|| self.map_from_graph(path))
+            .then(|| self.map_from_graph(&path))
             .flatten();
         let path = match self.map_from_graph {
             Some(map_from_graph) => path
-                .iter()
+                .into_iter()
                 .map(|p| StampedPose {
                     stamp_ns: p.stamp_ns,
                     pose: map_from_graph.compose(&p.pose),
                 })
                 .collect(),
-            None => path.to_vec(),
+            None => path,
         };
         self.final_path = Some(path);
     }
@@ -493,8 +490,8 @@ impl Recorder {
     }
 
     /// The filter's final path, which becomes `trajectory.tum` (the latest path wins).
-    pub fn set_final_path(&mut self, path: &[StampedPose]) {
-        self.final_path = Some(path.to_vec());
+    pub fn set_final_path(&mut self, path: Vec<StampedPose>) {
+        self.final_path = Some(path);
     }
 
     /// Replaces the map (the latest snapshot wins), in the SLAM frame.
@@ -820,7 +817,7 @@ impl Recorder {
             .iter()
             .filter(|p| p.stamp_ns >= from_ns)
             .filter_map(|p| {
-                let truth = self.truth_by_stamp.get(&p.stamp_ns)?;
+                let truth = self.truth.get(&p.stamp_ns)?;
                 Some((xy(&p.pose), xy(truth)))
             })
             .unzip();
@@ -844,8 +841,8 @@ impl Recorder {
     ) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
         self.estimates
             .range(seqs)
-            .filter_map(|(seq, e)| {
-                let (estimate, truth) = (pick(e)?, self.truth.get(seq)?);
+            .filter_map(|(_, e)| {
+                let (estimate, truth) = (pick(e)?, self.truth.get(&e.stamp_ns)?);
                 Some((xy(&estimate), xy(truth)))
             })
             .unzip()
@@ -1133,7 +1130,7 @@ mod tests {
                 pose,
             });
         }
-        recorder.set_final_path(&path);
+        recorder.set_final_path(path.clone());
         recorder.finish()?;
         for file in [TRAJECTORY_ONLINE_FILE, DEAD_RECKONING_FILE, TRAJECTORY_FILE] {
             let text = std::fs::read_to_string(dir.join(file)).unwrap_or_default();

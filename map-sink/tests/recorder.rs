@@ -326,7 +326,7 @@ fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
     for seq in 0..50_u64 {
         let stamp_ns = 1_000_000_000 + seq * 25_000_000;
         let pose = Pose2::new(0.1 * seq as f64, 0.02 * seq as f64, 0.01 * seq as f64);
-        recorder.record_truth(seq, stamp_ns, pose)?;
+        recorder.record_truth(stamp_ns, pose)?;
         // The online estimate is off by a wobble; the final path is exact.
         let wobble = if seq % 2 == 0 { 0.05 } else { -0.05 };
         let online = Pose2::new(pose.x, pose.y + wobble, pose.yaw);
@@ -334,7 +334,7 @@ fn the_final_path_becomes_the_trajectory_and_is_scored() -> TestResult {
         truth.push(pose);
         path.push(StampedPose { stamp_ns, pose });
     }
-    recorder.set_final_path(&path);
+    recorder.set_final_path(path.clone());
     let metrics = recorder.finish()?;
 
     assert_trajectory_is(&dir, &truth)?;
@@ -363,7 +363,7 @@ fn a_path_too_wide_for_a_grid_is_written_with_its_numbers_and_landmarks() -> Tes
         recorder.record_scan(seq, -1.0, 0.5, 0.1, 30.0, &[2.0, 2.1, 2.2, 2.3, 2.2]);
         recorder.record_pose(seq, p.stamp_ns, p.pose, None, None)?;
     }
-    recorder.set_final_path(&path);
+    recorder.set_final_path(path.clone());
     let result = recorder.finish();
     assert!(matches!(result, Err(SinkError::Grid(_))), "{result:?}");
     // What a run killed while its grid is made leaves too: the path, the corners, a
@@ -489,7 +489,7 @@ fn localized_run(
             truth
         };
         recorder.record_pose(seq, stamp_ns, estimate, Some(truth), None)?;
-        recorder.record_truth(seq, stamp_ns, truth)?;
+        recorder.record_truth(stamp_ns, truth)?;
         recorder.record_localization(seq, stamp_ns, seq >= converged);
     }
     let metrics = recorder.finish()?;

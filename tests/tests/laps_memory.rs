@@ -47,9 +47,6 @@ fn peaks(out: &Path) -> BTreeMap<String, u64> {
 }
 
 #[test]
-#[ignore = "graph-proc starts new submaps where old ones cover the place (about 8 MB a \
-            lap) and map-sink keeps every scan's poses and kept beams (about 5 MB a lap); \
-            the office driven three times peaks at 1.24 times once in both"]
 fn the_office_driven_three_times_peaks_within_10_percent_of_once_per_process() {
     let (once_metrics, once) = office(1);
     let (thrice_metrics, thrice) = office(3);

@@ -227,7 +227,7 @@ pub fn drive(recorder: &mut map_sink::Recorder, run: Synthetic) -> Result<(), ma
             recorder.record_scan(seq, angle_min, angle_increment, 0.1, 30.0, &ranges);
         }
         if run.truth {
-            recorder.record_truth(seq, stamp_ns, truth)?;
+            recorder.record_truth(stamp_ns, truth)?;
         }
     }
     recorder.set_map(world.map_corners(slam_from_world, &mut rng, 0.03));
