@@ -21,6 +21,8 @@ const OTHER_UID: u32 = 65534;
 const START_LIMIT: Duration = Duration::from_secs(5);
 /// A stop by Ctrl-C once the run is under way.
 const STOP_LIMIT: Duration = Duration::from_secs(2);
+/// A hostile file given as world, log or map image is refused within this.
+const REFUSAL_LIMIT: Duration = Duration::from_secs(2);
 /// The data segment a refusing slam-launch runs under: reading a device or a sparse file
 /// whole would exceed it and abort instead of refusing.
 const REFUSAL_DATA_BYTES: u64 = 100 << 20;
@@ -202,24 +204,26 @@ fn a_device_a_fifo_or_a_huge_file_as_world_log_or_map_is_refused_at_once() {
             stderr.contains("map image") && stderr.contains(why),
             "{stderr}"
         );
-        assert!(took < Duration::from_secs(2), "{took:?}: {stderr}");
+        assert!(took < REFUSAL_LIMIT, "{took:?}: {stderr}");
     }
     for (file, why) in hostile_files(&dir, "world") {
-        let (stderr, _) = refusal("hostile-world", &["--world", file.to_str().expect("UTF-8")]);
+        let (stderr, took) = refusal("hostile-world", &["--world", file.to_str().expect("UTF-8")]);
         assert!(
             stderr.contains("world file") && stderr.contains(why),
             "{stderr}"
         );
+        assert!(took < REFUSAL_LIMIT, "{took:?}: {stderr}");
     }
     for (file, why) in hostile_files(&dir, "log") {
         let log = file.to_str().expect("UTF-8");
-        let (stderr, _) = refusal("hostile-log", &["--replay", log, "--format", "carmen"]);
+        let (stderr, took) = refusal("hostile-log", &["--replay", log, "--format", "carmen"]);
         // A log is read as a stream: the sparse file is refused for the scan it lacks.
         let why = why.replace(
             "bytes or more, above the",
             "no valid scan in its first 64 MiB",
         );
         assert!(stderr.contains(log) && stderr.contains(&why), "{stderr}");
+        assert!(took < REFUSAL_LIMIT, "{took:?}: {stderr}");
     }
 }
 
