@@ -133,10 +133,14 @@ pub enum BagError {
     NoMetadata { path: PathBuf },
     #[error(transparent)]
     Metadata(#[from] MetadataError),
-    /// A file the metadata names is missing, not a regular file, or too large.
-    #[error("{bag}: {cause}")]
+    /// A file the metadata names is not there.
+    #[error("{metadata} names {file}, which is missing")]
+    MissingFile { metadata: PathBuf, file: PathBuf },
+    /// A bag file that cannot be opened, is not a regular file, or is too large.
+    #[error("{bag}")]
     File {
         bag: PathBuf,
+        #[source]
         cause: stage_kit::InputError,
     },
     #[error("{path} is not a bag file (.mcap or .db3, or a bag directory)")]
@@ -270,6 +274,12 @@ fn locate(path: &Path) -> Result<(Storage, Vec<PathBuf>, Option<Vec<Topic>>), Ba
         }
         let metadata = Metadata::read(path)?;
         for file in &metadata.files {
+            if !file.exists() {
+                return Err(BagError::MissingFile {
+                    metadata: path.join(METADATA_FILE),
+                    file: file.clone(),
+                });
+            }
             BAG_FILE_INPUT
                 .open(file, stage_kit::input::Links::Follow)
                 .map_err(file_error)?;
