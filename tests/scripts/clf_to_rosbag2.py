@@ -14,7 +14,9 @@ pose and are written as they are. Each message is stamped (header and bag time) 
 line's ipc_timestamp.
 
 Usage: clf_to_rosbag2.py LOG.clf OUT_DIR --storage mcap|sqlite3 [--laser-offset 0.25]
-OUT_DIR must not exist (rosbag2 writers create it).
+       [--frames N] [--wrong-type-after N]
+OUT_DIR must not exist (rosbag2 writers create it). --wrong-type-after N puts a
+std_msgs/msg/String on /scan after its N-th scan (a damaged bag, for the tests).
 """
 
 import argparse
@@ -47,6 +49,8 @@ def main():
     parser.add_argument('--storage', choices=['mcap', 'sqlite3'], required=True)
     parser.add_argument('--laser-offset', type=float, default=0.25)
     parser.add_argument('--frames', type=int, default=0, help='scans to write; 0 = all')
+    parser.add_argument('--wrong-type-after', type=int, default=0,
+                        help='write a std_msgs/msg/String on /scan after this scan')
     args = parser.parse_args()
 
     store = get_typestore(Stores.ROS2_HUMBLE)
@@ -115,6 +119,9 @@ def main():
         scan_topic = connection('/scan', LaserScan.__msgtype__)
         odom_topic = connection('/odom', Odometry.__msgtype__)
         tf_topic = connection('/tf', TFMessage.__msgtype__)
+        String = store.types['std_msgs/msg/String']
+        wrong = connection('/scan', String.__msgtype__) if args.wrong_type_after else None
+        written = 0
 
         def write(conn, ns, message):
             writer.write(conn, ns, store.serialize_cdr(message, conn.msgtype))
@@ -142,6 +149,9 @@ def main():
                     ranges=ranges,
                     intensities=np.array([], dtype=np.float32),
                 ))
+                written += 1
+                if wrong is not None and written == args.wrong_type_after:
+                    write(wrong, ns + 1, String(data='not a scan'))
             else:
                 x, y, yaw = value
                 write(odom_topic, ns, Odometry(
