@@ -27,6 +27,8 @@ mod mount;
 mod pairing;
 mod sqlite_storage;
 mod storage;
+#[cfg(test)]
+mod tests;
 
 use std::collections::{BTreeMap, VecDeque};
 use std::io::BufReader;
@@ -259,9 +261,17 @@ fn list_topics(topics: &[Topic]) -> String {
         .join(", ")
 }
 
-/// The storage and files of the bag at `path`, and the topics it declares (`None` when
-/// only reading it tells: an MCAP file without a summary).
-fn locate(path: &Path) -> Result<(Storage, Vec<PathBuf>, Option<Vec<Topic>>), BagError> {
+/// Where a bag's messages are.
+struct Located {
+    storage: Storage,
+    files: Vec<PathBuf>,
+    /// The topics the bag declares; `None` when only reading it tells (an MCAP file
+    /// without a summary).
+    topics: Option<Vec<Topic>>,
+}
+
+/// The storage and files of the bag at `path`, and the topics it declares.
+fn locate(path: &Path) -> Result<Located, BagError> {
     let file_error = |cause| BagError::File {
         bag: path.to_path_buf(),
         cause,
@@ -284,7 +294,11 @@ fn locate(path: &Path) -> Result<(Storage, Vec<PathBuf>, Option<Vec<Topic>>), Ba
                 .open(file, stage_kit::input::Links::Follow)
                 .map_err(file_error)?;
         }
-        return Ok((metadata.storage, metadata.files, Some(metadata.topics)));
+        return Ok(Located {
+            storage: metadata.storage,
+            files: metadata.files,
+            topics: Some(metadata.topics),
+        });
     }
     let storage = Storage::of_file(path).ok_or_else(|| BagError::NotABag {
         path: path.to_path_buf(),
@@ -296,8 +310,11 @@ fn locate(path: &Path) -> Result<(Storage, Vec<PathBuf>, Option<Vec<Topic>>), Ba
         Storage::Mcap => mcap_storage::summary_channels(BufReader::new(file)),
         Storage::Sqlite3 => Some(sqlite_storage::SqliteSource::open(path)?.channels()),
     };
-    let topics = channels.map(|channels| topics_of(&channels));
-    Ok((storage, vec![path.to_path_buf()], topics))
+    Ok(Located {
+        storage,
+        files: vec![path.to_path_buf()],
+        topics: channels.map(|channels| topics_of(&channels)),
+    })
 }
 
 /// One topic per name, in the order first declared.
@@ -814,7 +831,11 @@ pub fn check_bag(path: &Path, options: &BagOptions) -> Result<BagInfo, BagError>
 }
 
 fn survey(path: &Path, options: &BagOptions, stop: StopFlag) -> Result<BagInfo, BagError> {
-    let (storage, files, declared) = locate(path)?;
+    let Located {
+        storage,
+        files,
+        topics: declared,
+    } = locate(path)?;
     let topics_error = |reason| BagError::Topics {
         path: path.to_path_buf(),
         reason,
@@ -895,12 +916,17 @@ fn survey(path: &Path, options: &BagOptions, stop: StopFlag) -> Result<BagInfo, 
             }
         }
     }
+    let undeclared = declared.is_none();
     let topics = declared.unwrap_or_else(|| topics_of(&seen));
     // Topics only the survey saw: refuse now, naming them, if none could be chosen.
-    let (scan_topic, odometry) = match chosen {
+    let (scan_topic, mut odometry) = match chosen {
         Some(chosen) => chosen,
         None => choose(&topics, options).map_err(topics_error)?,
     };
+    // ... and the odometry from every channel it met, some after the first scan.
+    if undeclared && let Ok((_, later)) = choose(&topics, options) {
+        odometry = later;
+    }
     let Some((scan, _)) = first_scan else {
         let within = if messages.read >= SNIFF_MESSAGES {
             format!("in its first {SNIFF_MESSAGES} messages")
