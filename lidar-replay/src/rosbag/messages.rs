@@ -326,8 +326,11 @@ pub(crate) mod tests {
         w.bytes
     }
 
-    /// A TFMessage's CDR: (stamp, parent, child, x, y, yaw) each.
-    pub(crate) fn tf_message(transforms: &[((i32, u32), &str, &str, f64, f64, f64)]) -> Vec<u8> {
+    /// One transform for [`tf_message`]: (stamp, parent, child, x, y, yaw).
+    pub(crate) type PlanarTransform<'a> = ((i32, u32), &'a str, &'a str, f64, f64, f64);
+
+    /// A TFMessage's CDR.
+    pub(crate) fn tf_message(transforms: &[PlanarTransform<'_>]) -> Vec<u8> {
         let mut w = CdrWriter::new(true);
         w.u32(transforms.len() as u32);
         for &(stamp, parent, child, x, y, yaw) in transforms {
