@@ -129,3 +129,92 @@ impl MessageSource for SqliteSource {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("lidar-replay-sqlite-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// A rosbag2 database: two topics, and `messages` (topic id, timestamp) with their
+    /// number as data.
+    fn database(path: &Path, messages: &[(i64, i64)]) {
+        let db = Connection::open(path).unwrap();
+        db.execute_batch(
+            "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, \
+             serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+             CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, \
+             timestamp INTEGER NOT NULL, data BLOB NOT NULL);
+             CREATE INDEX timestamp_idx ON messages (timestamp ASC);
+             INSERT INTO topics VALUES (1, '/scan', 'sensor_msgs/msg/LaserScan', 'cdr', '');
+             INSERT INTO topics VALUES (2, '/odom', 'nav_msgs/msg/Odometry', 'cdr', '');",
+        )
+        .unwrap();
+        // One transaction: a commit a row would sync the disk 700 times.
+        db.execute_batch("BEGIN").unwrap();
+        for (n, (topic, time)) in messages.iter().enumerate() {
+            db.execute(
+                "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
+                (topic, time, (n as u32).to_le_bytes().to_vec()),
+            )
+            .unwrap();
+        }
+        db.execute_batch("COMMIT").unwrap();
+    }
+
+    #[test]
+    fn messages_come_in_time_order_across_pages_of_equal_times() {
+        let dir = scratch("pages");
+        let path = dir.join("bag_0.db3");
+        // Three messages a time, times going back every 100 rows, a topic no table names.
+        let messages: Vec<(i64, i64)> = (0..700)
+            .map(|n: i64| (if n == 5 { 9 } else { 1 + n % 2 }, (n / 3) % 100))
+            .collect();
+        database(&path, &messages);
+        let mut source = SqliteSource::open(&path).unwrap();
+        assert_eq!(source.channels().len(), 2);
+        assert_eq!(source.channels()[1].topic, "/odom");
+        let read: Vec<RawMessage> = std::iter::from_fn(|| source.next_message())
+            .map(Result::unwrap)
+            .collect();
+        assert_eq!(read.len(), 700);
+        let keys: Vec<(u64, u32)> = read
+            .iter()
+            .map(|m| {
+                let n = u32::from_le_bytes(m.data[..4].try_into().unwrap());
+                (m.log_time_ns, n)
+            })
+            .collect();
+        let mut sorted = keys.clone();
+        sorted.sort();
+        assert_eq!(keys, sorted, "by time, then as written");
+        assert_eq!(read[0].channel.topic, "/scan");
+        assert!(read.iter().any(|m| m.channel.topic == "(topic id 9)"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_file_that_is_no_database_is_refused_by_name() {
+        let dir = scratch("foreign");
+        let path = dir.join("bag_0.db3");
+        std::fs::write(&path, "FLASER 180 ...\n".repeat(200)).unwrap();
+        let error = SqliteSource::open(&path)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(
+            error.starts_with(&format!(
+                "{} is not a rosbag2 SQLite3 storage: ",
+                path.display()
+            )),
+            "{error}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
