@@ -34,13 +34,32 @@ pub struct Args {
     /// World to simulate: hall, office, corridor or a world file (JSON).
     #[arg(long)]
     world: Option<String>,
-    /// Replay this recorded log instead of simulating.
+    /// Replay this recorded log instead of simulating: a CARMEN log, a run.mcap of
+    /// --record, or a ROS 2 bag (its directory, or a bare .mcap or .db3).
     #[arg(long, value_name = "FILE")]
     replay: Option<PathBuf>,
-    /// Format of the replayed log: seed-csv, carmen or mcap (a run.mcap of --record; the
-    /// default for a file named *.mcap).
+    /// Format of the replayed log: seed-csv, carmen, mcap (a run.mcap of --record) or
+    /// rosbag2 (a ROS 2 bag). Default: rosbag2 for a directory, a .db3 or a .mcap of ROS 2
+    /// messages, mcap for another .mcap, else carmen.
     #[arg(long)]
     format: Option<String>,
+    /// A ROS 2 bag's sensor_msgs/msg/LaserScan topic (default: the bag's only one).
+    #[arg(long, value_name = "TOPIC")]
+    scan_topic: Option<String>,
+    /// A ROS 2 bag's odometry: odom (nav_msgs/msg/Odometry), tf (/tf, odom to base_link)
+    /// or auto (Odometry if the bag has it, else /tf).
+    #[arg(long, value_name = "SOURCE")]
+    odom_source: Option<String>,
+    /// A ROS 2 bag's nav_msgs/msg/Odometry topic (default: the bag's only one).
+    #[arg(long, value_name = "TOPIC")]
+    odom_topic: Option<String>,
+    /// A ROS 2 bag's robot frame (REP 105; default base_link): the odometry's child frame
+    /// and the parent of the laser's mount on /tf_static.
+    #[arg(long, value_name = "FRAME")]
+    base_frame: Option<String>,
+    /// A ROS 2 bag's odometry frame, for --odom-source tf (default odom).
+    #[arg(long, value_name = "FRAME")]
+    odom_frame: Option<String>,
     /// HOST:PORT of a live Hokuyo scanner (with --source hokuyo).
     #[arg(long)]
     addr: Option<String>,
@@ -176,12 +195,15 @@ impl Args {
     /// The config keys the options given set, each with its value. One option may set
     /// several keys (`--seed` seeds the simulator and the filter).
     fn options(&self) -> Result<Vec<(&'static str, Value)>, ConfigError> {
-        let mcap = self
+        // What can be told apart by looking (a bag, a recording); a text log stays what the
+        // config file or the default says.
+        let detected = self
             .replay
             .as_deref()
-            .filter(|file| file.extension().is_some_and(|e| e == "mcap"))
-            .map(|_| lidar_replay::LogFormat::Mcap.name().to_owned());
-        let given: [(&'static str, Option<Value>); 26] = [
+            .and_then(lidar_replay::LogFormat::detect)
+            .filter(|format| !format.is_text())
+            .map(|format| format.name().to_owned());
+        let given: [(&'static str, Option<Value>); 31] = [
             (
                 "source",
                 value(
@@ -193,7 +215,12 @@ impl Args {
                 "replay.file",
                 value(self.replay.as_deref().map(Path::to_path_buf))?,
             ),
-            ("replay.format", value(self.format.clone().or(mcap))?),
+            ("replay.format", value(self.format.clone().or(detected))?),
+            ("replay.scan_topic", value(self.scan_topic.clone())?),
+            ("replay.odom_source", value(self.odom_source.clone())?),
+            ("replay.odom_topic", value(self.odom_topic.clone())?),
+            ("replay.base_frame", value(self.base_frame.clone())?),
+            ("replay.odom_frame", value(self.odom_frame.clone())?),
             ("hokuyo.addr", value(self.addr.clone())?),
             ("replay.odometry", value(self.no_odometry.then_some(false))?),
             ("replay.rate", value(self.rate)?),

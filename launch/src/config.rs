@@ -76,7 +76,7 @@ pub struct ReplaySection {
     /// Ranges beyond this many metres become no-returns (`--replay-max-range`,
     /// lidar-replay's `--max-range`).
     pub max_range: Option<f64>,
-    /// `seed-csv`, `carmen` or `mcap`.
+    /// `seed-csv`, `carmen`, `mcap` or `rosbag2`.
     pub format: String,
     /// Scans per second relative to the log's timing (1 = as recorded); 0 = lockstep.
     pub rate: f64,
@@ -89,6 +89,34 @@ pub struct ReplaySection {
     pub reorder_window: Option<f64>,
     /// The log's scan to start at, from 0 (`--replay-start`, lidar-replay's `--skip`).
     pub start: u64,
+    /// A ROS 2 bag's LaserScan topic (`--scan-topic`); unset = the bag's only one.
+    pub scan_topic: Option<String>,
+    /// A ROS 2 bag's odometry: `auto`, `odom` (nav_msgs/msg/Odometry) or `tf`
+    /// (`--odom-source`).
+    pub odom_source: String,
+    /// A ROS 2 bag's Odometry topic (`--odom-topic`); unset = the bag's only one.
+    pub odom_topic: Option<String>,
+    /// A ROS 2 bag's robot frame, REP 105 (`--base-frame`).
+    pub base_frame: String,
+    /// A ROS 2 bag's odometry frame, for odometry from /tf (`--odom-frame`).
+    pub odom_frame: String,
+}
+
+impl ReplaySection {
+    /// What lidar-replay is asked to replay of a ROS 2 bag.
+    pub fn bag_options(&self) -> Result<lidar_replay::rosbag::BagOptions, ConfigError> {
+        let odometry = self.odom_source.parse().map_err(|e| {
+            ConfigError::Invalid(format!("[replay] odom_source (--odom-source): {e}"))
+        })?;
+        Ok(lidar_replay::rosbag::BagOptions {
+            scan_topic: self.scan_topic.clone(),
+            odometry,
+            odometry_topic: self.odom_topic.clone(),
+            base_frame: self.base_frame.clone(),
+            odom_frame: self.odom_frame.clone(),
+            ..lidar_replay::rosbag::BagOptions::default()
+        })
+    }
 }
 
 impl Default for ReplaySection {
@@ -103,6 +131,11 @@ impl Default for ReplaySection {
             frames: 0,
             reorder_window: None,
             start: 0,
+            scan_topic: None,
+            odom_source: "auto".into(),
+            odom_topic: None,
+            base_frame: "base_link".into(),
+            odom_frame: "odom".into(),
         }
     }
 }
@@ -312,6 +345,7 @@ impl RunConfig {
             if let Err(e) = lidar_replay::check_rate(self.replay.rate) {
                 return Err(ConfigError::Invalid(format!("[replay] rate (--rate) {e}")));
             }
+            self.replay.bag_options()?;
             if let Err(e) = lidar_replay::Degradation::new(
                 self.replay.every.unwrap_or(1),
                 self.replay.max_range,

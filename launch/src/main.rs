@@ -301,10 +301,16 @@ fn check_source_input(config: &RunConfig) -> Result<()> {
         }
         SourceKind::Replay => {
             if let (Some(file), Ok(format)) = (&config.replay.file, config.replay.format.parse()) {
+                // A bag is surveyed as lidar-replay will: its files there, its topics
+                // chosen, its first scan read, its laser's mount found.
+                if format == lidar_replay::LogFormat::Rosbag {
+                    lidar_replay::rosbag::check_bag(file, &config.replay.bag_options()?)?;
+                    return Ok(());
+                }
                 let opened =
                     lidar_replay::input_kind(format).open(file, stage_kit::input::Links::Follow)?;
                 // A text log is also read up to its first scan, as lidar-replay will.
-                if format != lidar_replay::LogFormat::Mcap {
+                if format.is_text() {
                     lidar_replay::check_format(format, std::io::BufReader::new(opened))
                         .with_context(|| format!("{}", file.display()))?;
                 }
@@ -511,6 +517,16 @@ fn settings_args(
                 }
                 if let Some(window) = config.replay.reorder_window {
                     args.push(format!("--reorder-window={window}"));
+                }
+                if config.replay.format == lidar_replay::LogFormat::Rosbag.name() {
+                    let replay = &config.replay;
+                    args.extend(flag_values([
+                        ("--scan-topic", replay.scan_topic.clone()),
+                        ("--odom-source", Some(replay.odom_source.clone())),
+                        ("--odom-topic", replay.odom_topic.clone()),
+                        ("--base-frame", Some(replay.base_frame.clone())),
+                        ("--odom-frame", Some(replay.odom_frame.clone())),
+                    ]));
                 }
                 args
             }

@@ -195,3 +195,47 @@ fn laps_go_to_the_simulator_and_are_refused_for_any_other_source() {
         "[sim] laps (--laps) must be from 1 to 1000 laps, not 0"
     );
 }
+
+#[test]
+fn a_bag_directory_is_a_rosbag2_replay_with_its_topics_and_frames() {
+    let file = ConfigFile::new("bag", "[replay]\nbase_frame = 'base_footprint'\n");
+    let dir = std::env::temp_dir().join(format!("slam-launch-cli-bag-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("bag directory");
+    let bag = dir.display().to_string();
+    let config = file.config(&[
+        "--replay",
+        &bag,
+        "--scan-topic",
+        "/front/scan",
+        "--odom-source",
+        "tf",
+    ]);
+    assert_eq!(config.source, SourceKind::Replay);
+    assert_eq!(config.replay.format, "rosbag2");
+    assert_eq!(config.replay.scan_topic.as_deref(), Some("/front/scan"));
+    let options = config.replay.bag_options().expect("valid bag options");
+    assert_eq!(options.odometry, lidar_replay::rosbag::OdometryFrom::Tf);
+    // The file's frame, the default's other.
+    assert_eq!(options.base_frame, "base_footprint");
+    assert_eq!(options.odom_frame, "odom");
+    // A bag's SQLite3 storage alone is a bag too; a text log stays what the file says.
+    assert_eq!(
+        file.config(&["--replay", "bag_0.db3"]).replay.format,
+        "rosbag2"
+    );
+    assert_eq!(
+        file.config(&["--replay", "log.clf"]).replay.format,
+        "carmen"
+    );
+    // An odometry source that is none is refused before anything starts, by its name.
+    let error = file
+        .config(&["--replay", &bag, "--odom-source", "wheels"])
+        .validate()
+        .expect_err("unknown odometry source refused")
+        .to_string();
+    assert!(
+        error.contains("[replay] odom_source (--odom-source): unknown odometry source 'wheels'"),
+        "{error}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

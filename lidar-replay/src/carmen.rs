@@ -537,6 +537,7 @@ fn parse_flaser(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRecord),
         yaw: wrap_angle(theta),
         linear_velocity: 0.0,
         angular_velocity: 0.0,
+        log_covariance: [0.0; 9],
     };
     let scan = ScanRecord {
         line,
@@ -615,6 +616,7 @@ fn parse_robotlaser1(fields: &mut Fields<'_>) -> Result<(OdometryRecord, ScanRec
         yaw: wrap_angle(theta),
         linear_velocity,
         angular_velocity,
+        log_covariance: [0.0; 9],
     };
     let scan = ScanRecord {
         line: fields.line,
@@ -655,6 +657,7 @@ fn parse_odom(fields: &mut Fields<'_>) -> Result<OdometryRecord, LineError> {
         yaw: wrap_angle(theta),
         linear_velocity: tv,
         angular_velocity: rv,
+        log_covariance: [0.0; 9],
     })
 }
 

@@ -27,6 +27,10 @@ pub enum Malformation {
     BadGeometry,
     /// A message of a recording that cannot be rebuilt.
     Undecodable,
+    /// A message of a bag's replayed topic of another type or encoding than the topic's.
+    WrongType,
+    /// A bag's odometry of another frame than the robot's.
+    OtherFrame,
 }
 
 impl std::fmt::Display for Malformation {
@@ -41,7 +45,9 @@ impl std::fmt::Display for Malformation {
             Self::BadStamp => "bad timestamp",
             Self::BeamCount => "impossible beam count",
             Self::BadGeometry => "impossible scan geometry",
-            Self::Undecodable => "message not as slam-record writes it",
+            Self::Undecodable => "message cannot be decoded",
+            Self::WrongType => "message of another type",
+            Self::OtherFrame => "odometry of another frame",
         })
     }
 }
@@ -114,6 +120,10 @@ pub enum ReadError {
     /// [`crate::LogFormat::Mcap`] asked of the text readers.
     #[error("an MCAP recording is not a text log: it is read with open_recording")]
     NotText,
+    /// A bag that cannot be read on (cut short, a damaged chunk or page): everything before
+    /// it was given out, nothing after it will be.
+    #[error("the bag cannot be read past its message {messages}: {cause}")]
+    Cut { messages: u64, cause: String },
 }
 
 /// Why a log cannot be replayed at all.

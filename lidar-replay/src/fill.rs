@@ -108,6 +108,7 @@ mod tests {
             yaw: 0.5,
             linear_velocity: 0.3,
             angular_velocity: -0.1,
+            log_covariance: [0.0; 9],
         };
         let mut message = Odometry::boxed_zeroed();
         let covariance = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5];

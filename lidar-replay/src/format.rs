@@ -11,6 +11,7 @@ use crate::lines::{NumberedLines, StopFlag, never};
 use crate::odometry_judge::{self, Verdict};
 use crate::record::LogRecord;
 use crate::reorder::{ReorderConfig, ReorderCounts};
+use crate::rosbag::{BagError, BagInfo, BagOptions, BagReader};
 use crate::scan_order::{self, OrderVerdict};
 use crate::seed_csv::SeedCsvReader;
 use crate::start;
@@ -38,6 +39,7 @@ pub fn input_kind(format: LogFormat) -> stage_kit::InputKind {
     match format {
         LogFormat::SeedCsv | LogFormat::Carmen => LOG_INPUT,
         LogFormat::Mcap => recorder::RECORDING_INPUT,
+        LogFormat::Rosbag => crate::rosbag::BAG_FILE_INPUT,
     }
 }
 
@@ -51,6 +53,10 @@ pub enum LogFormat {
     /// `run.mcap` of `slam-record`: the scans and odometry of a run, published again
     /// exactly as they were. Not a text log: it is read with [`crate::open_recording`].
     Mcap,
+    /// A ROS 2 bag (rosbag2): a bag directory, or a bare `.mcap` or `.db3` file of ROS 2
+    /// messages ([`crate::rosbag`]). Not a text log: it is read with
+    /// [`crate::rosbag::open_bag_until`].
+    Rosbag,
 }
 
 impl LogFormat {
@@ -60,6 +66,7 @@ impl LogFormat {
             Self::SeedCsv => "seed-csv",
             Self::Carmen => "carmen",
             Self::Mcap => "mcap",
+            Self::Rosbag => "rosbag2",
         }
     }
 
@@ -67,7 +74,34 @@ impl LogFormat {
     pub fn can_have_odometry(self) -> bool {
         match self {
             Self::SeedCsv => false,
-            Self::Carmen | Self::Mcap => true,
+            Self::Carmen | Self::Mcap | Self::Rosbag => true,
+        }
+    }
+
+    /// Whether a log of this format is read line by line ([`open_log`]).
+    pub fn is_text(self) -> bool {
+        matches!(self, Self::SeedCsv | Self::Carmen)
+    }
+
+    /// The format of the log at `path` where it can be told without being told: a
+    /// directory is a rosbag2 bag, a `.db3` its SQLite3 storage, a `.mcap` a bag when its
+    /// channels are ROS 2's (CDR) and a run of slam-record otherwise, `.clf` CARMEN and
+    /// `.csv` the seed-hall scans. `None` for anything else.
+    pub fn detect(path: &Path) -> Option<Self> {
+        if path.is_dir() {
+            return Some(Self::Rosbag);
+        }
+        match path.extension()?.to_str()? {
+            "db3" => Some(Self::Rosbag),
+            // One that cannot be read far enough to tell is left to the recording's
+            // reader, which says what is wrong with it.
+            "mcap" => Some(match crate::rosbag::is_ros2_mcap(path) {
+                Some(true) => Self::Rosbag,
+                _ => Self::Mcap,
+            }),
+            "clf" => Some(Self::Carmen),
+            "csv" => Some(Self::SeedCsv),
+            _ => None,
         }
     }
 }
@@ -86,8 +120,9 @@ impl std::str::FromStr for LogFormat {
             "seed-csv" => Ok(Self::SeedCsv),
             "carmen" => Ok(Self::Carmen),
             "mcap" => Ok(Self::Mcap),
+            "rosbag2" => Ok(Self::Rosbag),
             other => Err(format!(
-                "unknown log format '{other}' (seed-csv, carmen or mcap)"
+                "unknown log format '{other}' (seed-csv, carmen, mcap or rosbag2)"
             )),
         }
     }
@@ -100,7 +135,10 @@ pub enum LogReader<R> {
     SeedCsv(SeedCsvReader<R>),
     // Boxed: it carries its reordering window, ten times the CSV reader's size.
     Carmen(Box<CarmenReader<R>>),
-    /// An MCAP recording asked for as a text log: yields [`ReadError::NotText`] once.
+    /// A ROS 2 bag, opened with [`open_bag_until`] (boxed: it carries its window).
+    Rosbag(Box<BagReader>),
+    /// An MCAP recording (or a bag) asked for as a text log: yields [`ReadError::NotText`]
+    /// once.
     NotText {
         told: bool,
     },
@@ -120,7 +158,7 @@ impl<R: BufRead> LogReader<R> {
             LogFormat::Carmen => {
                 Self::Carmen(Box::new(CarmenReader::with_reorder(reader, reorder)))
             }
-            LogFormat::Mcap => Self::NotText { told: false },
+            LogFormat::Mcap | LogFormat::Rosbag => Self::NotText { told: false },
         }
     }
 
@@ -165,7 +203,8 @@ impl<R: BufRead> LogReader<R> {
         match &mut self {
             Self::SeedCsv(reader) => reader.lines.set_stop(stop),
             Self::Carmen(reader) => reader.lines.set_stop(stop),
-            Self::NotText { .. } => {}
+            // A bag takes its stop when it is opened.
+            Self::Rosbag(_) | Self::NotText { .. } => {}
         }
         self
     }
@@ -175,7 +214,7 @@ impl<R: BufRead> LogReader<R> {
         match self {
             Self::SeedCsv(reader) => Some(&reader.lines),
             Self::Carmen(reader) => Some(&reader.lines),
-            Self::NotText { .. } => None,
+            Self::Rosbag(_) | Self::NotText { .. } => None,
         }
     }
 
@@ -189,18 +228,33 @@ impl<R: BufRead> LogReader<R> {
         match self {
             Self::SeedCsv(_) | Self::NotText { .. } => None,
             Self::Carmen(reader) => Some((reader.reorder_config(), *reader.reorder_counts())),
+            Self::Rosbag(reader) => Some(reader.reordering()),
         }
     }
 
-    /// Number of the line read last (0 before the first).
+    /// Number of the line read last (0 before the first); a bag's messages read.
     pub fn line_number(&self) -> u64 {
-        self.lines().map_or(0, NumberedLines::line_number)
+        match self {
+            Self::Rosbag(reader) => reader.messages_read(),
+            _ => self.lines().map_or(0, NumberedLines::line_number),
+        }
     }
 
-    /// Record types the reader skipped as not its business, with their line counts.
+    /// Whether what is read are messages of a recording rather than lines of a text.
+    pub fn reads_messages(&self) -> bool {
+        matches!(self, Self::Rosbag(_))
+    }
+
+    /// Record types the reader skipped as not its business, with their line counts (a
+    /// bag's topics not replayed, with their message counts).
     pub fn skipped_records(&self) -> Vec<(String, u64)> {
         match self {
             Self::SeedCsv(_) | Self::NotText { .. } => Vec::new(),
+            Self::Rosbag(reader) => reader
+                .passed_over()
+                .iter()
+                .map(|(topic, count)| (topic.clone(), *count))
+                .collect(),
             Self::Carmen(reader) => reader
                 .skipped_records()
                 .iter()
@@ -217,6 +271,7 @@ impl<R: BufRead> Iterator for LogReader<R> {
         match self {
             Self::SeedCsv(reader) => reader.next(),
             Self::Carmen(reader) => reader.next(),
+            Self::Rosbag(reader) => reader.next(),
             Self::NotText { told } => {
                 (!std::mem::replace(told, true)).then_some(Err(ReadError::NotText))
             }
@@ -252,7 +307,7 @@ pub fn check_format_until<R: BufRead>(
                 return Err(CheckError::Mismatch(ReadError::NotText.to_string()));
             }
             Some(Err(ReadError::Stopped)) => return Err(CheckError::Stopped),
-            None => break,
+            Some(Err(ReadError::Cut { .. })) | None => break,
         }
     }
     let lines = log.line_number();
@@ -321,7 +376,7 @@ pub fn open_log_until(
                 Some(scan_order::judge_start(&start)),
             )
         }
-        LogFormat::SeedCsv | LogFormat::Mcap => (None, None),
+        LogFormat::SeedCsv | LogFormat::Mcap | LogFormat::Rosbag => (None, None),
     };
     // Read again from the top, so the lines looked at are replayed and reported as usual.
     let mut reader = LogReader::with_reorder(format, open()?, reorder).stop_when(stop);
@@ -332,6 +387,17 @@ pub fn open_log_until(
         reader = reader.with_order_verdict(order);
     }
     Ok(reader)
+}
+
+/// Opens a ROS 2 bag for replay after surveying it ([`crate::rosbag::open_bag_until`]):
+/// a reader of its scans and odometry like any log's, and what the survey found.
+pub fn open_bag_until(
+    path: &Path,
+    options: &BagOptions,
+    stop: StopFlag,
+) -> Result<(LogReader<BufReader<File>>, BagInfo), BagError> {
+    let (reader, info) = crate::rosbag::open_bag_until(path, options, stop)?;
+    Ok((LogReader::Rosbag(Box::new(reader)), info))
 }
 
 #[cfg(test)]
@@ -414,6 +480,8 @@ mod tests {
         assert_eq!("seed-csv".parse(), Ok(LogFormat::SeedCsv));
         assert_eq!("carmen".parse(), Ok(LogFormat::Carmen));
         assert_eq!("mcap".parse(), Ok(LogFormat::Mcap));
+        assert_eq!("rosbag2".parse(), Ok(LogFormat::Rosbag));
+        assert_eq!(LogFormat::Rosbag.to_string(), "rosbag2");
         assert!("csv".parse::<LogFormat>().is_err());
         assert_eq!(LogFormat::Carmen.to_string(), "carmen");
     }

@@ -16,6 +16,9 @@
 //!   dropped, and why.
 //! * A [`Degradation`] makes a harder version of a log on the fly: every n-th scan, ranges
 //!   cut to a shorter sensor's; what it left out is in the summary, not counted as lost.
+//! * ROS 2 bags ([`rosbag`]): a rosbag2 directory (MCAP or SQLite3 storage) or a bare
+//!   `.mcap`, their `sensor_msgs/msg/LaserScan`, odometry (`nav_msgs/msg/Odometry` or
+//!   `/tf`) and the laser's mount from `/tf_static`, as one more [`LogReader`].
 //! * [`open_log`] refuses a file that is not of its format ([`check_format`]) before anything
 //!   is published.
 //! * No input can fill the memory or hold up a stop: a line longer than [`MAX_LINE_BYTES`]
@@ -42,6 +45,7 @@ mod odometry_noise;
 mod pacing;
 mod record;
 pub mod reorder;
+pub mod rosbag;
 pub mod scan_order;
 pub mod seed_csv;
 mod start;
@@ -55,7 +59,7 @@ pub use error::{CheckError, LineError, Malformation, OpenError, ReadError};
 pub use fill::{ODOMETRY_FRAME, SCAN_FRAME, fill_odometry, fill_scan};
 pub use format::{
     LOG_INPUT, LogFormat, LogReader, SNIFF_BYTES, SNIFF_LINES, check_format, check_format_until,
-    input_kind, open_log, open_log_until,
+    input_kind, open_bag_until, open_log, open_log_until,
 };
 pub use lines::{MAX_LINE_BYTES, StopFlag};
 pub use odometry_judge::Verdict;

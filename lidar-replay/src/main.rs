@@ -9,9 +9,11 @@ use clap::Parser;
 use iceoryx2::prelude::{Node, ipc};
 use ipc_types::prelude::*;
 use lidar_replay::reorder::{DEFAULT_REORDER_CAP, DEFAULT_REORDER_WINDOW_NS};
+use lidar_replay::rosbag::{BagError, BagOptions};
 use lidar_replay::{
     Degradation, LOG_ODOMETRY_NOISE, LogFormat, LogRecord, OdometryCovariance, OpenError,
-    ReadError, Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_log_until,
+    ReadError, Records, ReorderConfig, ReplaySummary, fill_odometry, fill_scan, open_bag_until,
+    open_log_until,
 };
 use recorder::Recorded;
 use stage_kit::pacing::Pacer;
@@ -30,16 +32,41 @@ use stage_kit::{SourceArgs, say, say_err, shutdown};
 ///
 /// mcap replays the run.mcap of slam-record: its scans and odometry exactly as they were
 /// published, with their original stamps, sequence numbers and frames.
+///
+/// rosbag2 replays a ROS 2 bag (a bag directory with metadata.yaml and MCAP or SQLite3
+/// files, or a bare .mcap or .db3): sensor_msgs/msg/LaserScan of --scan-topic, odometry
+/// from nav_msgs/msg/Odometry or /tf interpolated to each scan's stamp, the laser's mount
+/// from /tf_static, so that trajectories are base_link's.
 #[derive(Debug, Parser)]
 #[command(name = "lidar-replay", version)]
 struct Args {
-    /// Log format: seed-csv (seed-hall scans.csv), carmen (FLASER, ROBOTLASER1, ODOM) or mcap
-    /// (a run.mcap of slam-record).
+    /// Log format: seed-csv (seed-hall scans.csv), carmen (FLASER, ROBOTLASER1, ODOM), mcap
+    /// (a run.mcap of slam-record) or rosbag2 (a ROS 2 bag). Default: told from the file (a
+    /// directory, .db3 or a .mcap of ROS 2 messages: rosbag2; another .mcap: mcap; .clf:
+    /// carmen; .csv: seed-csv).
     #[arg(long)]
-    format: LogFormat,
-    /// The log file.
+    format: Option<LogFormat>,
+    /// The log file (or a bag's directory).
     #[arg(long, value_name = "FILE")]
     file: PathBuf,
+    /// rosbag2: the sensor_msgs/msg/LaserScan topic to replay (default: the bag's only one).
+    #[arg(long, value_name = "TOPIC")]
+    scan_topic: Option<String>,
+    /// rosbag2: where the odometry comes from: odom (nav_msgs/msg/Odometry), tf (/tf, the
+    /// odom frame to the base frame) or auto (the Odometry topic if the bag has one, else
+    /// /tf).
+    #[arg(long, value_name = "SOURCE", default_value = "auto")]
+    odom_source: lidar_replay::rosbag::OdometryFrom,
+    /// rosbag2: the nav_msgs/msg/Odometry topic (default: the bag's only one).
+    #[arg(long, value_name = "TOPIC")]
+    odom_topic: Option<String>,
+    /// rosbag2: the robot's frame (REP 105): the odometry's child frame and the parent of
+    /// the laser's mount on /tf_static.
+    #[arg(long, value_name = "FRAME", default_value = "base_link")]
+    base_frame: String,
+    /// rosbag2: the odometry's frame, for --odom-source tf.
+    #[arg(long, value_name = "FRAME", default_value = "odom")]
+    odom_frame: String,
     /// Speed against the log's own timing (0.001 to 1000): 1 = as recorded, 2 = twice as
     /// fast; 0 = lockstep: each message waits until every subscriber has taken the previous
     /// one, nothing is lost.
@@ -84,9 +111,18 @@ fn main() -> ExitCode {
 }
 
 fn run(args: Args) -> Result<()> {
-    match args.format {
+    let format = match args.format {
+        Some(format) => format,
+        None => LogFormat::detect(&args.file).with_context(|| {
+            format!(
+                "cannot tell the format of {} from its name: give --format (seed-csv,                  carmen, mcap or rosbag2)",
+                args.file.display()
+            )
+        })?,
+    };
+    match format {
         LogFormat::Mcap => replay_recording(&args),
-        LogFormat::SeedCsv | LogFormat::Carmen => replay_log(&args),
+        LogFormat::SeedCsv | LogFormat::Carmen | LogFormat::Rosbag => replay_log(&args, format),
     }
 }
 
@@ -215,8 +251,8 @@ impl Streams {
     }
 }
 
-/// Replays a text log (seed-csv, CARMEN).
-fn replay_log(args: &Args) -> Result<()> {
+/// Replays a text log (seed-csv, CARMEN) or a ROS 2 bag.
+fn replay_log(args: &Args, format: LogFormat) -> Result<()> {
     // An hour is far beyond any log's disorder, and keeps the nanoseconds within u64.
     anyhow::ensure!(
         args.reorder_window.is_finite() && (0.0..=3600.0).contains(&args.reorder_window),
@@ -229,14 +265,41 @@ fn replay_log(args: &Args) -> Result<()> {
     };
     let degradation = Degradation::new(args.every, args.max_range)?;
     // Refuse a file that is not of the format before anyone sees a port.
-    let mut log = match open_log_until(args.format, &args.file, reorder, shutdown::requested) {
-        Ok(log) => log,
+    let opened = if format == LogFormat::Rosbag {
+        let options = BagOptions {
+            scan_topic: args.scan_topic.clone(),
+            odometry: args.odom_source,
+            odometry_topic: args.odom_topic.clone(),
+            base_frame: args.base_frame.clone(),
+            odom_frame: args.odom_frame.clone(),
+            reorder,
+        };
+        match open_bag_until(&args.file, &options, shutdown::requested) {
+            Ok((log, info)) => Ok((log, Some(info))),
+            Err(e @ BagError::Stopped { .. }) => Err(e.to_string()),
+            Err(e) => return Err(e.into()),
+        }
+    } else {
+        match open_log_until(format, &args.file, reorder, shutdown::requested) {
+            Ok(log) => Ok((log, None)),
+            Err(e @ OpenError::Stopped { .. }) => Err(e.to_string()),
+            Err(e) => return Err(e.into()),
+        }
+    };
+    let (mut log, bag) = match opened {
+        Ok(opened) => opened,
         // Ctrl-C is how a user ends a replay, before its first scan as after it.
-        Err(e @ OpenError::Stopped { .. }) => {
-            say_err(&format!("lidar-replay: {e}"));
+        Err(stopped) => {
+            say_err(&format!("lidar-replay: {stopped}"));
             return Ok(());
         }
-        Err(e) => return Err(e.into()),
+    };
+    for line in bag.iter().flat_map(|info| info.describe()) {
+        say(&format!("lidar-replay: {line}"));
+    }
+    let odometry = match &bag {
+        Some(info) => info.has_odometry(),
+        None => format.can_have_odometry(),
     };
     if let Some(verdict) = log.odometry_verdict()
         && !args.no_odometry
@@ -246,10 +309,11 @@ fn replay_log(args: &Args) -> Result<()> {
     if let Some(order) = log.order_verdict().and_then(|verdict| verdict.describe()) {
         say(&format!("lidar-replay: {order}"));
     }
-    let mut streams = Streams::open(args, args.format.can_have_odometry() && !args.no_odometry)?;
+    let mut streams = Streams::open(args, odometry && !args.no_odometry)?;
     let mut odometry_covariance = OdometryCovariance::new(LOG_ODOMETRY_NOISE);
     let mut summary = ReplaySummary {
         file: args.file.display().to_string(),
+        recording: log.reads_messages(),
         degradation,
         ..ReplaySummary::default()
     };
@@ -271,6 +335,11 @@ fn replay_log(args: &Args) -> Result<()> {
                 continue;
             }
             Err(ReadError::Stopped) => break,
+            Err(e @ ReadError::Cut { .. }) => {
+                say_err(&format!("lidar-replay: {}: {e}", args.file.display()));
+                summary.cut = Some(e.to_string());
+                continue;
+            }
             Err(e @ (ReadError::Io(_) | ReadError::NotText)) => {
                 return Err(e).with_context(|| format!("{}", args.file.display()));
             }
@@ -296,7 +365,11 @@ fn replay_log(args: &Args) -> Result<()> {
                         continue;
                     }
                     let seq = streams.published;
-                    let covariance = odometry_covariance.update(pose.pose());
+                    // The log's own covariance (a bag's) over the model's growth.
+                    let mut covariance = odometry_covariance.update(pose.pose());
+                    for (total, given) in covariance.iter_mut().zip(pose.log_covariance) {
+                        *total += given;
+                    }
                     streams.odometry(pose.stamp_ns, |message| {
                         fill_odometry(message, seq, &pose, covariance)
                     })?

@@ -36,6 +36,10 @@ pub struct OdometryRecord {
     pub linear_velocity: f64,
     /// Yaw rate, rad/s (0 when the log does not say).
     pub angular_velocity: f64,
+    /// The pose's covariance as the log gives it, row-major over (x, y, yaw); all zero when
+    /// it gives none. The replay adds it to the covariance its model of the odometry's
+    /// noise grows along the motion ([`crate::OdometryCovariance`]).
+    pub log_covariance: [f64; 9],
 }
 
 impl OdometryRecord {

@@ -389,6 +389,7 @@ mod tests {
             yaw: 0.0,
             linear_velocity: 0.0,
             angular_velocity: 0.0,
+            log_covariance: [0.0; 9],
         }
     }
 

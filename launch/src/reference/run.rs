@@ -214,12 +214,12 @@ pub const SIM_VEHICLE_ODOMETRY: Section = Section {
 
 pub const REPLAY: Section = Section {
     table: "replay",
-    about: "lidar-replay: a recorded log or a run's run.mcap (source = \"replay\").",
+    about: "lidar-replay: a recorded log, a run's run.mcap or a ROS 2 bag (source = \"replay\").",
     settings: &[
         unset(
             "file",
             "",
-            Range::words("a log file"),
+            Range::words("a log file or a bag directory"),
             "\"aces.clf\"",
             "The log to replay (--replay).",
         ),
@@ -240,8 +240,8 @@ pub const REPLAY: Section = Section {
         set(
             "format",
             "",
-            Range::words("seed-csv, carmen or mcap"),
-            "The log's format (--format; a file named *.mcap is mcap).",
+            Range::words("seed-csv, carmen, mcap or rosbag2"),
+            "The log's format (--format; --replay of a directory, a .db3 or a .mcap of ROS 2 messages is rosbag2, another .mcap is mcap).",
         ),
         set(
             "rate",
@@ -273,6 +273,38 @@ pub const REPLAY: Section = Section {
             "scans",
             Range::ANY,
             "The log's scan to start at, from 0 (--replay-start).",
+        ),
+        unset(
+            "scan_topic",
+            "",
+            Range::words("a sensor_msgs/msg/LaserScan topic of the bag"),
+            "\"/scan\"",
+            "A ROS 2 bag's scans (--scan-topic); unset = the bag's only LaserScan topic.",
+        ),
+        set(
+            "odom_source",
+            "",
+            Range::words("auto, odom or tf"),
+            "A ROS 2 bag's odometry: nav_msgs/msg/Odometry (odom), /tf from odom_frame to base_frame (tf), or auto: Odometry if the bag has it, else /tf (--odom-source).",
+        ),
+        unset(
+            "odom_topic",
+            "",
+            Range::words("a nav_msgs/msg/Odometry topic of the bag"),
+            "\"/odom\"",
+            "A ROS 2 bag's Odometry topic (--odom-topic); unset = the bag's only one.",
+        ),
+        set(
+            "base_frame",
+            "",
+            Range::words("a frame of the bag"),
+            "A ROS 2 bag's robot frame (REP 105): the odometry's child frame and the parent of the laser's mount on /tf_static (--base-frame).",
+        ),
+        set(
+            "odom_frame",
+            "",
+            Range::words("a frame of the bag"),
+            "A ROS 2 bag's odometry frame, for odometry from /tf (--odom-frame).",
         ),
     ],
 };
