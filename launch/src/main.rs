@@ -57,7 +57,7 @@ fn run() -> Result<ExitCode> {
     slam_proc::memory::check(config.slam.filter.particles).context("refusing to start")?;
     // A map that cannot be used would only fail once the stages are up.
     if let Some(dir) = &config.map {
-        let saved = map_sink::SavedMap::load(dir).with_context(|| {
+        let saved = saved_map::SavedMap::load(dir).with_context(|| {
             format!("refusing to start: cannot use the map in {}", dir.display())
         })?;
         anyhow::ensure!(

@@ -2,8 +2,8 @@
 //! rows run downwards, the map's y upwards; map_server flips the rows back on reading).
 
 use crate::error::SinkError;
-use crate::map_yaml::trinary_pixel;
 use back_end::occupancy_grid::OccupancyGrid;
+use saved_map::trinary_pixel;
 
 /// The grid's trinary pixels, row by row from the top of the image.
 pub fn grid_pixels(grid: &OccupancyGrid) -> Vec<u8> {

@@ -4,8 +4,9 @@
 //! back end's or the filter's, or the online per-scan estimate when none came; the online
 //! estimate beside it), the true and dead-reckoning trajectories in TUM format, the corner
 //! map as CSV, a saved map (an occupancy grid as ROS map_server reads it and the landmarks,
-//! [`SavedMap::load`] reads it back), a picture of the run as SVG and a `metrics.json` with
-//! throughput, latency and, when the truth is known, accuracy scores.
+//! in the saved-map crate's format; [`saved_map::SavedMap::load`] reads it back), a picture
+//! of the run as SVG and a `metrics.json` with throughput, latency and, when the truth is
+//! known, accuracy scores.
 //!
 //! This is the library half; the process shell receives the pipeline's messages and feeds
 //! them to a [`Recorder`] as plain values, so nothing here depends on the transport.
@@ -55,16 +56,11 @@ mod corner_shift;
 mod corners_csv;
 mod error;
 mod grid_image;
-mod landmarks;
 mod line_file;
-mod map_load_error;
 mod map_writer;
-mod map_yaml;
 mod path_assembly;
-mod pgm;
 mod prior_grid;
 mod recorder;
-mod saved_map;
 mod scan_keeper;
 mod svg;
 mod tum;
@@ -79,28 +75,12 @@ pub use back_end::occupancy_grid::{
 pub use corners_csv::{corners_csv, corners_csv_header};
 pub use error::SinkError;
 pub use grid_image::{encode_png, grid_pixels};
-pub use landmarks::{
-    CornerLandmark, GridReference, LANDMARKS_FORMAT, LANDMARKS_FRAME, LANDMARKS_UNITS,
-    LANDMARKS_VERSION, Landmarks, LandmarksError,
-};
 pub use line_file::LineFile;
-pub use map_load_error::MapLoadError;
-pub use map_writer::{
-    LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, map_files, write_map,
-};
-pub use map_yaml::{
-    FREE_PIXEL, FREE_THRESH, MapMode, MapYaml, OCCUPIED_PIXEL, OCCUPIED_THRESH, UNKNOWN_PIXEL,
-    YamlError, trinary_pixel,
-};
+pub use map_writer::{map_files, write_map};
 pub use path_assembly::{ChunkError, PathAssembly};
-pub use pgm::{Pgm, PgmError, encode_pgm};
 pub use prior_grid::{PRIOR_FREE_LOG_ODDS, PRIOR_OCCUPIED_LOG_ODDS, PriorGridError, prior_grid};
 pub use recorder::{
     FinishedRun, GridReport, MAP_CORNERS_FILE, MAP_SVG_FILE, Recorder, RecorderOptions,
-};
-pub use saved_map::{
-    GridMap, LANDMARKS_INPUT, MAP_IMAGE_INPUT, MAP_YAML_INPUT, MAX_MAP_COORDINATE_M,
-    MapExtentError, SavedMap,
 };
 pub use scan_keeper::ScanKeeper;
 pub use slam_geom::MapCorner;

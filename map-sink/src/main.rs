@@ -573,9 +573,9 @@ fn map_corners(snapshot: &MapSnapshot) -> Vec<map_sink::MapCorner> {
 }
 
 /// The grid of the saved map in `dir`, if there is one and it has a grid.
-fn saved_grid(dir: Option<&std::path::Path>) -> Result<Option<map_sink::GridMap>> {
+fn saved_grid(dir: Option<&std::path::Path>) -> Result<Option<saved_map::GridMap>> {
     let Some(dir) = dir else { return Ok(None) };
-    let saved = map_sink::SavedMap::load(dir)
+    let saved = saved_map::SavedMap::load(dir)
         .with_context(|| format!("cannot use the map in {}", dir.display()))?;
     Ok(saved.grid)
 }

@@ -6,20 +6,12 @@ use std::path::Path;
 use crate::atomic::write_atomic;
 use crate::error::SinkError;
 use crate::grid_image::{encode_png, grid_pixels};
-use crate::landmarks::{GridReference, Landmarks};
-use crate::map_yaml::MapYaml;
-use crate::pgm::encode_pgm;
 use back_end::occupancy_grid::OccupancyGrid;
+use saved_map::{
+    GridReference, LANDMARKS_FILE, Landmarks, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, MapYaml,
+    encode_pgm,
+};
 use slam_geom::MapCorner;
-
-/// The map_server description of the grid.
-pub const MAP_YAML_FILE: &str = "map.yaml";
-/// The grid's trinary image, named by `map.yaml`.
-pub const MAP_PGM_FILE: &str = "map.pgm";
-/// The same image as PNG, for people.
-pub const MAP_PNG_FILE: &str = "map.png";
-/// The landmark map, which names the grid files.
-pub const LANDMARKS_FILE: &str = "landmarks.json";
 
 /// Writes the map files into `dir` ([`map_files`]), each atomically, in their order; the
 /// first failure ends them.

@@ -16,10 +16,10 @@
 //! any is, so that a thin wall survives a coarser grid. A rotated grid (origin yaw other
 //! than 0) is refused.
 
-use crate::saved_map::GridMap;
 use back_end::occupancy_grid::{
     CellState, GridError, HIT_LOG_ODDS, MAX_CELLS, MISS_LOG_ODDS, OccupancyGrid, RESOLUTION_RANGE_M,
 };
+use saved_map::GridMap;
 
 /// The evidence of a saved occupied cell: one return's, just above the occupied threshold.
 pub const PRIOR_OCCUPIED_LOG_ODDS: f32 = HIT_LOG_ODDS;
@@ -39,7 +39,7 @@ pub enum PriorGridError {
     Resolution { resolution: f64, min: f64, max: f64 },
     #[error(
         "its grid's origin ({x}, {y}) is not within {} m of the map frame's",
-        crate::MAX_MAP_COORDINATE_M
+        saved_map::MAX_MAP_COORDINATE_M
     )]
     Origin { x: f64, y: f64 },
     #[error("its grid on cells of {resolution_m} m: {source}")]
@@ -69,7 +69,7 @@ pub fn prior_grid(
         });
     }
     // Beyond it, cell indices would overflow.
-    let far = |v: f64| v.is_nan() || v.abs() > crate::MAX_MAP_COORDINATE_M;
+    let far = |v: f64| v.is_nan() || v.abs() > saved_map::MAX_MAP_COORDINATE_M;
     if far(ox) || far(oy) {
         return Err(PriorGridError::Origin { x: ox, y: oy });
     }
@@ -140,9 +140,9 @@ pub fn prior_grid(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::map_yaml::MapYaml;
     use back_end::compact_scan::CompactScan;
     use back_end::occupancy_grid::GridConfig;
+    use saved_map::MapYaml;
     use slam_geom::Pose2;
 
     /// A saved grid of cells of `resolution` whose lower-left corner is at `origin`, from

@@ -10,15 +10,15 @@ use crate::atomic::write_atomic;
 use crate::corner_shift::follow_final_path;
 use crate::corners_csv::corners_csv;
 use crate::error::SinkError;
-use crate::map_writer::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE, map_files};
+use crate::map_writer::map_files;
 use crate::prior_grid::prior_grid;
-use crate::saved_map::GridMap;
 use crate::scan_keeper::ScanKeeper;
 use crate::svg::{SvgInput, render_svg};
 use crate::tum_stream::TumStream;
 use back_end::compact_scan::CompactScan;
 use back_end::global_grid::{self, Layer};
 use back_end::occupancy_grid::{CellState, GridConfig, OccupancyGrid};
+use saved_map::{GridMap, LANDMARKS_FILE, MAP_PGM_FILE, MAP_PNG_FILE, MAP_YAML_FILE};
 use slam_eval::{
     AteStats, DEAD_RECKONING_FILE, FitVerdict, FrameCounts, GROUND_TRUTH_FILE, IncompleteOutput,
     METRICS_FILE, MapFit, Metrics, RelationsFile, RelativePoseErrors, SearchPhase, TRAJECTORY_FILE,

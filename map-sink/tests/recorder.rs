@@ -7,9 +7,10 @@ use std::path::Path;
 
 use common::Synthetic;
 use map_sink::{
-    CellState, GridConfig, MAP_CORNERS_FILE, MAP_PNG_FILE, MAP_SVG_FILE, Pose2, Recorder,
-    RecorderOptions, SavedMap, SinkError, StampedPose, corners_csv_header,
+    CellState, GridConfig, MAP_CORNERS_FILE, MAP_SVG_FILE, Pose2, Recorder, RecorderOptions,
+    SinkError, StampedPose, corners_csv_header,
 };
+use saved_map::{MAP_PNG_FILE, SavedMap};
 use slam_eval::{
     FrameCounts, GROUND_TRUTH_FILE, METRICS_FILE, Metrics, RelationsFile, TRAJECTORY_FILE,
     TRAJECTORY_ONLINE_FILE, score_run,
@@ -527,8 +528,8 @@ fn a_localization_is_scored_from_convergence_with_its_search_apart() -> TestResu
 #[test]
 fn a_saved_grid_that_does_not_fit_the_scans_is_not_merged() -> TestResult {
     // A saved map 40 m away from the synthetic room, occupied throughout.
-    let saved = map_sink::GridMap {
-        yaml: map_sink::MapYaml::trinary("map.pgm", 0.05, [40.0, 40.0]),
+    let saved = saved_map::GridMap {
+        yaml: saved_map::MapYaml::trinary("map.pgm", 0.05, [40.0, 40.0]),
         width: 40,
         height: 40,
         cells: vec![CellState::Occupied; 1600],

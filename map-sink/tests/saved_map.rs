@@ -4,10 +4,8 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use map_sink::{
-    CellState, CompactScan, GridConfig, LANDMARKS_FILE, MAP_PGM_FILE, MAP_YAML_FILE, MapCorner,
-    MapLoadError, OccupancyGrid, Pose2, SavedMap, write_map,
-};
+use map_sink::{CellState, CompactScan, GridConfig, MapCorner, OccupancyGrid, Pose2, write_map};
+use saved_map::{LANDMARKS_FILE, MAP_PGM_FILE, MAP_YAML_FILE, MapLoadError, SavedMap};
 
 type TestResult = Result<(), Box<dyn std::error::Error>>;
 

@@ -26,7 +26,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use lidar_replay::{LogFormat, LogRecord, ReorderConfig, open_log};
-use map_sink::SavedMap;
+use saved_map::SavedMap;
 use slam_eval::{ErrorStats, percentile};
 use slam_geom::{Pose2, read_tum, wrap_angle};
 use slam_proc::{

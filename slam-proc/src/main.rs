@@ -7,7 +7,7 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use clap::Parser;
 use ipc_types::prelude::*;
-use map_sink::SavedMap;
+use saved_map::SavedMap;
 use slam_eval::{FitVerdict, MapFit};
 use slam_proc::{
     FastSlam, FilterStats, LocalizeStats, Localizer, MeasuredCorner, MeasuredLine, MeasuredMotion,

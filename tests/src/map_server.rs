@@ -1,5 +1,6 @@
 //! A map directory's grid read by the ROS map_server rules (ROS 1 image_loader, nav2
-//! map_io), with a parser of the tests' own, not with map-sink's code.
+//! map_io), with a parser of the tests' own, not with the saved-map crate's code (with which
+//! map-sink writes it and slam-proc reads it).
 
 use std::collections::HashMap;
 

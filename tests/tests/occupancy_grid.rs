@@ -1,7 +1,7 @@
 //! The office loop's occupancy grid against the world it was made in (issue 15, first
 //! acceptance bullet): `map.yaml` and `map.pgm` are read here by the ROS map_server rules
-//! with a parser of this file's own, not with map-sink's code, and the grid is compared with
-//! the simulator's walls.
+//! with a parser of this file's own, not with the saved-map crate's code (with which map-sink
+//! writes them), and the grid is compared with the simulator's walls.
 
 use std::collections::{HashMap, HashSet};
 use std::path::Path;

@@ -245,7 +245,7 @@ impl FastSlam {
     /// is set aside for the rest of the run: its grid no longer holds the particles and its
     /// corners leave every particle's map, so that the run maps on its own rather than
     /// merging this building's corners with another's.
-    pub fn with_saved_grid(mut self, grid: &map_sink::GridMap) -> Self {
+    pub fn with_saved_grid(mut self, grid: &saved_map::GridMap) -> Self {
         self.saved_grid = Some(SavedGrid::new(grid, &self.config.localize));
         self
     }

@@ -11,8 +11,8 @@ use crate::localize::localizer::{ScanRanges, sample_beam_ends};
 use crate::localize::map_fit::FitField;
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use crate::localize_config::LocalizeConfig;
-use map_sink::GridMap;
 use nalgebra::{Matrix3, Vector3};
+use saved_map::GridMap;
 use slam_eval::MapFit;
 use slam_geom::{Pose2, wrap_angle};
 
@@ -188,8 +188,8 @@ mod tests {
     use crate::filter::observation::MeasuredMotion;
     use crate::localize::localizer::ScanRanges;
     use crate::localize::tracking_field::{TrackingField, beam_bearings};
-    use map_sink::{CellState, GridMap, MapYaml};
     use nalgebra::{Matrix3, Matrix4};
+    use saved_map::{CellState, GridMap, MapYaml};
     use slam_eval::{FitVerdict, MAP_FIT_BEAMS_PER_SCAN, MAP_FIT_MIN_BEAMS};
     use slam_geom::{MapCorner, Pose2};
 

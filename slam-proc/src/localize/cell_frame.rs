@@ -1,6 +1,6 @@
 //! Where a saved grid's cells lie in the map frame, for the fields computed over them.
 
-use map_sink::{CellState, GridMap};
+use saved_map::{CellState, GridMap};
 
 /// A grid's cells in the map frame: row 0 the lowest y, cells indexed row by row.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -14,7 +14,7 @@
 
 use std::f64::consts::TAU;
 
-use map_sink::{CellState, GridMap};
+use saved_map::{CellState, GridMap};
 use slam_geom::Pose2;
 
 use crate::localize::cell_frame::CellFrame;
@@ -177,7 +177,7 @@ fn faces(grid: &GridMap, direction: usize) -> Vec<bool> {
 mod tests {
     use super::*;
     use crate::LikelihoodField;
-    use map_sink::MapYaml;
+    use saved_map::MapYaml;
 
     const MODEL: BeamModel = BeamModel {
         sigma_hit: 0.1,

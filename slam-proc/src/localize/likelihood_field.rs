@@ -2,7 +2,7 @@
 //! 6.4; AMCL's `likelihood_field` model): the distance from every cell to the nearest
 //! occupied one, so that weighting a beam end costs one lookup.
 
-use map_sink::{CellState, GridMap};
+use saved_map::{CellState, GridMap};
 
 use crate::localize::cell_frame::{CellFrame, SeenCells};
 
@@ -204,7 +204,7 @@ fn transform_1d(f: &[f64], out: &mut [f64], work: &mut Work) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use map_sink::MapYaml;
+    use saved_map::MapYaml;
 
     fn grid(width: usize, height: usize, occupied: &[(usize, usize)]) -> GridMap {
         let mut cells = vec![CellState::Free; width * height];

@@ -25,7 +25,7 @@ use crate::localize::map_fit::FitField;
 use crate::localize::tracking_field::{TrackingField, beam_bearings};
 use crate::localize_config::LocalizeConfig;
 use crate::motion::predict::{self, MotionNoise};
-use map_sink::GridMap;
+use saved_map::GridMap;
 use slam_eval::MapFit;
 use slam_geom::Pose2;
 use stage_kit::SettingError;
@@ -562,7 +562,7 @@ impl Localizer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use map_sink::{CellState, MapYaml};
+    use saved_map::{CellState, MapYaml};
 
     const RESOLUTION: f64 = 0.05;
     const WIDTH: usize = 240;

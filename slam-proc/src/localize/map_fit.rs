@@ -3,7 +3,7 @@
 //! A fraction of beams, not a likelihood, so that it means the same whatever the scanner's
 //! beam count or range and the localizer's beam model.
 
-use map_sink::{CellState, GridMap};
+use saved_map::{CellState, GridMap};
 use slam_eval::MapFit;
 use slam_geom::Pose2;
 
@@ -130,7 +130,7 @@ impl FitField {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use map_sink::MapYaml;
+    use saved_map::MapYaml;
 
     /// A 10 m x 6 m room of 0.05 m cells: walls on its border and across it at x = 5 m
     /// (y from 0 to 3 m), seen inside, unknown beyond x = 8 m.

@@ -3,7 +3,7 @@
 //! otherwise score as well as ends on its face, and a forward-looking scanner would be
 //! drawn ahead of its pose. Tools that judge a map as the localizer sees it use the same.
 
-use map_sink::GridMap;
+use saved_map::GridMap;
 use slam_geom::Pose2;
 
 use crate::localize::faced_field::{FacedField, faced_scan_score};

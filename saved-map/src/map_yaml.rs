@@ -8,7 +8,8 @@
 //! ROS 1's map_saver does and nav2's does since 2025 (navigation2 pull request 5278): with
 //! the 0.25 older nav2 savers wrote, a reader takes every unknown pixel for free space.
 //! The thresholds that decided which cell became which pixel are the grid's
-//! ([`crate::OCCUPIED_PROBABILITY`], [`crate::FREE_PROBABILITY`]).
+//! ([`back_end::occupancy_grid::OCCUPIED_PROBABILITY`],
+//! [`back_end::occupancy_grid::FREE_PROBABILITY`]).
 
 pub use back_end::occupancy_grid::{
     CellState, FREE_PIXEL, OCCUPIED_PIXEL, UNKNOWN_PIXEL, trinary_pixel,

@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 
 use stage_kit::{InputError, InputKind};
 
+use crate::file_names::LANDMARKS_FILE;
 use crate::landmarks::{Landmarks, LandmarksError};
 use crate::map_load_error::MapLoadError;
-use crate::map_writer::LANDMARKS_FILE;
 use crate::map_yaml::{MapMode, MapYaml, YamlError};
 use crate::pgm::{Pgm, PgmError};
 use back_end::occupancy_grid::CellState;
@@ -217,21 +217,21 @@ fn resolve(dir: &Path, name: &str) -> PathBuf {
 /// A saved map's landmarks: a few hundred bytes a corner.
 pub const LANDMARKS_INPUT: InputKind = InputKind {
     what: "landmarks file",
-    limit_name: "map_sink::LANDMARKS_INPUT",
+    limit_name: "saved_map::LANDMARKS_INPUT",
     max_bytes: 64 << 20,
 };
 
 /// A map_server description: a dozen lines.
 pub const MAP_YAML_INPUT: InputKind = InputKind {
     what: "map description",
-    limit_name: "map_sink::MAP_YAML_INPUT",
+    limit_name: "saved_map::MAP_YAML_INPUT",
     max_bytes: 1 << 20,
 };
 
 /// A map image: one byte a cell, so 8192 x 8192 cells (410 m square at 5 cm).
 pub const MAP_IMAGE_INPUT: InputKind = InputKind {
     what: "map image",
-    limit_name: "map_sink::MAP_IMAGE_INPUT",
+    limit_name: "saved_map::MAP_IMAGE_INPUT",
     max_bytes: 64 << 20,
 };
 
