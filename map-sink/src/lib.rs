@@ -17,7 +17,7 @@
 //! * Accuracy is scored through slam-eval, as docs/CONVENTIONS.md says: the estimate is
 //!   aligned to the truth by a least-squares rigid SE(2) fit before the absolute trajectory
 //!   error ([`slam_eval::ate`]) is taken, and the map corners are moved by the same
-//!   transform before they are scored; the summary is slam-eval's [`Metrics`].
+//!   transform before they are scored; the summary is slam-eval's [`Metrics`](slam_eval::Metrics).
 //! * The occupancy grid is the back end's where it runs ([`RecorderOptions::back_end`]);
 //!   without it, it is traced at the end of the run along the final path
 //!   ([`OccupancyGrid`]), so the scans are kept until then, compactly ([`CompactScan`],

@@ -18,23 +18,23 @@ const KEEP_TURN_RAD: f64 = back_end::global_slam::GRID_TURN_RAD;
 /// keeps 0.66 M beams), so their maps do not change; a robot that goes round the same rooms
 /// for an hour keeps a lap or two of scans and then only those of places new to it.
 const REVISIT_BEAMS: usize = 4_000_000;
-/// Past [`REVISIT_BEAMS`], viewpoints fall in cells of this edge and ...
+/// Past `REVISIT_BEAMS`, viewpoints fall in cells of this edge and ...
 const VIEWPOINT_CELL_M: f64 = 0.25;
 /// ... headings in sectors of this width; a scan is kept when no kept scan's viewpoint fell
 /// in its cell and sector.
 const VIEWPOINT_SECTOR_RAD: f64 = 0.1;
 
 /// Keeps each scan whose viewpoint differs from the last one kept: by the online estimate,
-/// the robot moved at least a grid cell or turned at least [`KEEP_TURN_RAD`]. A scan from
+/// the robot moved at least a grid cell or turned at least `KEEP_TURN_RAD`. A scan from
 /// (nearly) the same viewpoint sees the same cells again and only adds certainty that the
 /// log-odds clamp would cap anyway, so a robot standing still costs no memory. Past
-/// [`REVISIT_BEAMS`] a scan is also left out when a kept scan was taken from about the same
+/// `REVISIT_BEAMS` a scan is also left out when a kept scan was taken from about the same
 /// place and heading, however long ago, so that a robot going round and round costs memory
 /// and end-step time for the places it saw, not for its laps.
 #[derive(Debug)]
 pub struct ScanKeeper {
     min_move_m: f64,
-    /// [`REVISIT_BEAMS`], but for the tests.
+    /// `REVISIT_BEAMS`, but for the tests.
     revisit_beams: usize,
     pending: BTreeMap<u64, CompactScan>,
     kept: Vec<(u64, CompactScan)>,
@@ -43,7 +43,7 @@ pub struct ScanKeeper {
     viewpoints: HashSet<(i64, i64, i64)>,
     bytes: usize,
     beams: usize,
-    /// Scans left out past [`REVISIT_BEAMS`] for a viewpoint seen before.
+    /// Scans left out past `REVISIT_BEAMS` for a viewpoint seen before.
     revisits: usize,
 }
 
