@@ -7,9 +7,9 @@
 //! * Odometry comes from `nav_msgs/msg/Odometry` (of the base frame) or from `/tf` (the odom
 //!   frame to the base frame), [`OdometryFrom`]; the pose at each scan's stamp is
 //!   interpolated between the readings around it and published right before the scan
-//!   ([`pairing`]), with the message's covariance added to the replay's odometry model.
+//!   (`pairing.rs`), with the message's covariance added to the replay's odometry model.
 //! * The laser's mount is the chain of `/tf_static` transforms from the base frame to the
-//!   scans' `frame_id` ([`mount`]), so that a run's trajectories are the base frame's.
+//!   scans' `frame_id` (`mount.rs`), so that a run's trajectories are the base frame's.
 //! * Messages go out in stamp order within the reordering window of CARMEN logs; what is
 //!   late, repeats a stamp, is of another type or cannot be decoded is counted and
 //!   skipped; a bag cut short replays up to the damage and says where it was cut.
