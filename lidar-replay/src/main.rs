@@ -115,7 +115,8 @@ fn run(args: Args) -> Result<()> {
         Some(format) => format,
         None => LogFormat::detect(&args.file).with_context(|| {
             format!(
-                "cannot tell the format of {} from its name: give --format (seed-csv,                  carmen, mcap or rosbag2)",
+                "cannot tell the format of {} from its name: give --format (seed-csv, \
+                 carmen, mcap or rosbag2)",
                 args.file.display()
             )
         })?,

@@ -5,9 +5,16 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use slam_geom::Pose2;
+
+use super::decode::{Decoded, Plan};
 use super::messages::tests::{laser_scan, odometry, tf_message};
+use super::storage::{Channel, RawMessage};
+use super::topics::choose;
 use super::*;
+use crate::error::ReadError;
 use crate::lines::never;
+use crate::record::LogRecord;
 
 const S: u64 = 1_000_000_000;
 
