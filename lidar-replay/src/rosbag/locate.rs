@@ -81,9 +81,9 @@ fn open_bag_file(bag: &Path, file: &Path) -> Result<std::fs::File, BagError> {
         })
 }
 
-/// Whether the MCAP file at `path` holds ROS 2 messages (a channel in `cdr`, or a schema
-/// of ROS 2 message definitions) rather than a run of slam-record; `None` when it cannot
-/// be read far enough to tell.
+/// Whether the MCAP file at `path` holds ROS 2 messages (a channel in the `cdr` message
+/// encoding, as rosbag2 writes every one) rather than a run of slam-record; `None` when it
+/// cannot be read far enough to tell.
 pub fn is_ros2_mcap(path: &Path) -> Option<bool> {
     let open = || {
         BAG_FILE_INPUT
