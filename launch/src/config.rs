@@ -253,6 +253,8 @@ pub struct RunConfig {
     pub slam: SlamSection,
     pub grid: GridSection,
     pub record: crate::record::RecordSection,
+    /// The live view (`--foxglove`).
+    pub foxglove: crate::view::ViewSection,
 }
 
 impl Default for RunConfig {
@@ -273,6 +275,7 @@ impl Default for RunConfig {
             slam: SlamSection::default(),
             grid: GridSection::default(),
             record: crate::record::RecordSection::default(),
+            foxglove: crate::view::ViewSection::default(),
         }
     }
 }
@@ -354,6 +357,11 @@ impl RunConfig {
             )));
         }
         self.validate_sections()?;
+        if let Err(e) = self.foxglove.address() {
+            return Err(ConfigError::Invalid(format!(
+                "[foxglove] addr (--foxglove): {e}"
+            )));
+        }
         let grid = map_sink::GridConfig {
             resolution_m: self.grid.resolution,
             ..map_sink::GridConfig::default()
