@@ -19,9 +19,11 @@ pub enum RecordError {
         topic: &'static str,
         source: serde_json::Error,
     },
-    #[error("cannot send a message on {topic}: {source}")]
+    /// The output's own error is named `cause` and is part of the message, which `{:#}`
+    /// then does not repeat.
+    #[error("cannot send a message on {topic}: {cause}")]
     Output {
         topic: &'static str,
-        source: Box<dyn std::error::Error + Send + Sync>,
+        cause: Box<dyn std::error::Error + Send + Sync>,
     },
 }

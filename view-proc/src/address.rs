@@ -49,9 +49,9 @@ impl std::str::FromStr for ViewAddress {
 impl ViewAddress {
     /// The socket addresses the host names.
     pub fn resolve(&self) -> Result<Vec<SocketAddr>, ViewError> {
-        let resolve_error = |source| ViewError::Resolve {
+        let resolve_error = |cause| ViewError::Resolve {
             address: self.to_string(),
-            source,
+            cause,
         };
         let found: Vec<SocketAddr> = (self.host.as_str(), self.port)
             .to_socket_addrs()
@@ -80,7 +80,10 @@ impl ViewAddress {
         if source.kind() == std::io::ErrorKind::AddrInUse {
             ViewError::PortInUse { address }
         } else {
-            ViewError::Listen { address, source }
+            ViewError::Listen {
+                address,
+                cause: source,
+            }
         }
     }
 }

@@ -57,7 +57,7 @@ impl Output for LiveChannels {
     ) -> Result<(), RecordError> {
         let channel = self.declare::<M>().map_err(|e| RecordError::Output {
             topic: M::TOPIC,
-            source: Box::new(e),
+            cause: Box::new(e),
         })?;
         if !channel.has_sinks() {
             return Ok(());
@@ -91,8 +91,8 @@ fn open_channel<M: ChannelMessage>(context: &Arc<Context>) -> Result<Arc<RawChan
         .schema(schema)
         .context(context)
         .build_raw()
-        .map_err(|source| ViewError::Channel {
+        .map_err(|cause| ViewError::Channel {
             topic: M::TOPIC,
-            source,
+            cause,
         })
 }

@@ -39,9 +39,9 @@ impl ViewServer {
             .start_blocking()
             .map_err(|source| match source {
                 FoxgloveError::Bind(io) => address.listen_error(io),
-                source => ViewError::Server {
+                cause => ViewError::Server {
                     address: address.to_string(),
-                    source,
+                    cause,
                 },
             })?;
         let address = ViewAddress {
