@@ -121,6 +121,13 @@ impl<O: Output> Recording<O> {
         &self.file
     }
 
+    /// Has the next scan of each sensor frame put that frame on the robot again
+    /// (`base_link` → frame on `/tf`), as its first one did. A file needs it once; a live
+    /// view says it again now and then for the clients that connected since.
+    pub fn restate_sensor_frames(&mut self) {
+        self.sensor_frames.clear();
+    }
+
     /// A scan on `/lidar/scan`; the first scan of a frame other than `base_link` also puts
     /// that frame on the robot (identity: the lidar sits at the robot's origin,
     /// docs/CONVENTIONS.md), so the viewer can draw the scan in the map.

@@ -2,7 +2,7 @@
 
 mod inlets;
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -38,6 +38,11 @@ struct Args {
 fn main() -> std::process::ExitCode {
     stage_kit::run_stage("slam-view", run)
 }
+
+/// How often the sensor's place on the robot (`base_link` → `laser`, sent once in a file)
+/// is said again, for the clients that connected since: without it their scans are not
+/// placed in the map.
+const RESTATE_SENSOR_FRAMES: Duration = Duration::from_secs(1);
 
 /// Longest sleep without a notification: a wake-up missed under load costs at most this,
 /// and a stop is seen within it.
@@ -93,7 +98,12 @@ fn serve(inlets: &Inlets, view: &mut Recording<LiveChannels>) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("cannot wait on a topic: {e:?}"))?,
         );
     }
+    let mut restated = Instant::now();
     while !shutdown::requested() {
+        if restated.elapsed() >= RESTATE_SENSOR_FRAMES {
+            view.restate_sensor_frames();
+            restated = Instant::now();
+        }
         let woken = waitset.wait_and_process_once_with_timeout(
             |id| {
                 for (guard, wakeable) in guards.iter().zip(&wakeables) {
