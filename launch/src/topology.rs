@@ -873,7 +873,7 @@ mod tests {
             viewed: true,
             ..PLAIN
         };
-        assert_eq!(published(&viewed, PARTICLES), true);
+        assert!(published(&viewed, PARTICLES));
         assert_eq!(subscribers(&viewed, PARTICLES), 0, "only the view reads it");
         assert_eq!(
             stages(&viewed).map(|s| s.binary).next(),
