@@ -66,8 +66,9 @@ pub use message::Message;
 pub use messages::*;
 pub use topic::Topic;
 pub use transport::{
-    Delivery, Inlet, LATEST_QUEUE, LOSSLESS_QUEUE, OpenError, OpenFailure, Outlet, PublishError,
-    PublishFailure, ReceiveError, WaitError, Wake, Wakeable, wait_any, wait_for_topic,
+    Delivery, Inlet, LATEST_QUEUE, LOSSLESS_QUEUE, LOSSY_READER, OpenError, OpenFailure, Outlet,
+    PublishError, PublishFailure, ReceiveError, WaitError, Wake, Wakeable, wait_any,
+    wait_for_topic,
 };
 pub use zeroed::Zeroable;
 

@@ -314,3 +314,41 @@ fn a_planted_fifo_or_link_as_owner_file_is_reported_not_opened() {
         std::fs::remove_file(&owner).unwrap();
     }
 }
+
+#[test]
+fn a_lossy_reader_is_never_waited_for_and_loses_what_does_not_fit() {
+    let (domain, _cleanup) = scratch_domain("lossy");
+    let node = domain.node("both").unwrap();
+    let outlet = Outlet::create(&domain, &node, topic::SCAN, Delivery::Lossless, 0).unwrap();
+    let view = Inlet::open_lossy(&node, topic::SCAN).unwrap();
+    assert_eq!(view.delivery(), Delivery::Lossless);
+    // Not one of the pipeline's readers: a publisher waiting for one does not start for it.
+    assert_eq!(outlet.subscriber_count(), 0);
+    assert!(
+        !outlet
+            .wait_for_subscribers(1, Some(Duration::from_millis(200)))
+            .unwrap()
+    );
+
+    let reader_domain = domain.clone();
+    let reader = std::thread::spawn(move || {
+        let node = reader_domain.node("reader").unwrap();
+        let inlet = Inlet::open(&node, topic::SCAN).unwrap();
+        drain_until_end(&inlet)
+    });
+    assert!(
+        outlet
+            .wait_for_subscribers(1, Some(Duration::from_secs(20)))
+            .unwrap()
+    );
+    assert_eq!(outlet.subscriber_count(), 1);
+    // The lossy reader takes nothing while they are sent: the sends do not wait for it.
+    publish_scans(&outlet, 200);
+    assert_eq!(reader.join().unwrap(), (0..200).collect::<Vec<_>>());
+    let mut seen = Vec::new();
+    while let Some(sample) = view.receive().unwrap() {
+        seen.push(sample.header.seq);
+    }
+    // Its queue of one kept the first message; every later one was not delivered to it.
+    assert_eq!(seen, vec![0]);
+}

@@ -17,7 +17,8 @@ use crate::config::{ConfigError, RunConfig, SourceKind};
 ///
 /// Every setting can also come from a TOML file (--config) with the keys `source`,
 /// `relations`, `stall_warning`, `stall_limit`, `map`, `localize` and `initial_pose` and the
-/// sections [sim], [replay], [hokuyo], [features], [front_end], [slam], [grid] and [record];
+/// sections [sim], [replay], [hokuyo], [features], [front_end], [slam], [grid], [record] and
+/// [foxglove];
 /// options given here override the file. A key a section does not know, or a value out of
 /// its range, is refused before anything starts.
 #[derive(Debug, Parser)]
@@ -25,7 +26,7 @@ use crate::config::{ConfigError, RunConfig, SourceKind};
 pub struct Args {
     /// TOML file with `source`, `relations`, `stall_warning`, `stall_limit`, `map`,
     /// `localize`, `initial_pose` and [sim], [replay], [hokuyo], [features], [front_end],
-    /// [slam], [grid], [record] sections.
+    /// [slam], [grid], [record], [foxglove] sections.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where the scans come from (default: sim; --replay implies replay).
@@ -139,6 +140,12 @@ pub struct Args {
     /// run stays lossless and deterministic.
     #[arg(long)]
     record: bool,
+    /// Serve the run live to Foxglove over its WebSocket protocol (slam-view) on HOST:PORT,
+    /// default 127.0.0.1:8765: open Foxglove, Open connection, ws://HOST:PORT. The view
+    /// reads lossy: nothing about the run changes with it, and a slow client loses view
+    /// messages, never the pipeline's.
+    #[arg(long, value_name = "HOST:PORT", num_args = 0..=1)]
+    foxglove: Option<Option<String>>,
     /// Print the configuration and exit: every setting with its value (the defaults, with
     /// --config and the options given over them) and a comment line saying what it means,
     /// its unit and its range, as a TOML file to start a --config file from; `markdown`
@@ -203,7 +210,7 @@ impl Args {
             .and_then(lidar_replay::LogFormat::detect)
             .filter(|format| !format.is_text())
             .map(|format| format.name().to_owned());
-        let given: [(&'static str, Option<Value>); 31] = [
+        let given: [(&'static str, Option<Value>); 33] = [
             (
                 "source",
                 value(
@@ -238,6 +245,12 @@ impl Args {
             ("stall_limit", value(self.stall_limit)?),
             ("grid.resolution", value(self.resolution)?),
             ("record.enabled", value(self.record.then_some(true))?),
+            (
+                "foxglove.enabled",
+                value(self.foxglove.as_ref().map(|_| true))?,
+            ),
+            // Without a value, the config file's address or the default.
+            ("foxglove.addr", value(self.foxglove.clone().flatten())?),
             ("map", value(self.map.clone())?),
             ("localize", value(self.localize.then_some(true))?),
             ("initial_pose", value(self.initial_pose.clone())?),

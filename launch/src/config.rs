@@ -286,6 +286,8 @@ pub struct RunConfig {
     pub slam: SlamSection,
     pub grid: GridSection,
     pub record: crate::record::RecordSection,
+    /// The live view (`--foxglove`).
+    pub foxglove: crate::view::ViewSection,
 }
 
 impl Default for RunConfig {
@@ -306,6 +308,7 @@ impl Default for RunConfig {
             slam: SlamSection::default(),
             grid: GridSection::default(),
             record: crate::record::RecordSection::default(),
+            foxglove: crate::view::ViewSection::default(),
         }
     }
 }
@@ -388,6 +391,11 @@ impl RunConfig {
             )));
         }
         self.validate_sections()?;
+        if let Err(e) = self.foxglove.address() {
+            return Err(ConfigError::Invalid(format!(
+                "[foxglove] addr (--foxglove): {e}"
+            )));
+        }
         let grid = map_sink::GridConfig {
             resolution_m: self.grid.resolution,
             ..map_sink::GridConfig::default()

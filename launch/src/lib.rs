@@ -25,6 +25,9 @@
 //!   against the room left in /dev/shm before anything starts ([`shm_room`]; a stage that
 //!   dies of SIGBUS all the same is reported with that room), and nothing of this run is
 //!   left in /dev/shm at the end;
+//! * `--foxglove [ADDR]` adds `slam-view`, which serves the run live to Foxglove: it reads
+//!   lossy (no publisher waits for it), is started first and stopped once the others have
+//!   ended, and a run goes on without it if it dies ([`view`]);
 //! * a particle count slam-proc's memory estimate does not fit in the memory available is
 //!   refused before anything starts (`slam_proc::memory`).
 
@@ -43,3 +46,4 @@ pub mod stall;
 pub mod status;
 pub mod supervisor;
 pub mod topology;
+pub mod view;

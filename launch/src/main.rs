@@ -76,6 +76,11 @@ fn run() -> Result<ExitCode> {
             })?;
         }
     }
+    // A port in use would only fail the view once the run has started.
+    config
+        .foxglove
+        .check()
+        .context("refusing to start: --foxglove")?;
     // An address that names nothing would be retried for ever by lidar-hokuyo.
     if config.source == SourceKind::Hokuyo {
         lidar_hokuyo::resolve(&config.hokuyo.addr)
@@ -374,14 +379,16 @@ fn plan(
                 name: stage.binary.into(),
                 program,
                 args,
-                // The recording is a by-product: the run goes on without it.
-                expendable: stage.role == Role::Recorder,
+                // The recording and the view are by-products: the run goes on without them.
+                expendable: matches!(stage.role, Role::Recorder | Role::View),
+                // The view has no end of its own (it may miss any end-of-stream marker).
+                ends_with_run: stage.role == Role::View,
             })
         })
         .collect()
 }
 
-/// A recorded run's particle cloud every this many scans: each cloud holds every particle,
+/// A recorded or viewed run's particle cloud every this many scans: each cloud holds every particle,
 /// so it is kept rare for the recording's size, while a cloud every few seconds of a log
 /// still shows how it spreads and collapses.
 const PARTICLE_CLOUD_EVERY: u64 = 40;
@@ -415,6 +422,12 @@ fn settings_args(
     let back_end = topology::published(&run, ipc_types::topic::GRAPH_PATH.name());
     let switch = |on: bool, flag: &str| on.then(|| flag.to_owned());
     Ok(match role {
+        Role::View => {
+            let mut args = vec![format!("--addr={}", config.foxglove.addr)];
+            args.extend(switch(particles, "--particles"));
+            args.extend(switch(back_end, "--back-end"));
+            args
+        }
         Role::Recorder => {
             let mut args = flag_values([("--out", Some(out))]);
             args.extend(switch(particles, "--particles"));
@@ -466,8 +479,9 @@ fn settings_args(
         Role::Graph => {
             let front_end = text("front_end", RunConfig::section_text(&config.front_end))?;
             let mut args = section_file("front_end", front_end, "--front-end-config")?;
-            // The grid as it grows is for the recording; map-sink needs only the last.
-            args.extend(switch(run.recorded, "--interim-grids"));
+            // The grid as it grows is for the recording and the view; map-sink needs only
+            // the last.
+            args.extend(switch(run.recorded || run.viewed, "--interim-grids"));
             args
         }
         Role::Perception => {

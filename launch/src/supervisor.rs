@@ -30,6 +30,9 @@ pub struct StagePlan {
     /// The run goes on without it if it dies (the recorder: the run's results matter more
     /// than its recording); its death is reported, not a failure.
     pub expendable: bool,
+    /// It has no end of its own (the live view): the run is over when every other stage
+    /// has ended, and then it is stopped.
+    pub ends_with_run: bool,
 }
 
 /// How a run ended.
@@ -103,6 +106,7 @@ pub fn run(
     let mut all_ready = false;
     let mut losses = Losses::new(&names);
     let expendable: Vec<bool> = plan.iter().map(|p| p.expendable).collect();
+    let ends_with_run: Vec<bool> = plan.iter().map(|p| p.ends_with_run).collect();
     let mut lost = vec![false; stages.len()];
 
     let outcome = loop {
@@ -149,6 +153,7 @@ pub fn run(
         let mut failure = None;
         for (i, stage) in stages.iter_mut().enumerate() {
             match stage.poll_exit() {
+                None if ends_with_run[i] => {}
                 None => all_done = false,
                 Some(status) if status.success() => {}
                 Some(_) if lost[i] => {}
@@ -185,6 +190,7 @@ pub fn run(
             break Outcome::Failed(message);
         }
         if all_done {
+            stop_those_left(&mut stages, domain);
             break Outcome::Finished;
         }
 
@@ -283,6 +289,13 @@ pub fn run(
         losses,
         peak_memory_kib,
     })
+}
+
+/// Stops the stages still running once the run is over (those that end with it).
+fn stop_those_left(stages: &mut [Stage], domain: &Domain) {
+    if stages.iter_mut().any(|s| s.poll_exit().is_none()) {
+        stop_all(stages, domain);
+    }
 }
 
 /// SIGTERM to every stage, the source first so the stream ends; then waits for them to

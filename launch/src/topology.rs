@@ -20,6 +20,8 @@ pub struct RunKind {
     pub saved_map: bool,
     /// slam-record records every topic (`--record`).
     pub recorded: bool,
+    /// slam-view serves the run live to Foxglove (`--foxglove`).
+    pub viewed: bool,
 }
 
 impl RunKind {
@@ -36,6 +38,7 @@ impl RunKind {
             localize: config.localize,
             saved_map: config.map.is_some(),
             recorded: config.record.enabled,
+            viewed: config.foxglove.enabled,
         }
     }
 }
@@ -56,6 +59,10 @@ pub enum When {
     SavedMap,
     /// The run is recorded.
     Recorded,
+    /// The run is served live to Foxglove.
+    Viewed,
+    /// The run is recorded or served live: someone will look at it.
+    Watched,
 }
 
 impl When {
@@ -68,6 +75,8 @@ impl When {
             When::Mapping => !run.localize,
             When::SavedMap => run.saved_map,
             When::Recorded => run.recorded,
+            When::Viewed => run.viewed,
+            When::Watched => run.recorded || run.viewed,
         }
     }
 }
@@ -87,6 +96,16 @@ pub enum Role {
     Sink,
     /// Records every topic into `run.mcap`.
     Recorder,
+    /// Serves the run live to Foxglove; reads lossy (`Inlet::open_lossy`).
+    View,
+}
+
+impl Role {
+    /// The stage reads lossy: no publisher waits for it, and none counts it among the
+    /// subscribers it waits for. It still takes room in the shared memory.
+    pub fn reads_lossy(self) -> bool {
+        self == Role::View
+    }
 }
 
 /// A topic a stage publishes.
@@ -195,6 +214,15 @@ const fn for_the_recording(topic: &'static str) -> Publication {
     }
 }
 
+/// A topic published only for the recorder and the live view: a run with neither does no
+/// work for it.
+const fn for_the_eye(topic: &'static str) -> Publication {
+    Publication {
+        topic,
+        when: When::Watched,
+    }
+}
+
 /// A source's odometry, when the robot has some (and a replay is not told to drop it).
 const SOURCE_ODOMETRY: Publication = Publication {
     topic: ODOMETRY,
@@ -204,6 +232,24 @@ const SOURCE_ODOMETRY: Publication = Publication {
 /// Every stage, in the order they start: consumers first, so that nothing a source
 /// publishes finds no reader, and the source last.
 pub const STAGES: &[Stage] = &[
+    Stage {
+        binary: "slam-view",
+        role: Role::View,
+        runs: When::Viewed,
+        publishes: &[],
+        reads: &[
+            reads(SCAN),
+            reads(FEATURES),
+            reads(POSE),
+            reads(MAP),
+            reads(PATH),
+            reads_if_published(GRAPH_PATH),
+            reads_if_published(GRAPH_GRID),
+            reads(PARTICLES),
+        ],
+        waits_for: &[],
+        saved_map: None,
+    },
     Stage {
         binary: "slam-record",
         role: Role::Recorder,
@@ -267,7 +313,7 @@ pub const STAGES: &[Stage] = &[
             publishes(POSE),
             publishes(MAP),
             publishes(PATH),
-            for_the_recording(PARTICLES),
+            for_the_eye(PARTICLES),
         ],
         reads: &[
             reads(FEATURES),
@@ -356,24 +402,31 @@ pub fn published(run: &RunKind, topic: &str) -> bool {
     })
 }
 
-/// How many stages of the run read `topic` (when it is published).
+/// How many stages of the run read `topic` (when it is published) and are waited for:
+/// every reader but a lossy one ([`Role::reads_lossy`]).
 pub fn subscribers(run: &RunKind, topic: &str) -> usize {
-    stages(run)
-        .filter(|stage| {
-            stage
-                .reads
-                .iter()
-                .any(|r| r.topic == topic && r.when.holds(run))
-        })
+    readers(run, topic)
+        .filter(|stage| !stage.role.reads_lossy())
         .count()
 }
 
-/// The topics the run publishes, each with its number of readers: the services it has.
+/// The stages of the run that read `topic` (when it is published).
+fn readers<'a>(run: &'a RunKind, topic: &'a str) -> impl Iterator<Item = &'static Stage> + 'a {
+    stages(run).filter(move |stage| {
+        stage
+            .reads
+            .iter()
+            .any(|r| r.topic == topic && r.when.holds(run))
+    })
+}
+
+/// The topics the run publishes, each with its number of readers, lossy ones too (each
+/// takes room in the publisher's shared memory): the services it has.
 pub fn services(run: &RunKind) -> Vec<(&'static str, usize)> {
     TOPICS
         .iter()
         .filter(|topic| published(run, topic))
-        .map(|&topic| (topic, subscribers(run, topic)))
+        .map(|&topic| (topic, readers(run, topic).count()))
         .collect()
 }
 
@@ -423,6 +476,9 @@ pub fn readers_text(topic: &str) -> Vec<String> {
                     if r.if_published {
                         conditions.push("if published");
                     }
+                    if stage.role.reads_lossy() {
+                        conditions.push("lossy");
+                    }
                     if conditions.is_empty() {
                         stage.binary.to_owned()
                     } else {
@@ -458,6 +514,8 @@ fn condition_text(when: When) -> Option<&'static str> {
         When::Mapping => Some("without --localize"),
         When::SavedMap => Some("--map"),
         When::Recorded => Some("--record"),
+        When::Viewed => Some("--foxglove"),
+        When::Watched => Some("--record or --foxglove"),
     }
 }
 
@@ -483,13 +541,16 @@ mod tests {
         for source in [SourceKind::Sim, SourceKind::Replay, SourceKind::Hokuyo] {
             for odometry in [false, true] {
                 for (localize, saved_map) in [(false, false), (false, true), (true, true)] {
-                    for recorded in [false, true] {
+                    for (recorded, viewed) in
+                        [(false, false), (true, false), (false, true), (true, true)]
+                    {
                         runs.push(RunKind {
                             source,
                             odometry: odometry && source != SourceKind::Hokuyo,
                             localize,
                             saved_map,
                             recorded,
+                            viewed,
                         });
                     }
                 }
@@ -504,6 +565,7 @@ mod tests {
         localize: false,
         saved_map: false,
         recorded: false,
+        viewed: false,
     };
 
     #[test]
@@ -699,7 +761,7 @@ mod tests {
 
     #[test]
     fn the_recording_s_own_topics_exist_only_when_recorded() {
-        let own = [PARTICLES, MAP_PATH, MAP_GRID];
+        let own = [MAP_PATH, MAP_GRID];
         for run in every_run() {
             for topic in own {
                 assert_eq!(published(&run, topic), run.recorded, "{topic} in {run:?}");
@@ -709,6 +771,9 @@ mod tests {
                     "{topic}"
                 );
             }
+            // The cloud is for the recording and for the live view.
+            let watched = run.recorded || run.viewed;
+            assert_eq!(published(&run, PARTICLES), watched, "{run:?}");
         }
         let recorded = RunKind {
             recorded: true,
@@ -772,6 +837,48 @@ mod tests {
         assert!(
             doc.contains(&table),
             "docs/ARCHITECTURE.md's topic table is not the topology's; it should read:\n{table}"
+        );
+    }
+
+    #[test]
+    fn the_live_view_is_never_waited_for_but_takes_its_room() {
+        for run in every_run().into_iter().filter(|r| r.viewed) {
+            let unviewed = RunKind {
+                viewed: false,
+                ..run
+            };
+            let waits = |run: &RunKind| -> Vec<Vec<(&str, usize)>> {
+                stages(run)
+                    .filter(|s| s.role != Role::View)
+                    .map(|s| waits_for_subscribers(s, run))
+                    .collect()
+            };
+            // The cloud is published for the view alone when the run is not recorded.
+            if run.recorded {
+                assert_eq!(waits(&run), waits(&unviewed), "{run:?}");
+            }
+            let view = stages(&run)
+                .find(|s| s.role == Role::View)
+                .expect("a viewed run has the view");
+            for (topic, readers) in services(&run) {
+                let viewed = view.reads.iter().any(|r| r.topic == topic);
+                assert_eq!(
+                    readers,
+                    subscribers(&run, topic) + usize::from(viewed),
+                    "{topic} in {run:?}"
+                );
+            }
+        }
+        let viewed = RunKind {
+            viewed: true,
+            ..PLAIN
+        };
+        assert!(published(&viewed, PARTICLES));
+        assert_eq!(subscribers(&viewed, PARTICLES), 0, "only the view reads it");
+        assert_eq!(
+            stages(&viewed).map(|s| s.binary).next(),
+            Some("slam-view"),
+            "it starts first, the source last"
         );
     }
 }

@@ -239,3 +239,36 @@ fn a_bag_directory_is_a_rosbag2_replay_with_its_topics_and_frames() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn foxglove_with_or_without_an_address_layers_over_the_file() {
+    let plain = ConfigFile::new("foxglove-plain", "");
+    assert!(!plain.config(&[]).foxglove.enabled);
+    let default = plain.config(&["--foxglove", "--world", "office"]);
+    assert!(
+        default.foxglove.enabled,
+        "a bare --foxglove takes no other option as its address"
+    );
+    assert_eq!(default.foxglove.addr, "127.0.0.1:8765");
+    assert_eq!(default.sim.world, "office");
+    let given = plain.config(&["--foxglove", "0.0.0.0:9000"]);
+    assert_eq!(given.foxglove.addr, "0.0.0.0:9000");
+    let equals = plain.config(&["--foxglove=[::1]:9001"]);
+    assert_eq!(equals.foxglove.addr, "[::1]:9001");
+
+    let file = ConfigFile::new("foxglove-file", "[foxglove]\naddr = '127.0.0.1:9100'\n");
+    assert!(
+        !file.config(&[]).foxglove.enabled,
+        "an address alone turns nothing on"
+    );
+    // A bare --foxglove keeps the file's address; one given replaces it.
+    assert_eq!(file.config(&["--foxglove"]).foxglove.addr, "127.0.0.1:9100");
+    assert_eq!(
+        file.config(&["--foxglove", "127.0.0.1:9200"]).foxglove.addr,
+        "127.0.0.1:9200"
+    );
+    let bad = file.config(&["--foxglove", "nowhere"]);
+    let error = bad.validate().expect_err("not HOST:PORT").to_string();
+    assert!(error.contains("[foxglove] addr (--foxglove)"), "{error}");
+    assert!(error.contains("'nowhere'"), "{error}");
+}

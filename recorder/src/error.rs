@@ -1,6 +1,7 @@
 //! Why a recording failed.
 
-/// An error of the recording: the file could not be created or written.
+/// An error of the recording: the file could not be created or written, or another output
+/// (a live view) could not take a message.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
     #[error("cannot create {path}: {source}")]
@@ -17,5 +18,12 @@ pub enum RecordError {
     Encode {
         topic: &'static str,
         source: serde_json::Error,
+    },
+    /// The output's own error is named `cause` and is part of the message, which `{:#}`
+    /// then does not repeat.
+    #[error("cannot send a message on {topic}: {cause}")]
+    Output {
+        topic: &'static str,
+        cause: Box<dyn std::error::Error + Send + Sync>,
     },
 }

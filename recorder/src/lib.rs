@@ -32,6 +32,7 @@ mod grid;
 mod ground_truth;
 mod map_scene;
 mod mcap_file;
+mod output;
 mod own;
 mod particles;
 mod path;
@@ -57,6 +58,7 @@ pub use grid::{GraphGridMessage, GridMessage, PackedElementField, Vector2, base6
 pub use ground_truth::{GroundTruthMessage, WORLD_FRAME};
 pub use map_scene::{MapScene, MapSceneTopic, MapScenes, corner_entity_id};
 pub use mcap_file::{CHUNK_BYTES, ChannelCount, FLUSH_PERIOD, McapFile};
+pub use output::Output;
 pub use own::MapMessage;
 pub use particles::{ParticlePieces, ParticlesMessage};
 pub use path::{GraphPathMessage, MapPathMessage, PathChunks, PathMessage};

@@ -84,6 +84,11 @@ impl McapFile {
         })
     }
 
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
     fn mcap_error(&self, source: mcap::McapError) -> RecordError {
         RecordError::Mcap {
             path: self.path.display().to_string(),

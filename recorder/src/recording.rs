@@ -1,4 +1,5 @@
-//! A run's recording: each pipeline message to its channel(s).
+//! A run's recording: each pipeline message to its channel(s), written to an [`Output`]
+//! (the MCAP file, or a live view).
 
 use std::path::{Path, PathBuf};
 
@@ -13,6 +14,7 @@ use crate::grid::{GraphGridMessage, GridMessage};
 use crate::ground_truth::GroundTruthMessage;
 use crate::map_scene::MapScenes;
 use crate::mcap_file::{ChannelCount, McapFile};
+use crate::output::Output;
 use crate::own::MapMessage;
 use crate::particles::{ParticlePieces, ParticlesMessage};
 use crate::path::{GraphPathMessage, MapPathMessage, PathChunks, PathMessage};
@@ -46,11 +48,11 @@ pub struct RecordingSummary {
     pub particle_clouds_incomplete: u64,
 }
 
-/// A recording being written. End-of-stream markers carry no data and are not recorded.
+/// A recording being written to `O`. End-of-stream markers carry no data and are not
+/// recorded.
 #[derive(Debug)]
-pub struct Recording {
-    file: McapFile,
-    path: PathBuf,
+pub struct Recording<O: Output = McapFile> {
+    file: O,
     chunks: PathChunks,
     /// The scan frames already placed on the robot (`base_link` → frame).
     sensor_frames: Vec<String>,
@@ -75,9 +77,30 @@ impl Recording {
     /// Creates `dir/run.mcap`.
     pub fn create(dir: &Path) -> Result<Self, RecordError> {
         let path = dir.join(RECORDING_FILE);
-        Ok(Self {
-            file: McapFile::create(&path)?,
-            path,
+        Ok(Self::to(McapFile::create(&path)?))
+    }
+
+    /// Writes the last map snapshot if it was held back, and closes the file with its
+    /// summary and indexes.
+    pub fn finish(mut self) -> Result<RecordingSummary, RecordError> {
+        self.write_held_map()?;
+        let out_of_place = self.chunks.out_of_place;
+        Ok(RecordingSummary {
+            path: self.file.path().to_path_buf(),
+            channels: self.file.finish()?,
+            path_chunks_out_of_place: out_of_place,
+            maps_left_out: self.maps_left_out,
+            final_map_pieces_out_of_place: self.map_path.out_of_place + self.grid.out_of_place,
+            particle_clouds_incomplete: self.particles.incomplete,
+        })
+    }
+}
+
+impl<O: Output> Recording<O> {
+    /// Converts the messages into `output`.
+    pub fn to(output: O) -> Self {
+        Self {
+            file: output,
             chunks: PathChunks::default(),
             sensor_frames: Vec::new(),
             last_map_ns: None,
@@ -90,7 +113,19 @@ impl Recording {
             particles: ParticlePieces::default(),
             map_scenes: MapScenes::default(),
             features_scenes: FeaturesScenes::default(),
-        })
+        }
+    }
+
+    /// The output, to look at its state.
+    pub fn output(&self) -> &O {
+        &self.file
+    }
+
+    /// Has the next scan of each sensor frame put that frame on the robot again
+    /// (`base_link` → frame on `/tf`), as its first one did. A file needs it once; a live
+    /// view says it again now and then for the clients that connected since.
+    pub fn restate_sensor_frames(&mut self) {
+        self.sensor_frames.clear();
     }
 
     /// A scan on `/lidar/scan`; the first scan of a frame other than `base_link` also puts
@@ -284,20 +319,11 @@ impl Recording {
         self.file.write(&make(), header.stamp_ns, header.sent_ns)
     }
 
-    /// Writes the last map snapshot if it was held back, and closes the file with its
-    /// summary and indexes.
-    pub fn finish(mut self) -> Result<RecordingSummary, RecordError> {
+    /// Writes the last map snapshot if it was held back (the run's final map).
+    pub fn write_held_map(&mut self) -> Result<(), RecordError> {
         if let Some((message, stamp_ns, sent_ns)) = self.held_map.take() {
             self.write_map(&message, stamp_ns, sent_ns)?;
         }
-        let out_of_place = self.chunks.out_of_place;
-        Ok(RecordingSummary {
-            channels: self.file.finish()?,
-            path: self.path,
-            path_chunks_out_of_place: out_of_place,
-            maps_left_out: self.maps_left_out,
-            final_map_pieces_out_of_place: self.map_path.out_of_place + self.grid.out_of_place,
-            particle_clouds_incomplete: self.particles.incomplete,
-        })
+        Ok(())
     }
 }

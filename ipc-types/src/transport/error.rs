@@ -22,6 +22,8 @@ use crate::capacity::CapacityError;
 pub enum OpenError {
     #[error("'{0}' is not a valid service name")]
     BadServiceName(String),
+    #[error("'{0}' is not a valid port name")]
+    BadPortName(String),
     #[error("cannot open '{service}'")]
     Failed {
         service: String,

@@ -14,7 +14,7 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 
 use super::discovery::{self, Unmet};
 use super::error::open_failed;
-use super::{Delivery, OpenError, ReceiveError, Wakeable, service_name};
+use super::{Delivery, LOSSY_READER, OpenError, ReceiveError, Wakeable, service_name};
 use crate::message::Message;
 use crate::progress::{self, Direction};
 use crate::topic::Topic;
@@ -22,6 +22,15 @@ use crate::topic::Topic;
 /// How long [`Inlet::try_open`] waits for the publisher of a topic that exists without one:
 /// its creator makes the publisher right after the service.
 const PUBLISHER_WAIT: Duration = Duration::from_secs(2);
+
+/// Who a subscriber is to the topic's publishers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Reader {
+    /// A stage of the pipeline: on a lossless topic the publisher waits for it.
+    Pipeline,
+    /// For the eye only: never waited for (see the transport's module).
+    Lossy,
+}
 
 /// Subscribes to one message type on one topic.
 pub struct Inlet<T: Message> {
@@ -123,14 +132,46 @@ impl<T: Message> Inlet<T> {
     /// Subscribes to `topic`, waiting until its publisher has created it (so the publisher
     /// chooses the delivery). Logs every few seconds while it waits; stops on a signal.
     pub fn open(node: &Node<ipc::Service>, topic: Topic<T>) -> Result<Self, OpenError> {
+        Self::open_as(node, topic, Reader::Pipeline)
+    }
+
+    /// As [`Inlet::open`], for a reader that may lose messages and that no publisher waits
+    /// for: on a lossless topic a message that finds its queue full is not delivered to it
+    /// (to it alone; the pipeline's readers get every one). Its receipts are not counted
+    /// for the launcher. For a live view, never for a stage of the pipeline.
+    pub fn open_lossy(node: &Node<ipc::Service>, topic: Topic<T>) -> Result<Self, OpenError> {
+        Self::open_as(node, topic, Reader::Lossy)
+    }
+
+    fn open_as(
+        node: &Node<ipc::Service>,
+        topic: Topic<T>,
+        reader: Reader,
+    ) -> Result<Self, OpenError> {
         let listener = discovery::listener(node, topic)?;
         let service = wait_for_service(node, topic, &listener)?;
-        Self::subscribe(node, topic, &service, listener)
+        Self::subscribe(node, topic, &service, listener, reader)
     }
 
     /// Subscribes to `topic` if a publisher has created it; `None` when nobody publishes it.
     /// A topic that exists without a publisher gets a moment for it to appear.
     pub fn try_open(node: &Node<ipc::Service>, topic: Topic<T>) -> Result<Option<Self>, OpenError> {
+        Self::try_open_as(node, topic, Reader::Pipeline)
+    }
+
+    /// As [`Inlet::try_open`], lossy (see [`Inlet::open_lossy`]).
+    pub fn try_open_lossy(
+        node: &Node<ipc::Service>,
+        topic: Topic<T>,
+    ) -> Result<Option<Self>, OpenError> {
+        Self::try_open_as(node, topic, Reader::Lossy)
+    }
+
+    fn try_open_as(
+        node: &Node<ipc::Service>,
+        topic: Topic<T>,
+        reader: Reader,
+    ) -> Result<Option<Self>, OpenError> {
         let Some(service) = open_service(node, topic)? else {
             return Ok(None);
         };
@@ -143,7 +184,7 @@ impl<T: Message> Inlet<T> {
             Err(Unmet::Stopped) => return Err(OpenError::Stopped(topic.name().to_owned())),
             Err(Unmet::Failed(source)) => return Err(open_failed(topic.name())(source)),
         }
-        Self::subscribe(node, topic, &service, listener).map(Some)
+        Self::subscribe(node, topic, &service, listener, reader).map(Some)
     }
 
     /// Subscribes and tells the topic's outlets, which may be waiting for their subscribers.
@@ -152,6 +193,7 @@ impl<T: Message> Inlet<T> {
         topic: Topic<T>,
         service: &PubSubFactory<ipc::Service, T, ()>,
         listener: Listener<ipc::Service>,
+        reader: Reader,
     ) -> Result<Self, OpenError> {
         let name = topic.name();
         let delivery = if service.static_config().has_safe_overflow() {
@@ -159,10 +201,13 @@ impl<T: Message> Inlet<T> {
         } else {
             Delivery::Lossless
         };
-        let subscriber = service
-            .subscriber_builder()
-            .create()
-            .map_err(open_failed(name))?;
+        let mut builder = service.subscriber_builder();
+        if reader == Reader::Lossy {
+            let port = PortName::new(LOSSY_READER)
+                .map_err(|_| OpenError::BadPortName(LOSSY_READER.to_owned()))?;
+            builder = builder.name(&port);
+        }
+        let subscriber = builder.create().map_err(open_failed(name))?;
         // Wakes the outlets waiting for their subscribers; the notifier has done its job.
         drop(discovery::announce(node, topic)?);
         Ok(Self {
@@ -170,7 +215,11 @@ impl<T: Message> Inlet<T> {
             delivery,
             subscriber,
             listener,
-            received: progress::counter(Direction::In, name),
+            received: match reader {
+                Reader::Pipeline => progress::counter(Direction::In, name),
+                // Counted for no one: the launcher would take what it loses for a stall.
+                Reader::Lossy => Arc::default(),
+            },
         })
     }
 

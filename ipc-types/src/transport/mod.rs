@@ -30,6 +30,9 @@ pub enum Delivery {
     Latest,
 }
 
+/// The port name of a lossy subscriber (see the module).
+pub const LOSSY_READER: &str = "lossy-reader";
+
 /// Queue depth of a subscriber in [`Delivery::Lossless`] mode: one message in flight per
 /// stage, so the publisher sends the next only when the previous has been taken.
 pub const LOSSLESS_QUEUE: usize = 1;
@@ -48,6 +51,13 @@ pub(crate) fn subscriber_queue(delivery: Delivery, history: usize) -> usize {
         Delivery::Lossless => LOSSLESS_QUEUE.max(history),
         Delivery::Latest => LATEST_QUEUE.max(history),
     }
+}
+
+/// Whether a subscriber of the service is lossy (see the module), from its details.
+fn is_lossy(
+    details: &iceoryx2::service::dynamic_config::publish_subscribe::SubscriberDetails,
+) -> bool {
+    details.subscriber_name.as_str() == LOSSY_READER
 }
 
 fn service_name(name: &str) -> Result<ServiceName, OpenError> {

@@ -15,7 +15,7 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use super::discovery::{self, Unmet};
 use super::error::{open_failed, publish_failed};
 use super::{
-    Delivery, MAX_PUBLISHERS, MAX_SUBSCRIBERS, OpenError, PublishError, service_name,
+    Delivery, MAX_PUBLISHERS, MAX_SUBSCRIBERS, OpenError, PublishError, is_lossy, service_name,
     subscriber_queue,
 };
 use crate::domain::Domain;
@@ -31,7 +31,8 @@ const DEAD_NODE_SWEEP: Duration = Duration::from_millis(500);
 /// Publishes one message type on one topic.
 pub struct Outlet<T: Message> {
     name: &'static str,
-    service: PubSubFactory<ipc::Service, T, ()>,
+    /// Shared with the backpressure handler, which looks up who a full queue belongs to.
+    service: Arc<PubSubFactory<ipc::Service, T, ()>>,
     publisher: Publisher<ipc::Service, T, ()>,
     notifier: Notifier<ipc::Service>,
     /// Woken when a subscriber arrives (see [`Outlet::wait_for_subscribers`]).
@@ -68,6 +69,8 @@ impl<T: Message> Outlet<T> {
             .max_publishers(MAX_PUBLISHERS)
             .open_or_create()
             .map_err(open_failed(name))?;
+        let service = Arc::new(service);
+        let readers = Arc::clone(&service);
         let sweep_domain = domain.clone();
         let publisher = service
             .publisher_builder()
@@ -76,6 +79,10 @@ impl<T: Message> Outlet<T> {
                 Delivery::Latest => BackpressureStrategy::DiscardData,
             })
             .set_backpressure_handler(move |info: &BackpressureInfo| {
+                if is_lossy_receiver(&readers, info.receiver_port_id) {
+                    // A reader for the eye: it gets what fits, and nobody waits for it.
+                    return BackpressureAction::DiscardData;
+                }
                 on_backpressure(&sweep_domain, info)
             })
             .create()
@@ -93,9 +100,15 @@ impl<T: Message> Outlet<T> {
         })
     }
 
-    /// Subscribers connected to the topic now.
+    /// Subscribers connected to the topic now, not counting lossy ones
+    /// ([`crate::Inlet::open_lossy`]): the pipeline's readers.
     pub fn subscriber_count(&self) -> usize {
-        self.service.dynamic_config().number_of_subscribers()
+        let mut count = 0;
+        self.service.dynamic_config().list_subscribers(|details| {
+            count += usize::from(!is_lossy(details));
+            CallbackProgression::Continue
+        });
+        count
     }
 
     /// Waits until at least `count` subscribers are connected, so a lossless stream loses
@@ -174,6 +187,23 @@ const STOP_PATIENCE: Duration = Duration::from_secs(1);
 /// Retries of a blocked send before it sleeps between them, and how long.
 const SPIN_RETRIES: u64 = 64;
 const BACKOFF: Duration = Duration::from_micros(100);
+
+/// Whether the subscriber with port id `receiver` is lossy (see the transport's module).
+/// Looked up only when its queue is full, so a send that finds room costs nothing more.
+fn is_lossy_receiver<T: Message>(
+    service: &PubSubFactory<ipc::Service, T, ()>,
+    receiver: u128,
+) -> bool {
+    let mut lossy = false;
+    service.dynamic_config().list_subscribers(|details| {
+        if details.subscriber_id.value() == receiver {
+            lossy = is_lossy(details);
+            return CallbackProgression::Stop;
+        }
+        CallbackProgression::Continue
+    });
+    lossy
+}
 
 /// A lossless publisher blocked on a full subscriber: give up once stopped (after
 /// [`STOP_PATIENCE`]), and every so often remove dead nodes, since a killed subscriber would

@@ -192,7 +192,7 @@ pub struct Section {
 }
 
 /// Every section, in the order the config file has them.
-pub const SECTIONS: [Section; 13] = [
+pub const SECTIONS: [Section; 14] = [
     run::RUN,
     run::SIM,
     run::SIM_SENSOR,
@@ -206,6 +206,7 @@ pub const SECTIONS: [Section; 13] = [
     slam::LOCALIZE,
     run::GRID,
     run::RECORD,
+    run::FOXGLOVE,
 ];
 
 #[cfg(test)]

@@ -376,3 +376,22 @@ pub const RECORD: Section = Section {
     about: "slam-record: every topic into OUT/run.mcap, for Foxglove.",
     settings: &[set("enabled", "", Range::ANY, "Record the run (--record).")],
 };
+
+pub const FOXGLOVE: Section = Section {
+    table: "foxglove",
+    about: "slam-view: the run served live to Foxglove over its WebSocket protocol.",
+    settings: &[
+        set(
+            "enabled",
+            "",
+            Range::ANY,
+            "Serve the run live (--foxglove).",
+        ),
+        set(
+            "addr",
+            "",
+            Range::words("HOST:PORT that resolves, the port free"),
+            "Where the live view listens (--foxglove ADDR); Foxglove connects to ws://ADDR.",
+        ),
+    ],
+};
