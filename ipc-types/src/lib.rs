@@ -68,7 +68,7 @@ pub use topic::Topic;
 pub use transport::{
     Delivery, Inlet, LATEST_QUEUE, LOSSLESS_QUEUE, LOSSY_READER, OpenError, OpenFailure, Outlet,
     PublishError, PublishFailure, ReceiveError, WaitError, Wake, Wakeable, wait_any,
-    wait_for_topic,
+    wait_for_topic, wait_loop,
 };
 pub use zeroed::Zeroable;
 

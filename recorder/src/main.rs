@@ -6,11 +6,11 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use iceoryx2::prelude::{CallbackProgression, Node, SignalHandlingMode, WaitSetBuilder, ipc};
+use iceoryx2::prelude::{Node, ipc};
 use ipc_types::prelude::*;
-use ipc_types::{Topic, Wakeable};
+use ipc_types::{Topic, Wakeable, wait_loop};
 use recorder::Recording;
-use stage_kit::{say, say_err, shutdown};
+use stage_kit::{say, say_err};
 
 /// Subscribes to every topic of the pipeline (scans, odometry, features, pose estimates, map
 /// snapshots, the final path and, from a simulator, the ground truth and the world's
@@ -212,46 +212,11 @@ fn run(args: Args) -> Result<()> {
     say("ready");
     let wakeables = inlets.wakeables();
 
-    // One wait set for the whole run, not one per wake-up as `wait_any` makes: the recorder
-    // wakes for every message of every topic (five per scan), and making and dropping a wait
-    // set of eight listeners each time cost it more system time than its encoding took.
-    let waitset = WaitSetBuilder::new()
-        .signal_handling_mode(SignalHandlingMode::Disabled)
-        .create::<ipc::Service>()
-        .map_err(|e| anyhow::anyhow!("cannot create a wait set: {e:?}"))?;
-    let mut guards = Vec::with_capacity(wakeables.len());
-    for wakeable in &wakeables {
-        guards.push(
-            waitset
-                .attach_notification(wakeable.wake_listener())
-                .map_err(|e| anyhow::anyhow!("cannot wait on a topic: {e:?}"))?,
-        );
-    }
-
     // The poses end with slam-proc's marker; map-sink's path and grid come after it, once
     // map-sink has written its files.
     let mut finished = false;
     let mut final_map_done = inlets.map_grid.is_none();
-    let ended = |finished: bool, final_map_done: bool| finished && final_map_done;
-    while !ended(finished, final_map_done) && !shutdown::requested() {
-        let woken = waitset.wait_and_process_once_with_timeout(
-            |id| {
-                // Consume the notifications of the topics that woke us, so the next wait
-                // sleeps again; the queues are drained below whoever notified.
-                for (guard, wakeable) in guards.iter().zip(&wakeables) {
-                    if id.has_event_from(guard) {
-                        let _ = wakeable.wake_listener().try_wait(|_| {});
-                    }
-                }
-                CallbackProgression::Continue
-            },
-            WAIT,
-        );
-        if shutdown::requested() {
-            break;
-        }
-        // A signal interrupting the wait surfaces as an error; the flag above tells.
-        woken.map_err(|e| anyhow::anyhow!("cannot wait for messages: {e:?}"))?;
+    wait_loop(&wakeables, WAIT, || -> Result<bool> {
         inlets.drain_all_but_poses(&mut recording)?;
         final_map_done = final_map_done || inlets.drain_grid(&mut recording)?;
         while let Some(sample) = inlets.poses.receive()? {
@@ -263,8 +228,8 @@ fn run(args: Args) -> Result<()> {
             }
             recording.pose(&sample)?;
         }
-    }
-    drop(guards);
+        Ok(!(finished && final_map_done))
+    })?;
     // Whatever is still queued belongs in the file; a few rounds take what was in flight.
     for _ in 0..3 {
         if inlets.drain_all_but_poses(&mut recording)? == 0 {

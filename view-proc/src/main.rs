@@ -6,10 +6,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use iceoryx2::prelude::{CallbackProgression, SignalHandlingMode, WaitSetBuilder, ipc};
-use ipc_types::Domain;
+use ipc_types::{Domain, wait_loop};
 use recorder::Recording;
-use stage_kit::{say, say_err, shutdown};
+use stage_kit::{say, say_err};
 use view_proc::{LiveChannels, ViewAddress, ViewServer};
 
 use crate::inlets::Inlets;
@@ -85,42 +84,13 @@ fn run(args: Args) -> Result<()> {
 /// end of its own: it may have missed any stage's end-of-stream marker).
 fn serve(inlets: &Inlets, view: &mut Recording<LiveChannels>) -> Result<()> {
     let wakeables = inlets.wakeables();
-    // One wait set for the whole run, as the recorder has (see there).
-    let waitset = WaitSetBuilder::new()
-        .signal_handling_mode(SignalHandlingMode::Disabled)
-        .create::<ipc::Service>()
-        .map_err(|e| anyhow::anyhow!("cannot create a wait set: {e:?}"))?;
-    let mut guards = Vec::with_capacity(wakeables.len());
-    for wakeable in &wakeables {
-        guards.push(
-            waitset
-                .attach_notification(wakeable.wake_listener())
-                .map_err(|e| anyhow::anyhow!("cannot wait on a topic: {e:?}"))?,
-        );
-    }
     let mut restated = Instant::now();
-    while !shutdown::requested() {
+    wait_loop(&wakeables, WAIT, || -> Result<bool> {
         if restated.elapsed() >= RESTATE_SENSOR_FRAMES {
             view.restate_sensor_frames();
             restated = Instant::now();
         }
-        let woken = waitset.wait_and_process_once_with_timeout(
-            |id| {
-                for (guard, wakeable) in guards.iter().zip(&wakeables) {
-                    if id.has_event_from(guard) {
-                        let _ = wakeable.wake_listener().try_wait(|_| {});
-                    }
-                }
-                CallbackProgression::Continue
-            },
-            WAIT,
-        );
-        if shutdown::requested() {
-            break;
-        }
-        // A signal interrupting the wait surfaces as an error; the flag above tells.
-        woken.map_err(|e| anyhow::anyhow!("cannot wait for messages: {e:?}"))?;
         inlets.drain(view)?;
-    }
-    Ok(())
+        Ok(true)
+    })
 }

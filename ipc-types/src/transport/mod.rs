@@ -17,7 +17,7 @@ use iceoryx2::prelude::*;
 pub use error::{OpenError, OpenFailure, PublishError, PublishFailure, ReceiveError, WaitError};
 pub use inlet::{Inlet, wait_for_topic};
 pub use outlet::Outlet;
-pub use wait::{Wake, Wakeable, wait_any};
+pub use wait::{Wake, Wakeable, wait_any, wait_loop};
 
 /// How a topic treats a subscriber whose queue is full.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -70,3 +70,48 @@ pub fn wait_any(inlets: &[&dyn Wakeable], timeout: Duration) -> Result<Wake, Wai
     result.map_err(WaitError::Run)?;
     Ok(Wake::Poll)
 }
+
+/// Runs `poll` after every wake-up of `inlets` (a notification, or `timeout` passing) until
+/// it returns `false` or SIGINT or SIGTERM arrives. One wait set serves the whole loop, the
+/// inlets attached once: a reader woken for every message of many topics (the recorder, the
+/// live view) would spend more system time making and dropping attachments, as
+/// [`wait_any`] does at each wait, than on the messages.
+pub fn wait_loop<E: From<WaitError>>(
+    inlets: &[&dyn Wakeable],
+    timeout: Duration,
+    mut poll: impl FnMut() -> Result<bool, E>,
+) -> Result<(), E> {
+    let waitset = WaitSetBuilder::new()
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(WaitError::Create)?;
+    let guards = inlets
+        .iter()
+        .map(|inlet| waitset.attach_notification(inlet.wake_listener()))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(WaitError::Attach)?;
+    while !shutdown::requested() {
+        let woken = waitset.wait_and_process_once_with_timeout(
+            |id| {
+                // Consume the notifications of the inlets that woke us, so the next wait
+                // sleeps again; `poll` drains whoever notified.
+                for (guard, inlet) in guards.iter().zip(inlets) {
+                    if id.has_event_from(guard) {
+                        let _ = inlet.wake_listener().try_wait(|_| {});
+                    }
+                }
+                CallbackProgression::Continue
+            },
+            timeout,
+        );
+        if shutdown::requested() {
+            break;
+        }
+        // A signal interrupting the wait surfaces as an error; the flag above tells.
+        woken.map_err(WaitError::Run)?;
+        if !poll()? {
+            break;
+        }
+    }
+    Ok(())
+}
