@@ -360,3 +360,35 @@ fn a_recording_holds_the_grid_and_final_path_map_sink_wrote_and_the_particle_clo
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A recording holds the back end's grid as it grew, not only its final one: at a sensor's
+/// pace (40 scans a second, 7.5 s) the office run outlasts graph-proc's 5 s grid period.
+#[test]
+fn a_recording_holds_grids_published_while_the_run_went_on() {
+    let out = scratch("record-paced");
+    let args = [
+        "--world", "office", "--frames", "300", "--rate", "40", "--record",
+    ];
+    assert_success(&launch(&domain("record-paced"), &out, &args));
+    let bytes = std::fs::read(out.join("run.mcap")).expect("run.mcap written");
+    let log_times = |topic: &str| -> Vec<u64> {
+        mcap::MessageStream::new(&bytes)
+            .expect("a readable file")
+            .map(|m| m.expect("every message reads"))
+            .filter(|m| m.channel.topic == topic)
+            .map(|m| m.log_time)
+            .collect()
+    };
+    let grids = log_times("/graph/grid");
+    let last_scan = log_times("/lidar/scan")
+        .last()
+        .copied()
+        .expect("scans recorded");
+    assert!(grids.len() >= 2, "{} grids recorded", grids.len());
+    assert!(
+        grids[0] < last_scan,
+        "the first grid ({}) came before the last scan ({last_scan})",
+        grids[0]
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
