@@ -15,7 +15,7 @@
 use std::path::Path;
 
 use crate::topic::{self, Topic};
-use crate::transport::{Delivery, MAX_SUBSCRIBERS, subscriber_queue};
+use crate::transport::{Delivery, MAX_SUBSCRIBERS, lossy_queue, subscriber_queue};
 
 /// Where iceoryx2 keeps its shared memory.
 pub const SHM_DIR: &str = "/dev/shm";
@@ -42,11 +42,38 @@ pub fn sample_slots(delivery: Delivery, history: usize, subscribers: usize) -> u
     (subscribers.min(MAX_SUBSCRIBERS) * per_subscriber + history + PUBLISHER_MAX_LOANED) as u64
 }
 
-/// Bytes of one publisher's data segment on a topic of `T` that `subscribers` subscribers
-/// can have written.
-pub fn segment_bytes<T>(delivery: Delivery, history: usize, subscribers: usize) -> u64 {
+/// Sample slots `lossy` lossy subscribers of a topic of `T` can have in use together,
+/// each with its deeper queue ([`crate::Inlet::open_lossy`]).
+pub fn lossy_slots<T>(delivery: Delivery, history: usize, lossy: usize) -> u64 {
+    (lossy * (lossy_queue::<T>(delivery, history) + SUBSCRIBER_MAX_BORROWED)) as u64
+}
+
+/// Bytes of one publisher's data segment on a topic of `T` that `subscribers` pipeline
+/// subscribers and `lossy` lossy ones can have written.
+pub fn segment_bytes<T>(delivery: Delivery, history: usize, readers: Readers) -> u64 {
     let slot = std::mem::size_of::<T>() as u64 + SAMPLE_OVERHEAD;
-    sample_slots(delivery, history, subscribers) * slot
+    (sample_slots(delivery, history, readers.pipeline)
+        + lossy_slots::<T>(delivery, history, readers.lossy))
+        * slot
+}
+
+/// The subscribers of one topic in a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Readers {
+    /// Stages of the pipeline.
+    pub pipeline: usize,
+    /// Lossy readers (the live view).
+    pub lossy: usize,
+}
+
+impl Readers {
+    /// `n` stages of the pipeline and no lossy reader.
+    pub const fn stages(n: usize) -> Self {
+        Self {
+            pipeline: n,
+            lossy: 0,
+        }
+    }
 }
 
 /// One service of a run and the bytes its publisher's segment takes.
@@ -60,11 +87,11 @@ fn service<T>(
     topic: Topic<T>,
     delivery: Delivery,
     history: usize,
-    subscribers: usize,
+    readers: Readers,
 ) -> ServiceSize {
     ServiceSize {
         topic: topic.name(),
-        bytes: segment_bytes::<T>(delivery, history, subscribers),
+        bytes: segment_bytes::<T>(delivery, history, readers),
     }
 }
 
@@ -74,19 +101,15 @@ fn service<T>(
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunShape {
     pub delivery: Delivery,
-    pub topics: Vec<(&'static str, usize)>,
+    pub topics: Vec<(&'static str, Readers)>,
 }
 
-/// The service of the topic named `topic_name` with `subscribers` readers, as the stages
+/// The service of the topic named `topic_name` with `readers`, as the stages
 /// create it: the histories of their `Outlet::create` calls, the paths and the grid (sent
 /// once, at the end) always lossless.
 /// `None` for a name that is no topic of [`crate::topic`].
-pub fn service_size(
-    topic_name: &str,
-    delivery: Delivery,
-    subscribers: usize,
-) -> Option<ServiceSize> {
-    let (d, n) = (delivery, subscribers);
+pub fn service_size(topic_name: &str, delivery: Delivery, readers: Readers) -> Option<ServiceSize> {
+    let (d, n) = (delivery, readers);
     Some(match topic_name {
         t if t == topic::SCAN.name() => service(topic::SCAN, d, 0, n),
         t if t == topic::ODOMETRY.name() => service(topic::ODOMETRY, d, 0, n),
@@ -110,7 +133,7 @@ pub fn pipeline_services(shape: &RunShape) -> Vec<ServiceSize> {
     shape
         .topics
         .iter()
-        .filter_map(|&(name, subscribers)| service_size(name, shape.delivery, subscribers))
+        .filter_map(|&(name, readers)| service_size(name, shape.delivery, readers))
         .collect()
 }
 
@@ -229,7 +252,10 @@ mod tests {
             topics: TOPICS
                 .into_iter()
                 .filter(|&t| t != topic::ODOMETRY.name())
-                .map(|t| (t, 1 + usize::from(t == topic::SCAN.name()) + extra))
+                .map(|t| {
+                    let n = 1 + usize::from(t == topic::SCAN.name()) + extra;
+                    (t, Readers::stages(n))
+                })
                 .collect(),
         }
     }
@@ -264,12 +290,28 @@ mod tests {
     }
 
     #[test]
+    fn a_lossy_reader_takes_room_for_its_deeper_queue() {
+        let plain = Readers::stages(2);
+        let viewed = Readers { lossy: 1, ..plain };
+        let scans = |readers| segment_bytes::<LaserScan>(Delivery::Lossless, 0, readers);
+        let slot = std::mem::size_of::<LaserScan>() as u64 + SAMPLE_OVERHEAD;
+        let queue = lossy_queue::<LaserScan>(Delivery::Lossless, 0);
+        assert!(queue > 1, "{queue}");
+        assert_eq!(scans(viewed) - scans(plain), (queue as u64 + 2) * slot);
+        // About 2 MiB a topic, whatever its message's size.
+        assert!((1 << 20..3 << 20).contains(&(queue as u64 * slot)));
+    }
+
+    #[test]
     fn every_topic_has_a_size_and_nothing_else_has() {
         for name in TOPICS {
-            let size = service_size(name, Delivery::Lossless, 1).expect("a topic");
+            let size = service_size(name, Delivery::Lossless, Readers::stages(1)).expect("a topic");
             assert_eq!(size.topic, name);
         }
-        assert_eq!(service_size("lidar/scans", Delivery::Lossless, 1), None);
+        assert_eq!(
+            service_size("lidar/scans", Delivery::Lossless, Readers::stages(1)),
+            None
+        );
     }
 
     #[test]
@@ -277,12 +319,12 @@ mod tests {
         let shape = RunShape {
             delivery: Delivery::Lossless,
             topics: vec![
-                (topic::SCAN.name(), 2),
-                (topic::ODOMETRY.name(), 1),
-                (topic::FEATURES.name(), 1),
-                (topic::POSE.name(), 1),
-                (topic::MAP.name(), 1),
-                (topic::PATH.name(), 1),
+                (topic::SCAN.name(), Readers::stages(2)),
+                (topic::ODOMETRY.name(), Readers::stages(1)),
+                (topic::FEATURES.name(), Readers::stages(1)),
+                (topic::POSE.name(), Readers::stages(1)),
+                (topic::MAP.name(), Readers::stages(1)),
+                (topic::PATH.name(), Readers::stages(1)),
             ],
         };
         let need = pipeline_bytes(&shape);

@@ -58,6 +58,8 @@ pub fn sigbus_explanation() -> String {
 mod tests {
     use super::*;
 
+    use ipc_types::shm::Readers;
+
     use crate::config::SourceKind;
 
     fn topics(shape: &RunShape) -> Vec<&str> {
@@ -92,12 +94,23 @@ mod tests {
         config.replay.rate = 1.0;
         let shape = run_shape(&config);
         assert_eq!(shape.delivery, Delivery::Latest);
-        assert!(shape.topics.contains(&("robot/odometry", 1)));
+        assert!(
+            shape
+                .topics
+                .contains(&("robot/odometry", Readers::stages(1)))
+        );
         config.record.enabled = true;
-        assert!(run_shape(&config).topics.contains(&("robot/odometry", 2)));
+        assert!(
+            run_shape(&config)
+                .topics
+                .contains(&("robot/odometry", Readers::stages(2)))
+        );
         // On a saved map, slam-proc reads the scans too (and mapping, so does graph-proc).
         config.map = Some("runs/office".into());
-        assert_eq!(run_shape(&config).topics[0], ("lidar/scan", 5));
+        assert_eq!(
+            run_shape(&config).topics[0],
+            ("lidar/scan", Readers::stages(5))
+        );
     }
 
     #[test]
@@ -112,7 +125,10 @@ mod tests {
             config.record.enabled = true;
             let shape = run_shape(&config);
             for topic in ["slam/particles", "map/path", "map/grid"] {
-                assert!(shape.topics.contains(&(topic, 1)), "{topic}");
+                assert!(
+                    shape.topics.contains(&(topic, Readers::stages(1))),
+                    "{topic}"
+                );
             }
             let own: u64 = shm::pipeline_services(&shape)
                 .iter()
@@ -121,6 +137,36 @@ mod tests {
                 .sum();
             assert!(own < 4 << 20, "{own} bytes for the recording's own topics");
             assert!(shm::pipeline_bytes(&shape) < plain * 2, "{rate}");
+        }
+    }
+
+    #[test]
+    fn the_live_view_reads_lossy_with_room_for_its_deeper_queues() {
+        for rate in [0.0, 40.0] {
+            let mut config = RunConfig::default();
+            config.sim.rate = rate;
+            let plain = run_shape(&config);
+            let mut viewed = config.clone();
+            viewed.foxglove.enabled = true;
+            let viewed = run_shape(&viewed);
+            let scans = &viewed.topics[0];
+            assert_eq!(scans.0, "lidar/scan");
+            assert_eq!(scans.1.lossy, 1);
+            assert_eq!(scans.1.pipeline, plain.topics[0].1.pipeline);
+            config.record.enabled = true;
+            let recorded = run_shape(&config);
+            let more = |shape| shm::pipeline_bytes(shape) - shm::pipeline_bytes(&plain);
+            if rate == 0.0 {
+                // About 2 MiB for each of the topics it reads, where a stage has one message.
+                assert!(
+                    (4 << 20..24 << 20).contains(&more(&viewed)),
+                    "{}",
+                    more(&viewed)
+                );
+            } else {
+                // In real time a stage's queue is as deep: no more than the recorder takes.
+                assert!(more(&viewed) <= more(&recorded));
+            }
         }
     }
 

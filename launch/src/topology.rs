@@ -4,6 +4,7 @@
 //! in /dev/shm ([`crate::shm_room`]); docs/ARCHITECTURE.md's topic table is checked against
 //! it. A stage's own main opens the same topics; the table is what the launcher knows of it.
 
+use ipc_types::shm::Readers;
 use ipc_types::topic;
 
 use crate::config::{RunConfig, SourceKind};
@@ -420,13 +421,20 @@ fn readers<'a>(run: &'a RunKind, topic: &'a str) -> impl Iterator<Item = &'stati
     })
 }
 
-/// The topics the run publishes, each with its number of readers, lossy ones too (each
-/// takes room in the publisher's shared memory): the services it has.
-pub fn services(run: &RunKind) -> Vec<(&'static str, usize)> {
+/// The topics the run publishes, each with its readers, lossy ones too (each takes room in
+/// the publisher's shared memory): the services it has.
+pub fn services(run: &RunKind) -> Vec<(&'static str, Readers)> {
     TOPICS
         .iter()
         .filter(|topic| published(run, topic))
-        .map(|&topic| (topic, readers(run, topic).count()))
+        .map(|&topic| {
+            let lossy = readers(run, topic)
+                .filter(|stage| stage.role.reads_lossy())
+                .count();
+            let all = readers(run, topic).count();
+            let pipeline = all - lossy;
+            (topic, Readers { pipeline, lossy })
+        })
         .collect()
 }
 
@@ -619,9 +627,23 @@ mod tests {
                 "the source starts last"
             );
             for (topic, readers) in services(&run) {
-                assert!(readers > 0, "{topic} has no reader in {run:?}");
+                assert!(
+                    readers.pipeline + readers.lossy > 0,
+                    "{topic} has no reader in {run:?}"
+                );
             }
         }
+    }
+
+    /// [`services`] with the number of (pipeline) readers of each topic.
+    fn readers_of(run: &RunKind) -> Vec<(&'static str, usize)> {
+        services(run)
+            .into_iter()
+            .map(|(topic, readers)| {
+                assert_eq!(readers.lossy, 0, "{topic}");
+                (topic, readers.pipeline)
+            })
+            .collect()
     }
 
     #[test]
@@ -647,7 +669,7 @@ mod tests {
             ]
         );
         assert_eq!(
-            services(&PLAIN),
+            readers_of(&PLAIN),
             [
                 (SCAN, 3),
                 (GROUND_TRUTH, 1),
@@ -674,9 +696,9 @@ mod tests {
             ]
         );
         assert!(
-            services(&recorded)
+            readers_of(&recorded)
                 .iter()
-                .zip(services(&PLAIN))
+                .zip(readers_of(&PLAIN))
                 .all(|(with, without)| with.0 == without.0 && with.1 == without.1 + 1),
             "the recorder reads every topic"
         );
@@ -691,7 +713,7 @@ mod tests {
             [("slam-proc", 1), ("feature-proc", 1), ("lidar-replay", 3)]
         );
         assert_eq!(
-            services(&localize),
+            readers_of(&localize),
             [(SCAN, 3), (FEATURES, 1), (POSE, 1), (MAP, 1), (PATH, 1)]
         );
         let odometry = RunKind {
@@ -699,14 +721,14 @@ mod tests {
             ..PLAIN
         };
         assert_eq!(counts(&odometry), counts(&PLAIN));
-        let with: Vec<_> = services(&odometry);
-        assert_eq!(with.len(), services(&PLAIN).len() + 1);
+        let with: Vec<_> = readers_of(&odometry);
+        assert_eq!(with.len(), readers_of(&PLAIN).len() + 1);
         assert!(with.contains(&(ODOMETRY, 1)), "feature-proc reads it");
         let recorded_odometry = RunKind {
             recorded: true,
             ..odometry
         };
-        assert!(services(&recorded_odometry).contains(&(ODOMETRY, 2)));
+        assert!(readers_of(&recorded_odometry).contains(&(ODOMETRY, 2)));
     }
 
     #[test]
@@ -821,7 +843,12 @@ mod tests {
     fn every_topic_has_a_service_size() {
         for topic in TOPICS {
             assert!(
-                ipc_types::shm::service_size(topic, ipc_types::Delivery::Lossless, 1).is_some(),
+                ipc_types::shm::service_size(
+                    topic,
+                    ipc_types::Delivery::Lossless,
+                    Readers::stages(1)
+                )
+                .is_some(),
                 "{topic}"
             );
         }
@@ -862,11 +889,11 @@ mod tests {
                 .expect("a viewed run has the view");
             for (topic, readers) in services(&run) {
                 let viewed = view.reads.iter().any(|r| r.topic == topic);
-                assert_eq!(
-                    readers,
-                    subscribers(&run, topic) + usize::from(viewed),
-                    "{topic} in {run:?}"
-                );
+                let expected = Readers {
+                    pipeline: subscribers(&run, topic),
+                    lossy: usize::from(viewed),
+                };
+                assert_eq!(readers, expected, "{topic} in {run:?}");
             }
         }
         let viewed = RunKind {

@@ -1,7 +1,8 @@
-//! `slam-launch --foxglove` (issue 48): a client of Foxglove's WebSocket protocol connects to
-//! a live office run, sees the channels of the scan, the frames, the grid and the paths
+//! `slam-launch --foxglove` (issue 48): clients of Foxglove's WebSocket protocol, one
+//! offering it under the SDK's name and one under its first name, connect to a live office
+//! run; each sees the channels of the scan, the frames, the grid and the paths
 //! advertised under Foxglove's schemas, subscribes to the scan and receives scans while the
-//! run goes on; Ctrl-C ends the run and the view within seconds. A lockstep run with the
+//! run goes on, and one receives a whole grid of the back end's; Ctrl-C ends the run and the view within seconds. A lockstep run with the
 //! view and no client is the same run, bit for bit; a port in use is refused before a run
 //! starts.
 
@@ -25,8 +26,10 @@ const SCHEMAS: [&str; 4] = [
     "foxglove.Grid",
     "foxglove.PosesInFrame",
 ];
-/// What the Foxglove app offers; the SDK's server speaks the second.
-const SUBPROTOCOLS: &str = "foxglove.websocket.v1, foxglove.sdk.v1";
+/// The protocol's name in the SDK (the Foxglove app offers it).
+const SDK_NAME: &str = "foxglove.sdk.v1";
+/// Its first name, the only one older Foxglove apps and Lichtblick offer.
+const FIRST_NAME: &str = "foxglove.websocket.v1";
 
 /// A port free now on the loopback (the system's choice), for the view to listen on.
 fn free_port() -> u16 {
@@ -34,10 +37,11 @@ fn free_port() -> u16 {
     listener.local_addr().expect("its address").port()
 }
 
-/// Connects to the view at `addr` once it listens, offering [`SUBPROTOCOLS`]; panics when
-/// the launcher ends first or `limit` passes.
+/// Connects to the view at `addr` once it listens, offering the subprotocol `name`, and
+/// checks that the view chose it; panics when the launcher ends first or `limit` passes.
 fn connect(
     addr: &str,
+    name: &'static str,
     launcher: &mut std::process::Child,
     limit: Duration,
 ) -> WebSocket<TcpStream> {
@@ -61,14 +65,13 @@ fn connect(
         let mut request = format!("ws://{addr}")
             .into_client_request()
             .expect("a request");
-        request.headers_mut().insert(
-            "Sec-WebSocket-Protocol",
-            HeaderValue::from_static(SUBPROTOCOLS),
-        );
+        request
+            .headers_mut()
+            .insert("Sec-WebSocket-Protocol", HeaderValue::from_static(name));
         let (socket, response) = tungstenite::client(request, stream).expect("the handshake");
         assert_eq!(
             response.headers().get("Sec-WebSocket-Protocol"),
-            Some(&HeaderValue::from_static("foxglove.sdk.v1"))
+            Some(&HeaderValue::from_static(name))
         );
         return socket;
     }
@@ -126,36 +129,73 @@ fn read_message_data(socket: &mut WebSocket<TcpStream>, id: u32, limit: Duration
     }
 }
 
-#[test]
-fn a_foxglove_client_watches_a_live_office_run_until_ctrl_c() {
-    let addr = format!("127.0.0.1:{}", free_port());
-    let out = scratch("live-view");
-    let args = ["--world", "office", "--rate", "40", "--foxglove", &addr];
-    let mut launcher = spawn_launch(&domain("live-view"), &out, &args, Stdio::piped());
-    let console = read_console(&mut launcher);
-    let mut socket = connect(&addr, &mut launcher, LIMIT);
-
-    let channels = read_advertised(&mut socket, LIMIT);
+/// Waits for the scan channel among the advertised ones, subscribes to it as subscription
+/// `id` and reads two scans, so the second came while the client was subscribed; returns
+/// the channels advertised.
+fn watch_scans(socket: &mut WebSocket<TcpStream>, id: u32) -> Vec<(u64, String, String)> {
+    let channels = read_advertised(socket, LIMIT);
     let scan = channels
         .iter()
         .find(|(_, topic, schema)| topic == "/lidar/scan" && schema == "foxglove.LaserScan")
         .unwrap_or_else(|| panic!("no scan channel in {channels:?}"));
     let subscribe = serde_json::json!({
         "op": "subscribe",
-        "subscriptions": [{"id": 7, "channelId": scan.0}],
+        "subscriptions": [{"id": id, "channelId": scan.0}],
     });
     socket
         .send(Message::text(subscribe.to_string()))
         .expect("subscribe");
-    // Two scans, so the second came while the client was subscribed and the run went on.
     for _ in 0..2 {
-        let payload = read_message_data(&mut socket, 7, LIMIT);
+        let payload = read_message_data(socket, id, LIMIT);
         let scan: serde_json::Value = serde_json::from_slice(&payload).expect("a JSON scan");
         assert!(
             !scan["ranges"].as_array().expect("ranges").is_empty(),
             "{scan}"
         );
         assert_eq!(scan["frame_id"], "laser", "the recording's frame");
+    }
+    channels
+}
+
+/// Subscribes to the back end's grid as subscription `id` and waits for one, whole.
+fn watch_grid(socket: &mut WebSocket<TcpStream>, channels: &[(u64, String, String)], id: u32) {
+    let grid = channels
+        .iter()
+        .find(|(_, topic, schema)| topic == "/graph/grid" && schema == "foxglove.Grid")
+        .unwrap_or_else(|| panic!("no grid channel in {channels:?}"));
+    let subscribe = serde_json::json!({
+        "op": "subscribe",
+        "subscriptions": [{"id": id, "channelId": grid.0}],
+    });
+    socket
+        .send(Message::text(subscribe.to_string()))
+        .expect("subscribe");
+    let payload = read_message_data(socket, id, LIMIT);
+    let grid: serde_json::Value = serde_json::from_slice(&payload).expect("a JSON grid");
+    let rows = grid["row_count"].as_u64().expect("rows");
+    let row_stride = grid["row_stride"].as_u64().expect("a row stride");
+    let data = grid["data"].as_str().expect("base64 cells");
+    let padding = data.bytes().rev().take_while(|&b| b == b'=').count() as u64;
+    // Every row of cells is there (base64: 3 bytes in 4 characters).
+    assert!(rows > 0 && row_stride > 0, "{rows} {row_stride}");
+    assert_eq!(data.len() as u64 / 4 * 3 - padding, rows * row_stride);
+}
+
+#[test]
+fn foxglove_clients_watch_a_live_office_run_until_ctrl_c() {
+    let addr = format!("127.0.0.1:{}", free_port());
+    let out = scratch("live-view");
+    let args = ["--world", "office", "--rate", "40", "--foxglove", &addr];
+    let mut launcher = spawn_launch(&domain("live-view"), &out, &args, Stdio::piped());
+    let console = read_console(&mut launcher);
+    // Today's Foxglove app, and an older app or Lichtblick, at once.
+    let mut sockets = [SDK_NAME, FIRST_NAME].map(|name| connect(&addr, name, &mut launcher, LIMIT));
+    for (socket, id) in sockets.iter_mut().zip([7, 8]) {
+        let channels = watch_scans(socket, id);
+        if id == 7 {
+            // The back end publishes its grid every few seconds of the run.
+            watch_grid(socket, &channels, 9);
+        }
     }
     assert!(
         launcher.try_wait().expect("poll slam-launch").is_none(),
@@ -174,14 +214,16 @@ fn a_foxglove_client_watches_a_live_office_run_until_ctrl_c() {
     assert_eq!(status.code(), Some(130), "interrupted\n{console}");
     assert!(!console.contains("killed"), "{console}");
     assert!(!console.contains("slam-view died"), "{console}");
-    // The view closed the connection as it stopped.
-    let closed = loop {
-        match socket.read() {
-            Ok(Message::Close(_)) | Err(_) => break stopped_at.elapsed(),
-            Ok(_) => {}
-        }
-    };
-    assert!(closed < STOP_LIMIT, "the connection stayed open {closed:?}");
+    // The view closed the connections as it stopped.
+    for socket in &mut sockets {
+        let closed = loop {
+            match socket.read() {
+                Ok(Message::Close(_)) | Err(_) => break stopped_at.elapsed(),
+                Ok(_) => {}
+            }
+        };
+        assert!(closed < STOP_LIMIT, "a connection stayed open {closed:?}");
+    }
     let log = std::fs::read_to_string(out.join("logs/slam-view.log")).expect("slam-view's log");
     assert!(log.contains("messages served"), "{log}");
 }

@@ -11,6 +11,10 @@
 //! ([`LiveChannels`], a [`recorder::Output`] that logs on the Foxglove SDK's channels
 //! instead of writing a file).
 //!
+//! Clients may offer the protocol under its first name, `foxglove.websocket.v1` (older
+//! Foxglove apps, Lichtblick) or the SDK's, `foxglove.sdk.v1`: the view listens itself and
+//! renames the subprotocol in the handshake for the first ([`relay`], [`subprotocol`]).
+//!
 //! The view never holds the pipeline up: it reads lossy ([`ipc_types::Inlet::open_lossy`]:
 //! no publisher waits for it, and in lockstep it loses what arrives while it is busy), it
 //! encodes a message only while a client subscribes to its channel, and a slow client loses
@@ -19,7 +23,9 @@
 mod address;
 mod error;
 mod live;
+mod relay;
 mod server;
+mod subprotocol;
 
 pub use address::{DEFAULT_ADDRESS, ViewAddress};
 pub use error::ViewError;

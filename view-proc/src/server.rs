@@ -1,13 +1,15 @@
 //! The WebSocket server the Foxglove app connects to.
 
+use std::net::{Ipv4Addr, SocketAddr, TcpListener};
 use std::sync::Arc;
 use std::sync::mpsc;
 use std::time::Duration;
 
-use foxglove::{Context, FoxgloveError, WebSocketServer, WebSocketServerHandle};
+use foxglove::{Context, WebSocketServer, WebSocketServerHandle};
 
 use crate::address::ViewAddress;
 use crate::error::ViewError;
+use crate::relay;
 
 /// How long a stopping server has to close its clients' connections cleanly; the process
 /// ends after it all the same, so a stuck client cannot hold up the end of a run.
@@ -26,27 +28,30 @@ pub struct ViewServer {
 }
 
 impl ViewServer {
-    /// Listens on `address` (its own tokio runtime, in threads of its own).
+    /// Listens on `address`: the view's front door ([`crate::relay`]) there, the SDK's
+    /// server (its own tokio runtime, in threads of its own) on a loopback port behind it.
     pub fn start(address: &ViewAddress) -> Result<Self, ViewError> {
-        // The port 0 of a bind is left to the system; the host must name an address.
-        address.resolve()?;
+        let listener = TcpListener::bind(address.resolve()?.as_slice())
+            .map_err(|source| address.listen_error(source))?;
+        let door = listener
+            .local_addr()
+            .map_err(|source| address.listen_error(source))?;
         let context = Context::new();
         let handle = WebSocketServer::new()
             .name("slam-view")
-            .bind(address.host.clone(), address.port)
+            .bind(Ipv4Addr::LOCALHOST.to_string(), 0)
             .context(&context)
             .message_backlog_size(CLIENT_BACKLOG)
             .start_blocking()
-            .map_err(|source| match source {
-                FoxgloveError::Bind(io) => address.listen_error(io),
-                cause => ViewError::Server {
-                    address: address.to_string(),
-                    cause,
-                },
+            .map_err(|cause| ViewError::Server {
+                address: address.to_string(),
+                cause,
             })?;
+        let server = SocketAddr::from((Ipv4Addr::LOCALHOST, handle.port()));
+        relay::start(listener, server).map_err(|source| address.listen_error(source))?;
         let address = ViewAddress {
             host: address.host.clone(),
-            port: handle.port(),
+            port: door.port(),
         };
         Ok(Self {
             context,

@@ -14,7 +14,10 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 
 use super::discovery::{self, Unmet};
 use super::error::open_failed;
-use super::{Delivery, LOSSY_READER, OpenError, ReceiveError, Wakeable, service_name};
+use super::{
+    Delivery, LOSSY_READER, OpenError, ReceiveError, Wakeable, lossy_queue, service_name,
+    subscriber_queue,
+};
 use crate::message::Message;
 use crate::progress::{self, Direction};
 use crate::topic::Topic;
@@ -201,11 +204,16 @@ impl<T: Message> Inlet<T> {
         } else {
             Delivery::Lossless
         };
+        let history = service.static_config().history_size();
         let mut builder = service.subscriber_builder();
         if reader == Reader::Lossy {
             let port = PortName::new(LOSSY_READER)
                 .map_err(|_| OpenError::BadPortName(LOSSY_READER.to_owned()))?;
-            builder = builder.name(&port);
+            builder = builder
+                .name(&port)
+                .buffer_size(lossy_queue::<T>(delivery, history));
+        } else {
+            builder = builder.buffer_size(subscriber_queue(delivery, history));
         }
         let subscriber = builder.create().map_err(open_failed(name))?;
         // Wakes the outlets waiting for their subscribers; the notifier has done its job.

@@ -45,12 +45,28 @@ pub(crate) const MAX_SUBSCRIBERS: usize = 16;
 /// Publishers a topic may have at once: one in the pipeline, the rest for tools and tests.
 pub(crate) const MAX_PUBLISHERS: usize = 4;
 
-/// The queue depth of each subscriber of a topic with this delivery and history.
+/// Bytes a lossy reader's queue may hold on one topic. A grid, a path or a particle cloud
+/// comes in pieces, and a piece lost loses the whole: this much lets the live view take the
+/// pieces that come while it encodes something else.
+const LOSSY_QUEUE_BYTES: usize = 2 << 20;
+/// The deepest queue of a lossy reader, for small messages: a few seconds of poses.
+const MAX_LOSSY_QUEUE: usize = 64;
+
+/// The queue depth of each pipeline subscriber of a topic with this delivery and history.
 pub(crate) fn subscriber_queue(delivery: Delivery, history: usize) -> usize {
     match delivery {
         Delivery::Lossless => LOSSLESS_QUEUE.max(history),
         Delivery::Latest => LATEST_QUEUE.max(history),
     }
+}
+
+/// The queue depth of a lossy subscriber ([`Inlet::open_lossy`]) of a topic of `T`: what
+/// fits in [`LOSSY_QUEUE_BYTES`], at most [`MAX_LOSSY_QUEUE`], no less than a pipeline
+/// subscriber's. It is the service's largest queue: every topic's service allows it.
+pub(crate) fn lossy_queue<T>(delivery: Delivery, history: usize) -> usize {
+    (LOSSY_QUEUE_BYTES / std::mem::size_of::<T>().max(1))
+        .clamp(1, MAX_LOSSY_QUEUE)
+        .max(subscriber_queue(delivery, history))
 }
 
 /// Whether a subscriber of the service is lossy (see the module), from its details.

@@ -15,8 +15,8 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use super::discovery::{self, Unmet};
 use super::error::{open_failed, publish_failed};
 use super::{
-    Delivery, MAX_PUBLISHERS, MAX_SUBSCRIBERS, OpenError, PublishError, is_lossy, service_name,
-    subscriber_queue,
+    Delivery, MAX_PUBLISHERS, MAX_SUBSCRIBERS, OpenError, PublishError, is_lossy, lossy_queue,
+    service_name,
 };
 use crate::domain::Domain;
 use crate::header::{FLAG_END_OF_STREAM, now_ns};
@@ -58,7 +58,8 @@ impl<T: Message> Outlet<T> {
         history: usize,
     ) -> Result<Self, OpenError> {
         let name = topic.name();
-        let queue = subscriber_queue(delivery, history);
+        // Pipeline subscribers ask for their queue; a lossy one may take a deeper one.
+        let queue = lossy_queue::<T>(delivery, history);
         let service = node
             .service_builder(&service_name(name)?)
             .publish_subscribe::<T>()

@@ -180,7 +180,7 @@ impl Plan {
             let pose = transform.planar()?;
             poses.push(OdometryRecord {
                 line: index,
-                stamp_ns: transform.header.stamp_ns,
+                stamp_ns: stamp_or_log_time(transform.header.stamp_ns, message),
                 x: pose.x,
                 y: pose.y,
                 yaw: pose.yaw,

@@ -243,6 +243,16 @@ fn topics_are_chosen_or_the_refusal_lists_them() {
         choose(&topics, &from_tf).unwrap().1,
         Some(OdometryStream::Tf)
     );
+    // An Odometry topic named for odometry read from /tf is a contradiction, not a hint.
+    let both = BagOptions {
+        odometry_topic: Some("/odom".into()),
+        ..from_tf.clone()
+    };
+    assert_eq!(
+        choose(&topics, &both).unwrap_err(),
+        "--odom-topic /odom names a nav_msgs/msg/Odometry topic, but --odom-source tf reads \
+         the odometry from /tf: give one or the other"
+    );
     let wrong = BagOptions {
         scan_topic: Some("/odom".into()),
         ..BagOptions::default()
@@ -299,6 +309,31 @@ fn odometry_of_another_frame_is_counted_and_skipped() {
         panic!("another frame's odometry decoded");
     };
     assert_eq!(error.category(), "/odom: odometry of another frame");
+
+    // Odometry on /tf never stamped: the bag's time too.
+    let from_tf = Plan {
+        odometry: Some(OdometryStream::Tf),
+        ..plan
+    };
+    let tf = RawMessage {
+        channel: std::sync::Arc::new(Channel {
+            topic: TF_TOPIC.into(),
+            type_name: TF_MESSAGE.into(),
+            encoding: "cdr".into(),
+        }),
+        log_time_ns: 9,
+        data: tf_at(0, 1.5),
+    };
+    let Ok(Decoded::Tf(records)) = from_tf.decode(5, &tf) else {
+        panic!("/tf not decoded");
+    };
+    assert_eq!(
+        records
+            .iter()
+            .map(|r| (r.stamp_ns, r.x))
+            .collect::<Vec<_>>(),
+        [(9, 1.5)]
+    );
 }
 
 #[test]

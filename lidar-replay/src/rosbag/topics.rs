@@ -87,6 +87,12 @@ fn choose_odometry(
             "--odom-topic",
         )
     };
+    if let (OdometryFrom::Tf, Some(topic)) = (options.odometry, &options.odometry_topic) {
+        return Err(format!(
+            "--odom-topic {topic} names a {ODOMETRY} topic, but --odom-source tf reads the \
+             odometry from {TF_TOPIC}: give one or the other"
+        ));
+    }
     match options.odometry {
         OdometryFrom::Odom => {
             let topic = odometry_topic()?.ok_or_else(|| {
