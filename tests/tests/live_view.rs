@@ -129,22 +129,32 @@ fn read_message_data(socket: &mut WebSocket<TcpStream>, id: u32, limit: Duration
     }
 }
 
+/// Subscribes to the advertised channel of `(topic, schema)` as subscription `id`.
+fn subscribe(
+    socket: &mut WebSocket<TcpStream>,
+    channels: &[(u64, String, String)],
+    (topic, schema): (&str, &str),
+    id: u32,
+) {
+    let channel = channels
+        .iter()
+        .find(|(_, t, s)| t == topic && s == schema)
+        .unwrap_or_else(|| panic!("no {topic} of {schema} in {channels:?}"));
+    let subscribe = serde_json::json!({
+        "op": "subscribe",
+        "subscriptions": [{"id": id, "channelId": channel.0}],
+    });
+    socket
+        .send(Message::text(subscribe.to_string()))
+        .expect("subscribe");
+}
+
 /// Waits for the scan channel among the advertised ones, subscribes to it as subscription
 /// `id` and reads two scans, so the second came while the client was subscribed; returns
 /// the channels advertised.
 fn watch_scans(socket: &mut WebSocket<TcpStream>, id: u32) -> Vec<(u64, String, String)> {
     let channels = read_advertised(socket, LIMIT);
-    let scan = channels
-        .iter()
-        .find(|(_, topic, schema)| topic == "/lidar/scan" && schema == "foxglove.LaserScan")
-        .unwrap_or_else(|| panic!("no scan channel in {channels:?}"));
-    let subscribe = serde_json::json!({
-        "op": "subscribe",
-        "subscriptions": [{"id": id, "channelId": scan.0}],
-    });
-    socket
-        .send(Message::text(subscribe.to_string()))
-        .expect("subscribe");
+    subscribe(socket, &channels, ("/lidar/scan", "foxglove.LaserScan"), id);
     for _ in 0..2 {
         let payload = read_message_data(socket, id, LIMIT);
         let scan: serde_json::Value = serde_json::from_slice(&payload).expect("a JSON scan");
@@ -159,17 +169,7 @@ fn watch_scans(socket: &mut WebSocket<TcpStream>, id: u32) -> Vec<(u64, String, 
 
 /// Subscribes to the back end's grid as subscription `id` and waits for one, whole.
 fn watch_grid(socket: &mut WebSocket<TcpStream>, channels: &[(u64, String, String)], id: u32) {
-    let grid = channels
-        .iter()
-        .find(|(_, topic, schema)| topic == "/graph/grid" && schema == "foxglove.Grid")
-        .unwrap_or_else(|| panic!("no grid channel in {channels:?}"));
-    let subscribe = serde_json::json!({
-        "op": "subscribe",
-        "subscriptions": [{"id": id, "channelId": grid.0}],
-    });
-    socket
-        .send(Message::text(subscribe.to_string()))
-        .expect("subscribe");
+    subscribe(socket, channels, ("/graph/grid", "foxglove.Grid"), id);
     let payload = read_message_data(socket, id, LIMIT);
     let grid: serde_json::Value = serde_json::from_slice(&payload).expect("a JSON grid");
     let rows = grid["row_count"].as_u64().expect("rows");
