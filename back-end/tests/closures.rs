@@ -1,6 +1,9 @@
 //! Closures checked by the scans, on constructed worlds: a right closure after metres of
 //! drift is found and placed; a room that only looks like the old one is refused.
 
+mod common;
+use common::geometry;
+
 use back_end::GlobalConfig;
 use back_end::branch_bound::SearchWindow;
 use back_end::closure::{ClosureCheck, Refusal, verify};
@@ -11,7 +14,7 @@ use lidar_sim::RayCaster;
 use lidar_sim::geometry::Segment;
 use scan_match::FrontEndConfig;
 use scan_match::points::{SurfacePoint, extract};
-use slam_geom::{Pose2, ScanGeometry};
+use slam_geom::Pose2;
 
 const VOXEL: f64 = 0.05;
 
@@ -51,18 +54,6 @@ fn walls(corners: &[(f64, f64)], doors: &[(usize, f64, f64)]) -> Vec<Segment> {
 
 fn boxed(x: f64, y: f64, w: f64, h: f64) -> Vec<Segment> {
     walls(&[(x, y), (x + w, y), (x + w, y + h), (x, y + h)], &[])
-}
-
-/// A 270-degree scanner of 541 beams reaching 20 m.
-fn geometry() -> ScanGeometry {
-    ScanGeometry {
-        angle_min: -0.75 * std::f64::consts::PI,
-        angle_increment: 1.5 * std::f64::consts::PI / 540.0,
-        time_increment: 0.0,
-        scan_time: 0.025,
-        range_min: 0.1,
-        range_max: 20.0,
-    }
 }
 
 fn ranges(caster: &RayCaster, pose: &Pose2) -> Vec<f32> {

@@ -1,12 +1,15 @@
 //! Memory by the area mapped, on a constructed building: a robot that drives a mapped loop
 //! again retires the submaps it starts there, and keeps those of a wing it has not seen.
 
+mod common;
+use common::geometry;
+
 use back_end::{GlobalConfig, GlobalSlam, GlobalStats, ScanRanges};
 use lidar_sim::RayCaster;
 use lidar_sim::geometry::Segment;
 use nalgebra::Matrix3;
 use scan_match::FrontEndConfig;
-use slam_geom::{Pose2, ScanGeometry};
+use slam_geom::Pose2;
 
 /// The outline `corners` as walls.
 fn polygon(corners: &[(f64, f64)]) -> Vec<Segment> {
@@ -59,18 +62,6 @@ fn building() -> RayCaster {
         walls.extend(boxed(x, y, w, h));
     }
     RayCaster::from_segments(walls)
-}
-
-/// A 270-degree scanner of 541 beams reaching 20 m.
-fn geometry() -> ScanGeometry {
-    ScanGeometry {
-        angle_min: -0.75 * std::f64::consts::PI,
-        angle_increment: 1.5 * std::f64::consts::PI / 540.0,
-        time_increment: 0.0,
-        scan_time: 0.025,
-        range_min: 0.1,
-        range_max: 20.0,
-    }
 }
 
 /// The poses of a drive through `waypoints`: 0.1 m steps along each leg, turning on the

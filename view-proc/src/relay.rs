@@ -14,6 +14,8 @@ use crate::subprotocol::{head_end, rename_request, rename_response};
 const MAX_HEAD: usize = 16 * 1024;
 /// How long a client or the server may take to send its handshake head.
 const HANDSHAKE_TIME: Duration = Duration::from_secs(5);
+/// How long the door waits after a failed accept before the next.
+const ACCEPT_BACKOFF: Duration = Duration::from_millis(50);
 
 /// Accepts connections on `listener` and relays each to `server`, in threads of their own,
 /// for as long as the process lives (the server closing its connections ends theirs).
@@ -21,7 +23,12 @@ pub fn start(listener: TcpListener, server: SocketAddr) -> io::Result<()> {
     thread::Builder::new()
         .name("view-door".into())
         .spawn(move || {
-            for client in listener.incoming().flatten() {
+            for client in listener.incoming() {
+                let Ok(client) = client else {
+                    // Out of descriptors or memory, for now: back off rather than spin.
+                    thread::sleep(ACCEPT_BACKOFF);
+                    continue;
+                };
                 // A connection the relay cannot serve is closed; the client may try again.
                 let _ = thread::Builder::new()
                     .name("view-relay".into())
